@@ -1,0 +1,30 @@
+#include <cstdio>
+
+#include "apps/common.h"
+#include "io/atomic_file.h"
+#include "io/frf_file.h"
+
+namespace zwidth::app {
+
+void AddEstimateCommand(CLI::App& app) {
+  struct Flags {
+    std::string log, out;
+    EstimateFlags est;
+  };
+  auto f = std::make_shared<Flags>();
+  CLI::App* cmd = app.add_subcommand("estimate", "Welch frequency response (H1/H2), coherence and per-bin std of a log");
+  cmd->add_option("log", f->log, "log file (.h5 or .csv)")->required();
+  cmd->add_option("-o,--output", f->out, "frequency response to write (.csv or .h5)")->required();
+  AddEstimateFlags(cmd, &f->est);
+  cmd->callback([f] {
+    io::CheckOutputFolder(f->out);
+    io::LogInfo info;
+    const ident::FrequencyResponse r = EstimateFromLog(f->log, f->est, &info);
+    io::WriteFrequencyResponse(f->out, r);
+    std::fprintf(stderr, "%zu samples at %g Hz, %d averages, %zu bins from %.3f to %.3f Hz -> %s\n",
+                 info.num_samples, info.sample_rate_hz, r.num_averages, r.f_hz.size(),
+                 r.f_hz.front(), r.f_hz.back(), f->out.c_str());
+  });
+}
+
+}  // namespace zwidth::app

@@ -1,0 +1,39 @@
+#include <cstdio>
+
+#include "apps/common.h"
+#include "io/atomic_file.h"
+#include "io/log.h"
+#include "io/model_json.h"
+#include "model/error.h"
+#include "model/simulate.h"
+
+namespace zwidth::app {
+
+void AddSimulateCommand(CLI::App& app) {
+  struct Flags {
+    std::string model, out;
+    SimulateOptions o;
+  };
+  auto f = std::make_shared<Flags>();
+  CLI::App* cmd = app.add_subcommand("simulate", "simulate a white-noise torque log from a model");
+  cmd->add_option("--model", f->model, "model JSON")->required();
+  cmd->add_option("-o,--output", f->out, "log to write (.h5 or .csv)")->required();
+  cmd->add_option("--seconds", f->o.seconds, "length [s]")->capture_default_str();
+  cmd->add_option("--rate", f->o.sample_rate_hz, "sample rate [Hz]")->capture_default_str();
+  cmd->add_option("--torque-rms", f->o.torque_rms, "torque RMS [N m]")->capture_default_str();
+  cmd->add_option("--bandwidth-hz", f->o.bandwidth_hz, "torque band limit [Hz]")->capture_default_str();
+  cmd->add_option("--encoder-step", f->o.encoder_step_rad, "rad per encoder count (0: none)")->capture_default_str();
+  cmd->add_option("--noise-std", f->o.noise_std_rad, "sensor noise std [rad]")->capture_default_str();
+  cmd->add_option("--delay-samples", f->o.delay_samples, "extra input delay [samples]")->capture_default_str();
+  cmd->add_option("--seed", f->o.seed, "random seed")->capture_default_str();
+  cmd->callback([f] {
+    io::CheckOutputFolder(f->out);
+    const io::ModelFile mf = io::ReadModelJson(f->model);
+    const SimulatedLog log = SimulateLog(mf.plant, f->o);
+    io::WriteLog(f->out, log.sample_rate_hz, log.torque, log.position);
+    std::fprintf(stderr, "wrote %zu samples at %g Hz to %s\n", log.torque.size(),
+                 log.sample_rate_hz, f->out.c_str());
+  });
+}
+
+}  // namespace zwidth::app

@@ -1,0 +1,48 @@
+// Options shared by several subcommands, and the one place that maps errors to
+// exit codes (2: bad request or file, 1: a computation that failed).
+#pragma once
+
+#include <chrono>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "ident/welch.h"
+#include "io/log.h"
+
+namespace zwidth::app {
+
+struct EstimateFlags {
+  io::LogSelect select;
+  ident::WelchOptions welch;
+  std::string window = "hann", detrend = "linear", estimator = "h1";
+  // Parses the enum names; throws InputError naming the flag.
+  ident::WelchOptions Resolve() const;
+};
+
+void AddLogFlags(CLI::App* cmd, io::LogSelect* select);
+void AddEstimateFlags(CLI::App* cmd, EstimateFlags* flags);
+
+// Reads a log and runs Welch in one streaming pass.
+ident::FrequencyResponse EstimateFromLog(const std::string& path, const EstimateFlags& flags,
+                                         io::LogInfo* info = nullptr);
+
+// Prints "stage: 1.23 ms" to stderr.
+class StageTimer {
+ public:
+  explicit StageTimer(bool enabled = true) : enabled_(enabled) { Reset(); }
+  void Reset() { start_ = std::chrono::steady_clock::now(); }
+  double Lap(const std::string& stage);  // returns ms since last lap and prints it
+ private:
+  bool enabled_;
+  std::chrono::steady_clock::time_point start_;
+};
+
+void AddSimulateCommand(CLI::App& app);
+void AddEstimateCommand(CLI::App& app);
+void AddFitCommands(CLI::App& app);        // fit, compare
+void AddStabilityCommands(CLI::App& app);  // boundary, relay, check
+void AddExportCommand(CLI::App& app);
+void AddRunCommand(CLI::App& app);
+
+}  // namespace zwidth::app

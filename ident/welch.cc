@@ -1,0 +1,316 @@
+#include "ident/welch.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <numbers>
+
+#include <fftw3.h>
+
+#include "model/error.h"
+
+namespace zwidth::ident {
+namespace internal {
+
+// One r2c plan per window length, made once and shared (FFTW's planner is not
+// thread-safe, hence the mutex; executing a plan on new arrays is).
+struct PlanCache {
+  std::mutex mu;
+  std::map<int, fftw_plan> plans;
+  static PlanCache& Get() {
+    static PlanCache cache;
+    return cache;
+  }
+  fftw_plan For(int n, double* in, fftw_complex* out) {
+    std::lock_guard<std::mutex> lock(mu);
+    auto it = plans.find(n);
+    if (it != plans.end()) return it->second;
+    fftw_plan p = fftw_plan_dft_r2c_1d(n, in, out, FFTW_ESTIMATE);
+    plans[n] = p;
+    return p;
+  }
+};
+
+void DetrendInPlace(Detrend d, double* x, int n) {
+  if (d == Detrend::kNone) return;
+  double mean = 0.0;
+  for (int i = 0; i < n; ++i) mean += x[i];
+  mean /= n;
+  if (d == Detrend::kMean) {
+    for (int i = 0; i < n; ++i) x[i] -= mean;
+    return;
+  }
+  // Least-squares line against the centred index (i - (n-1)/2).
+  const double c = 0.5 * (n - 1);
+  double sxy = 0.0;
+  for (int i = 0; i < n; ++i) sxy += (i - c) * x[i];
+  const double sxx = static_cast<double>(n) * (static_cast<double>(n) * n - 1.0) / 12.0;
+  const double slope = sxy / sxx;
+  for (int i = 0; i < n; ++i) x[i] -= mean + slope * (i - c);
+}
+
+}  // namespace internal
+
+std::string ToString(Window w) {
+  switch (w) {
+    case Window::kHann: return "hann";
+    case Window::kHamming: return "hamming";
+    case Window::kRect: return "rect";
+  }
+  return "?";
+}
+std::string ToString(Detrend d) {
+  switch (d) {
+    case Detrend::kNone: return "none";
+    case Detrend::kMean: return "mean";
+    case Detrend::kLinear: return "linear";
+  }
+  return "?";
+}
+std::string ToString(Estimator e) { return e == Estimator::kH1 ? "h1" : "h2"; }
+bool FromString(const std::string& s, Window* w) {
+  if (s == "hann" || s == "hanning") *w = Window::kHann;
+  else if (s == "hamming") *w = Window::kHamming;
+  else if (s == "rect" || s == "boxcar" || s == "rectangular") *w = Window::kRect;
+  else return false;
+  return true;
+}
+bool FromString(const std::string& s, Detrend* d) {
+  if (s == "none") *d = Detrend::kNone;
+  else if (s == "mean" || s == "constant") *d = Detrend::kMean;
+  else if (s == "linear") *d = Detrend::kLinear;
+  else return false;
+  return true;
+}
+bool FromString(const std::string& s, Estimator* e) {
+  if (s == "h1" || s == "H1") *e = Estimator::kH1;
+  else if (s == "h2" || s == "H2") *e = Estimator::kH2;
+  else return false;
+  return true;
+}
+
+std::vector<double> MakeWindow(Window w, int n) {
+  std::vector<double> out(n, 1.0);
+  const double two_pi_over_n = 2.0 * std::numbers::pi / n;  // periodic: divide by n
+  for (int i = 0; i < n; ++i) {
+    if (w == Window::kHann) out[i] = 0.5 - 0.5 * std::cos(two_pi_over_n * i);
+    if (w == Window::kHamming) out[i] = 0.54 - 0.46 * std::cos(two_pi_over_n * i);
+  }
+  return out;
+}
+
+int WelchOptions::overlap_samples() const {
+  return static_cast<int>(std::floor(overlap * window_length));
+}
+
+bool WelchOptions::IsValid(std::string* why) const {
+  auto bad = [&](const std::string& m) { if (why) *why = m; return false; };
+  if (window_length < 16) {
+    return bad("window_length = " + std::to_string(window_length) + ": must be >= 16 samples");
+  }
+  if (window_length > (1 << 24)) return bad("window_length is over 2^24 samples");
+  if (!(overlap >= 0.0 && overlap < 1.0)) {
+    return bad("overlap = " + std::to_string(overlap) + ": must be in [0, 1)");
+  }
+  if (window_length - overlap_samples() < 1) return bad("overlap leaves no step between segments");
+  if (!(std::isfinite(fmin_hz) && fmin_hz >= 0.0)) return bad("fmin must be finite and >= 0");
+  if (!(fmax_hz > fmin_hz)) return bad("fmax must be > fmin");
+  return true;
+}
+
+struct WelchEstimator::Fft {
+  int n;
+  double* in;
+  fftw_complex* out_u;
+  fftw_complex* out_y;
+  double* in_y;
+  fftw_plan plan;
+  explicit Fft(int n_) : n(n_) {
+    in = fftw_alloc_real(n);
+    in_y = fftw_alloc_real(n);
+    out_u = fftw_alloc_complex(n / 2 + 1);
+    out_y = fftw_alloc_complex(n / 2 + 1);
+    plan = internal::PlanCache::Get().For(n, in, out_u);
+  }
+  ~Fft() {
+    fftw_free(in);
+    fftw_free(in_y);
+    fftw_free(out_u);
+    fftw_free(out_y);
+  }
+};
+
+WelchEstimator::WelchEstimator(const WelchOptions& options) : options_(options) {
+  std::string why;
+  if (!options_.IsValid(&why)) throw InputError("Welch options: " + why);
+  const int n = options_.window_length;
+  fft_ = std::make_unique<Fft>(n);
+  window_ = MakeWindow(options_.window, n);
+  acc_uu_.assign(n / 2 + 1, 0.0);
+  acc_yy_.assign(n / 2 + 1, 0.0);
+  acc_uy_.assign(n / 2 + 1, 0.0);
+}
+
+WelchEstimator::~WelchEstimator() = default;
+
+void WelchEstimator::ProcessSegment(const double* u, const double* y) {
+  const int n = options_.window_length;
+  double* a = fft_->in;
+  double* b = fft_->in_y;
+  std::copy(u, u + n, a);
+  std::copy(y, y + n, b);
+  internal::DetrendInPlace(options_.detrend, a, n);
+  internal::DetrendInPlace(options_.detrend, b, n);
+  for (int i = 0; i < n; ++i) {
+    a[i] *= window_[i];
+    b[i] *= window_[i];
+  }
+  fftw_execute_dft_r2c(fft_->plan, a, fft_->out_u);
+  fftw_execute_dft_r2c(fft_->plan, b, fft_->out_y);
+  const int nb = n / 2 + 1;
+  for (int k = 0; k < nb; ++k) {
+    const double ur = fft_->out_u[k][0], ui = fft_->out_u[k][1];
+    const double yr = fft_->out_y[k][0], yi = fft_->out_y[k][1];
+    acc_uu_[k] += ur * ur + ui * ui;
+    acc_yy_[k] += yr * yr + yi * yi;
+    // conj(U) Y
+    acc_uy_[k] += std::complex<double>(ur * yr + ui * yi, ur * yi - ui * yr);
+  }
+  ++segments_;
+}
+
+void WelchEstimator::Push(const double* input, const double* output, size_t count) {
+  const size_t n = static_cast<size_t>(options_.window_length);
+  const size_t step = n - static_cast<size_t>(options_.overlap_samples());
+  const size_t chunk_begin = seen_;  // global index of input[0]
+  seen_ += count;
+  // Segment starts are next_start_ + j * step (global indices). buf_ holds the
+  // samples from buf_begin_ to chunk_begin, always fewer than one window.
+  std::vector<double> tu, ty;
+  while (next_start_ + n <= seen_) {
+    if (next_start_ >= chunk_begin) {
+      ProcessSegment(input + (next_start_ - chunk_begin), output + (next_start_ - chunk_begin));
+    } else {  // straddles the pending buffer and this chunk
+      const size_t from_buf = chunk_begin - next_start_;
+      const size_t off = next_start_ - buf_begin_;
+      tu.assign(buf_u_.begin() + off, buf_u_.end());
+      ty.assign(buf_y_.begin() + off, buf_y_.end());
+      tu.insert(tu.end(), input, input + (n - from_buf));
+      ty.insert(ty.end(), output, output + (n - from_buf));
+      ProcessSegment(tu.data(), ty.data());
+    }
+    next_start_ += step;
+  }
+  // Keep what the next segment needs: samples from next_start_ on.
+  if (next_start_ >= chunk_begin) {
+    buf_u_.assign(input + std::min(next_start_ - chunk_begin, count), input + count);
+    buf_y_.assign(output + std::min(next_start_ - chunk_begin, count), output + count);
+  } else {
+    const size_t off = next_start_ - buf_begin_;
+    buf_u_.erase(buf_u_.begin(), buf_u_.begin() + off);
+    buf_y_.erase(buf_y_.begin(), buf_y_.begin() + off);
+    buf_u_.insert(buf_u_.end(), input, input + count);
+    buf_y_.insert(buf_y_.end(), output, output + count);
+  }
+  buf_begin_ = std::min(next_start_, seen_);
+}
+
+FrequencyResponse WelchEstimator::Finish(double fs) const {
+  const int n = options_.window_length;
+  if (segments_ == 0) {
+    int suggest = 16;
+    while (suggest * 2 <= static_cast<int>(seen_)) suggest *= 2;
+    throw InputError("the log has " + std::to_string(seen_) +
+                     " samples, fewer than one window of " + std::to_string(n) +
+                     (seen_ >= 16 ? "; use --window-length " + std::to_string(suggest) + " or less"
+                                  : "; record a longer log"));
+  }
+  if (!(fs > 0.0) || !std::isfinite(fs)) throw InputError("sample rate must be finite and > 0");
+  FrequencyResponse r;
+  r.sample_rate_hz = fs;
+  r.window_length = n;
+  r.num_averages = segments_;
+  // Welch (1967): equivalent independent averages for overlapped segments.
+  {
+    const int step = n - options_.overlap_samples();
+    double sw2 = 0.0;
+    for (double w : window_) sw2 += w * w;
+    double denom = 1.0;
+    for (int j = 1; j < segments_ && j * step < n; ++j) {
+      double rho = 0.0;
+      for (int i = 0; i + j * step < n; ++i) rho += window_[i] * window_[i + j * step];
+      rho /= sw2;
+      denom += 2.0 * (1.0 - static_cast<double>(j) / segments_) * rho * rho;
+    }
+    r.effective_averages = segments_ / denom;
+    // Bin correlation: c_k = DFT(w^2)_k / sum(w^2) summed in square over all k.
+    std::vector<double> w2(n);
+    for (int i = 0; i < n; ++i) w2[i] = window_[i] * window_[i];
+    double kappa = 0.0;
+    for (int k = 0; k < n; ++k) {
+      double re = 0.0, im = 0.0;
+      // Windows here are sums of few cosines, so only |k| <= 4 is non-zero;
+      // evaluate those lags directly.
+      if (k > 4 && k < n - 4) continue;
+      for (int i = 0; i < n; ++i) {
+        const double ang = -2.0 * std::numbers::pi * static_cast<double>(k) * i / n;
+        re += w2[i] * std::cos(ang);
+        im += w2[i] * std::sin(ang);
+      }
+      kappa += (re * re + im * im) / (sw2 * sw2);
+    }
+    r.bin_correlation = kappa;
+  }
+  double sw2 = 0.0;
+  for (double w : window_) sw2 += w * w;
+  const double scale = 1.0 / (fs * sw2 * segments_);
+  const double df = fs / n;
+  const double fmax = std::min(options_.fmax_hz, 0.5 * fs * (1.0 - 1e-12));
+  const int nb = n / 2 + 1;
+  const double neff = r.effective_averages;
+  bool any_power = false;
+  for (int k = 0; k < nb; ++k) {
+    const double f = k * df;
+    if (f < options_.fmin_hz - 1e-9 * df || f > fmax + 1e-9 * df) continue;
+    const bool edge = (k == 0) || (n % 2 == 0 && k == n / 2);
+    const double one_sided = edge ? 1.0 : 2.0;
+    const double suu = acc_uu_[k] * scale * one_sided;
+    const double syy = acc_yy_[k] * scale * one_sided;
+    const std::complex<double> suy = acc_uy_[k] * (scale * one_sided);
+    if (suu > 0.0) any_power = true;
+    std::complex<double> h;
+    if (options_.estimator == Estimator::kH1) h = suy / suu;
+    else h = syy / std::conj(suy);
+    const double coh = (suu > 0.0 && syy > 0.0) ? std::norm(suy) / (suu * syy) : 0.0;
+    const double c = std::min(coh, 1.0);
+    const double sd = c > 0.0 ? std::abs(h) * std::sqrt((1.0 - c) / (2.0 * neff * c))
+                              : std::numeric_limits<double>::infinity();
+    r.f_hz.push_back(f);
+    r.H.push_back(h);
+    r.coherence.push_back(coh);
+    r.H_std.push_back(sd);
+    r.S_uu.push_back(suu);
+    r.S_yy.push_back(syy);
+    r.S_uy.push_back(suy);
+  }
+  if (r.f_hz.empty()) {
+    throw InputError("no frequency bin between fmin and fmax (bin spacing " + std::to_string(df) +
+                     " Hz); widen the band or lengthen the window");
+  }
+  if (!any_power) throw InputError("the input has no power in the band: constant input?");
+  return r;
+}
+
+FrequencyResponse EstimateFrequencyResponse(const std::vector<double>& input,
+                                            const std::vector<double>& output, double fs,
+                                            const WelchOptions& options) {
+  assert(input.size() == output.size());
+  WelchEstimator est(options);
+  est.Push(input.data(), output.data(), input.size());
+  return est.Finish(fs);
+}
+
+}  // namespace zwidth::ident

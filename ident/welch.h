@@ -1,0 +1,100 @@
+// Welch-averaged spectra and the empirical frequency response of a log, as
+// MATLAB's tfestimate/mscohere and SciPy's csd/welch/coherence compute them:
+// periodic (DFT-even) windows, per-segment detrend, one-sided density scaling,
+// mean over segments, and S_uy = E[conj(U) Y] (SciPy's convention, so a rigid
+// body shows about -180 deg at low frequency).
+#pragma once
+
+#include <complex>
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace zwidth::ident {
+
+enum class Window { kHann, kHamming, kRect };
+enum class Detrend { kNone, kMean, kLinear };
+enum class Estimator { kH1, kH2 };  // H1 = S_uy/S_uu, H2 = S_yy/S_yu
+
+std::string ToString(Window w);
+std::string ToString(Detrend d);
+std::string ToString(Estimator e);
+bool FromString(const std::string& s, Window* w);
+bool FromString(const std::string& s, Detrend* d);
+bool FromString(const std::string& s, Estimator* e);
+
+// The periodic window of length n (SciPy get_window(name, n, fftbins=True)).
+std::vector<double> MakeWindow(Window w, int n);
+
+struct WelchOptions {
+  int window_length = 4096;          // samples per segment, >= 16
+  double overlap = 0.5;              // fraction of a segment shared with the next, [0, 1)
+  Window window = Window::kHann;
+  Detrend detrend = Detrend::kLinear;
+  Estimator estimator = Estimator::kH1;
+  double fmin_hz = 0.7;              // band kept in the result [Hz], >= 0
+  double fmax_hz = 300.0;            // clipped below Nyquist
+
+  // The overlap in samples: floor(overlap * window_length).
+  int overlap_samples() const;
+  bool IsValid(std::string* why) const;
+};
+
+struct FrequencyResponse {
+  double sample_rate_hz = 0.0;
+  int window_length = 0;
+  int num_averages = 0;            // Welch segments averaged
+  double effective_averages = 0;   // Welch (1967) equivalent independent averages
+  // Variance inflation for a sum over adjacent bins: sum_k c_k^2 with c_k the
+  // normalised DFT of the squared window (Hann 1.94, rect 1).
+  double bin_correlation = 1.0;
+  std::vector<double> f_hz;
+  std::vector<std::complex<double>> H;  // output/input, e.g. rad / (N m)
+  std::vector<double> coherence;        // magnitude-squared, [0, 1]
+  // Standard deviation of H per bin (each of the real and imaginary parts, and
+  // of |H|): Bendat & Piersol, Random Data (4th ed., sec. 9.2.4, Table 9.6),
+  //   sd(H) = |H| sqrt(1 - g^2) / (|g| sqrt(2 n_d)),
+  // with g^2 the coherence and n_d = effective_averages.
+  std::vector<double> H_std;
+  std::vector<double> S_uu, S_yy;       // one-sided PSDs [unit^2/Hz]
+  std::vector<std::complex<double>> S_uy;
+};
+
+// Streaming estimator: memory is a few windows whatever the log length.
+class WelchEstimator {
+ public:
+  // Throws InputError for invalid options.
+  explicit WelchEstimator(const WelchOptions& options);
+  ~WelchEstimator();
+  WelchEstimator(const WelchEstimator&) = delete;
+  WelchEstimator& operator=(const WelchEstimator&) = delete;
+
+  void Push(const double* input, const double* output, size_t n);
+  size_t samples_seen() const { return seen_; }
+  // Throws InputError when fewer samples than one window were pushed, or when
+  // the input has no power in the band.
+  FrequencyResponse Finish(double sample_rate_hz) const;
+
+ private:
+  void ProcessSegment(const double* u, const double* y);
+
+  WelchOptions options_;
+  struct Fft;
+  std::unique_ptr<Fft> fft_;
+  std::vector<double> window_;
+  std::vector<double> buf_u_, buf_y_;  // pending samples
+  std::vector<double> acc_uu_, acc_yy_;
+  std::vector<std::complex<double>> acc_uy_;
+  size_t seen_ = 0;
+  size_t next_start_ = 0;  // global index of the next segment's first sample
+  size_t buf_begin_ = 0;   // global index of buf_u_[0]
+  int segments_ = 0;
+};
+
+// Whole-signal convenience.
+FrequencyResponse EstimateFrequencyResponse(const std::vector<double>& input,
+                                            const std::vector<double>& output,
+                                            double sample_rate_hz, const WelchOptions& options);
+
+}  // namespace zwidth::ident

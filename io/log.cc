@@ -1,0 +1,417 @@
+#include "io/log.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
+#include <H5Cpp.h>
+
+#include "io/atomic_file.h"
+#include "model/error.h"
+
+namespace zwidth::io {
+namespace {
+
+constexpr size_t kChunk = 1 << 16;
+
+std::string Lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+std::string Trim(std::string_view s) {
+  size_t a = 0, b = s.size();
+  while (a < b && (s[a] == ' ' || s[a] == '\t' || s[a] == '"' || s[a] == '\r')) ++a;
+  while (b > a && (s[b - 1] == ' ' || s[b - 1] == '\t' || s[b - 1] == '"' || s[b - 1] == '\r')) --b;
+  return std::string(s.substr(a, b - a));
+}
+
+// Checks the sampling-interval invariants on the stream of time stamps.
+class TimeChecker {
+ public:
+  TimeChecker(std::string source, double tolerance) : source_(std::move(source)), tol_(tolerance) {}
+  void Add(double t, const std::string& where) {
+    if (n_ > 0) {
+      const double dt = t - last_;
+      if (!(dt > 0.0)) {
+        std::ostringstream os;
+        os.precision(12);
+        os << source_ << ": time is not strictly increasing at " << where << " (t = " << t
+           << " after " << last_ << ")";
+        throw InputError(os.str());
+      }
+      if (n_ >= 2) {
+        const double mean = (last_ - first_) / static_cast<double>(n_ - 1);
+        if (std::abs(dt - mean) > tol_ * mean) {
+          std::ostringstream os;
+          os.precision(6);
+          os << source_ << ": not uniformly sampled at " << where << ": interval " << dt
+             << " s differs from the mean interval " << mean << " s by "
+             << 100.0 * std::abs(dt - mean) / mean
+             << "% (missing or repeated samples?); resample the log first";
+          throw InputError(os.str());
+        }
+      }
+    } else {
+      first_ = t;
+    }
+    last_ = t;
+    ++n_;
+  }
+  double Rate() const { return n_ >= 2 ? static_cast<double>(n_ - 1) / (last_ - first_) : 0.0; }
+
+ private:
+  std::string source_;
+  double tol_;
+  double first_ = 0.0, last_ = 0.0;
+  size_t n_ = 0;
+};
+
+void CheckFinite(double v, const std::string& source, const std::string& where) {
+  if (!std::isfinite(v)) {
+    throw InputError(source + ": non-finite value (" + std::to_string(v) + ") at " + where +
+                     "; remove or repair that row");
+  }
+}
+
+// Tracks whether the input ever changes.
+struct ConstantCheck {
+  double first = 0.0;
+  bool any = false, varies = false;
+  void Add(const double* u, size_t n) {
+    for (size_t i = 0; i < n && !varies; ++i) {
+      if (!any) { first = u[i]; any = true; }
+      else if (u[i] != first) varies = true;
+    }
+  }
+};
+
+LogInfo StreamCsv(const std::string& path, const LogSelect& sel, const LogSink& sink) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open log file (does it exist?)");
+  std::string line;
+  size_t line_no = 0;
+  // Header: the first non-empty line.
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (!Trim(line).empty()) break;
+  }
+  if (Trim(line).empty()) throw InputError(path + ": empty file (expected a header line such as t,torque,position)");
+  std::vector<std::string> names;
+  {
+    std::string_view sv(line);
+    size_t start = 0;
+    while (true) {
+      size_t comma = sv.find(',', start);
+      names.push_back(Trim(sv.substr(start, comma == std::string_view::npos ? sv.npos : comma - start)));
+      if (comma == std::string_view::npos) break;
+      start = comma + 1;
+    }
+  }
+  auto find_col = [&](const std::string& name, bool required) -> int {
+    for (size_t i = 0; i < names.size(); ++i) if (names[i] == name) return static_cast<int>(i);
+    if (!required) return -1;
+    std::string list;
+    for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+    throw InputError(path + ": no column '" + name + "' in the header (columns: " + list +
+                     "); choose one with --input-column/--output-column/--time-column");
+  };
+  const int ci = find_col(sel.input_column, true);
+  const int co = find_col(sel.output_column, true);
+  const int ct = find_col(sel.time_column, sel.sample_rate_hz <= 0.0);
+  const int need = std::max({ci, co, ct}) + 1;
+
+  TimeChecker times(path, sel.max_interval_deviation);
+  ConstantCheck constant;
+  std::vector<double> u, y;
+  u.reserve(kChunk);
+  y.reserve(kChunk);
+  std::vector<std::string_view> fields;
+  size_t rows = 0;
+  auto flush = [&] {
+    if (u.empty()) return;
+    constant.Add(u.data(), u.size());
+    sink(u.data(), y.data(), u.size());
+    u.clear();
+    y.clear();
+  };
+  while (std::getline(in, line)) {
+    ++line_no;
+    std::string_view sv(line);
+    if (!sv.empty() && sv.back() == '\r') sv.remove_suffix(1);
+    if (sv.find_first_not_of(" \t") == std::string_view::npos) continue;
+    fields.clear();
+    size_t start = 0;
+    while (true) {
+      size_t comma = sv.find(',', start);
+      fields.push_back(sv.substr(start, comma == std::string_view::npos ? sv.npos : comma - start));
+      if (comma == std::string_view::npos) break;
+      start = comma + 1;
+    }
+    if (static_cast<int>(fields.size()) < need) {
+      throw InputError(path + ": line " + std::to_string(line_no) + " has " +
+                       std::to_string(fields.size()) + " fields, the header has " +
+                       std::to_string(names.size()) + " (truncated row?)");
+    }
+    auto parse = [&](int col) {
+      std::string_view f = fields[col];
+      while (!f.empty() && (f.front() == ' ' || f.front() == '\t')) f.remove_prefix(1);
+      while (!f.empty() && (f.back() == ' ' || f.back() == '\t')) f.remove_suffix(1);
+      if (!f.empty() && f.front() == '+') f.remove_prefix(1);
+      double v = 0.0;
+      auto [p, ec] = std::from_chars(f.data(), f.data() + f.size(), v);
+      const std::string where = "line " + std::to_string(line_no) + ", column '" + names[col] + "'";
+      if (ec != std::errc() || p != f.data() + f.size() || f.empty()) {
+        throw InputError(path + ": " + where + ": '" + std::string(f) + "' is not a number");
+      }
+      CheckFinite(v, path, where);
+      return v;
+    };
+    const double uv = parse(ci), yv = parse(co);
+    if (ct >= 0) times.Add(parse(ct), "line " + std::to_string(line_no));
+    u.push_back(uv);
+    y.push_back(yv);
+    ++rows;
+    if (u.size() == kChunk) flush();
+  }
+  if (in.bad()) throw InputError(path + ": read error");
+  flush();
+  if (rows == 0) throw InputError(path + ": no data rows after the header");
+  if (!constant.varies) {
+    throw InputError(path + ": input column '" + sel.input_column +
+                     "' is constant: the log has no excitation to identify from");
+  }
+  LogInfo info;
+  info.source = path;
+  info.num_samples = rows;
+  info.sample_rate_hz = sel.sample_rate_hz > 0.0 ? sel.sample_rate_hz : times.Rate();
+  if (!(info.sample_rate_hz > 0.0) || !std::isfinite(info.sample_rate_hz)) {
+    throw InputError(path + ": cannot tell the sample rate (fewer than 2 rows?); pass --rate");
+  }
+  return info;
+}
+
+std::string H5Where(const std::string& path, const std::string& ds) { return path + ":" + ds; }
+
+H5::DataSet OpenDataset(H5::H5File& file, const std::string& path, const std::string& name,
+                        const char* flag) {
+  if (!file.nameExists(name)) {
+    throw InputError(path + ": no dataset '" + name + "'; choose one with " + flag);
+  }
+  try {
+    return file.openDataSet(name);
+  } catch (const H5::Exception&) {
+    throw InputError(path + ": '" + name + "' is not a readable dataset");
+  }
+}
+
+size_t Length1D(const H5::DataSet& ds, const std::string& where) {
+  H5::DataSpace sp = ds.getSpace();
+  const int rank = sp.getSimpleExtentNdims();
+  std::vector<hsize_t> dims(std::max(rank, 1));
+  sp.getSimpleExtentDims(dims.data());
+  if (rank == 1) return dims[0];
+  if (rank == 2 && (dims[0] == 1 || dims[1] == 1)) return dims[0] * dims[1];
+  throw InputError(where + ": expected a 1-D dataset, found rank " + std::to_string(rank));
+}
+
+void ReadSlab(const H5::DataSet& ds, hsize_t offset, hsize_t count, double* out,
+              const std::string& where) {
+  H5::DataSpace file_space = ds.getSpace();
+  const int rank = file_space.getSimpleExtentNdims();
+  std::vector<hsize_t> dims(rank);
+  file_space.getSimpleExtentDims(dims.data());
+  std::vector<hsize_t> off(rank, 0), cnt(rank, 1);
+  const int axis = (rank == 2 && dims[0] == 1) ? 1 : 0;
+  off[axis] = offset;
+  cnt[axis] = count;
+  file_space.selectHyperslab(H5S_SELECT_SET, cnt.data(), off.data());
+  H5::DataSpace mem_space(1, &count);
+  try {
+    ds.read(out, H5::PredType::NATIVE_DOUBLE, mem_space, file_space);
+  } catch (const H5::Exception&) {
+    throw InputError(where + ": cannot read (truncated or corrupt file?)");
+  }
+}
+
+LogInfo StreamHdf5(const std::string& path, const LogSelect& sel, const LogSink& sink) {
+  H5::Exception::dontPrint();
+  std::unique_ptr<H5::H5File> file;
+  try {
+    if (!H5::H5File::isHdf5(path)) throw InputError(path + ": not an HDF5 file");
+    file = std::make_unique<H5::H5File>(path, H5F_ACC_RDONLY);
+  } catch (const H5::Exception&) {
+    throw InputError(path + ": cannot open as HDF5 (missing, truncated or corrupt file)");
+  }
+  try {
+    H5::DataSet du = OpenDataset(*file, path, sel.input_dataset, "--input-dataset");
+    H5::DataSet dy = OpenDataset(*file, path, sel.output_dataset, "--output-dataset");
+    const size_t n = Length1D(du, H5Where(path, sel.input_dataset));
+    if (Length1D(dy, H5Where(path, sel.output_dataset)) != n) {
+      throw InputError(path + ": '" + sel.input_dataset + "' and '" + sel.output_dataset +
+                       "' have different lengths");
+    }
+    if (n == 0) throw InputError(path + ": dataset '" + sel.input_dataset + "' is empty");
+    double attr_rate = 0.0;
+    if (file->attrExists("sample_rate_hz")) {
+      H5::Attribute a = file->openAttribute("sample_rate_hz");
+      a.read(H5::PredType::NATIVE_DOUBLE, &attr_rate);
+      if (!(attr_rate > 0.0) || !std::isfinite(attr_rate)) {
+        throw InputError(path + ": attribute sample_rate_hz = " + std::to_string(attr_rate) +
+                         " must be finite and > 0");
+      }
+    }
+    const bool have_time = file->nameExists(sel.time_dataset);
+    H5::DataSet dt;
+    if (have_time) {
+      dt = OpenDataset(*file, path, sel.time_dataset, "--time-dataset");
+      if (Length1D(dt, H5Where(path, sel.time_dataset)) != n) {
+        throw InputError(path + ": '" + sel.time_dataset + "' has a different length from the signals");
+      }
+    } else if (attr_rate <= 0.0 && sel.sample_rate_hz <= 0.0) {
+      throw InputError(path + ": neither a '" + sel.time_dataset +
+                       "' dataset nor a sample_rate_hz attribute; pass --rate");
+    }
+    TimeChecker times(path, sel.max_interval_deviation);
+    ConstantCheck constant;
+    std::vector<double> u(kChunk), y(kChunk), t(kChunk);
+    for (size_t off = 0; off < n; off += kChunk) {
+      const size_t cnt = std::min(kChunk, n - off);
+      ReadSlab(du, off, cnt, u.data(), H5Where(path, sel.input_dataset));
+      ReadSlab(dy, off, cnt, y.data(), H5Where(path, sel.output_dataset));
+      if (have_time) ReadSlab(dt, off, cnt, t.data(), H5Where(path, sel.time_dataset));
+      for (size_t i = 0; i < cnt; ++i) {
+        const std::string where = "sample " + std::to_string(off + i);
+        CheckFinite(u[i], H5Where(path, sel.input_dataset), where);
+        CheckFinite(y[i], H5Where(path, sel.output_dataset), where);
+        if (have_time) {
+          CheckFinite(t[i], H5Where(path, sel.time_dataset), where);
+          times.Add(t[i], where + " of " + sel.time_dataset);
+        }
+      }
+      constant.Add(u.data(), cnt);
+      sink(u.data(), y.data(), cnt);
+    }
+    if (!constant.varies) {
+      throw InputError(path + ": input dataset '" + sel.input_dataset +
+                       "' is constant: the log has no excitation to identify from");
+    }
+    LogInfo info;
+    info.source = path;
+    info.num_samples = n;
+    const double time_rate = have_time ? times.Rate() : 0.0;
+    if (sel.sample_rate_hz > 0.0) info.sample_rate_hz = sel.sample_rate_hz;
+    else if (attr_rate > 0.0) {
+      if (time_rate > 0.0 && std::abs(time_rate - attr_rate) > 0.01 * attr_rate) {
+        throw InputError(path + ": attribute sample_rate_hz = " + std::to_string(attr_rate) +
+                         " disagrees with the time stamps (" + std::to_string(time_rate) + " Hz)");
+      }
+      info.sample_rate_hz = attr_rate;
+    } else {
+      info.sample_rate_hz = time_rate;
+    }
+    if (!(info.sample_rate_hz > 0.0)) throw InputError(path + ": cannot tell the sample rate; pass --rate");
+    return info;
+  } catch (const H5::Exception& e) {
+    throw InputError(path + ": HDF5 error (" + e.getDetailMsg() + "): truncated or corrupt file?");
+  }
+}
+
+void WriteCsvLog(const std::string& tmp, double rate, const std::vector<double>& u,
+                 const std::vector<double>& y) {
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) throw InputError("cannot create '" + tmp + "'");
+  std::fputs("t,torque,position\n", f);
+  for (size_t k = 0; k < u.size(); ++k) {
+    std::fprintf(f, "%.17g,%.17g,%.17g\n", static_cast<double>(k) / rate, u[k], y[k]);
+  }
+  const bool ok = std::ferror(f) == 0;
+  if (std::fclose(f) != 0 || !ok) throw InputError("failed writing '" + tmp + "' (disk full?)");
+}
+
+void WriteStringAttr(H5::H5Object& obj, const std::string& name, const std::string& value) {
+  H5::StrType st(H5::PredType::C_S1, value.size() + 1);
+  H5::Attribute a = obj.createAttribute(name, st, H5::DataSpace(H5S_SCALAR));
+  a.write(st, value.c_str());
+}
+
+void WriteHdf5Log(const std::string& tmp, double rate, const std::vector<double>& u,
+                  const std::vector<double>& y) {
+  H5::Exception::dontPrint();
+  try {
+    H5::H5File file(tmp, H5F_ACC_TRUNC);
+    const hsize_t n = u.size();
+    H5::DataSpace space(1, &n);
+    std::vector<double> t(n);
+    for (hsize_t k = 0; k < n; ++k) t[k] = static_cast<double>(k) / rate;
+    auto write = [&](H5::Group& parent, const std::string& name, const std::vector<double>& v,
+                     const std::string& unit) {
+      H5::DataSet ds = parent.createDataSet(name, H5::PredType::IEEE_F64LE, space);
+      ds.write(v.data(), H5::PredType::NATIVE_DOUBLE);
+      WriteStringAttr(ds, "units", unit);
+    };
+    H5::Group root = file.openGroup("/");
+    write(root, "time", t, "s");
+    H5::Group gi = file.createGroup("/input");
+    H5::Group go = file.createGroup("/output");
+    write(gi, "torque", u, "N m");
+    write(go, "position", y, "rad");
+    H5::Attribute a = root.createAttribute("sample_rate_hz", H5::PredType::IEEE_F64LE,
+                                           H5::DataSpace(H5S_SCALAR));
+    a.write(H5::PredType::NATIVE_DOUBLE, &rate);
+    WriteStringAttr(root, "sample_rate_units", "Hz");
+  } catch (const H5::Exception& e) {
+    throw InputError("cannot write HDF5 '" + tmp + "': " + e.getDetailMsg());
+  }
+}
+
+}  // namespace
+
+LogFormat DetectLogFormat(const std::string& path) {
+  const std::string p = Lower(path);
+  auto ends = [&](const char* s) {
+    const size_t n = std::strlen(s);
+    return p.size() >= n && p.compare(p.size() - n, n, s) == 0;
+  };
+  if (ends(".h5") || ends(".hdf5") || ends(".he5")) return LogFormat::kHdf5;
+  if (ends(".csv") || ends(".txt")) return LogFormat::kCsv;
+  std::ifstream in(path, std::ios::binary);
+  char sig[8] = {};
+  in.read(sig, 8);
+  if (in.gcount() == 8 && std::memcmp(sig, "\x89HDF\r\n\x1a\n", 8) == 0) return LogFormat::kHdf5;
+  return LogFormat::kCsv;
+}
+
+LogInfo StreamLog(const std::string& path, const LogSelect& select, const LogSink& sink) {
+  if (select.sample_rate_hz < 0.0 || !std::isfinite(select.sample_rate_hz)) {
+    throw InputError("--rate must be finite and > 0");
+  }
+  return DetectLogFormat(path) == LogFormat::kHdf5 ? StreamHdf5(path, select, sink)
+                                                   : StreamCsv(path, select, sink);
+}
+
+Log ReadLog(const std::string& path, const LogSelect& select) {
+  Log log;
+  log.info = StreamLog(path, select, [&](const double* u, const double* y, size_t n) {
+    log.input.insert(log.input.end(), u, u + n);
+    log.output.insert(log.output.end(), y, y + n);
+  });
+  return log;
+}
+
+void WriteLog(const std::string& path, double rate, const std::vector<double>& u,
+              const std::vector<double>& y) {
+  if (!(rate > 0.0)) throw InputError("sample rate must be > 0");
+  const bool h5 = DetectLogFormat(path) == LogFormat::kHdf5;
+  WriteAtomically(path, [&](const std::string& tmp) {
+    if (h5) WriteHdf5Log(tmp, rate, u, y);
+    else WriteCsvLog(tmp, rate, u, y);
+  });
+}
+
+}  // namespace zwidth::io

@@ -1,0 +1,80 @@
+#include "model/simulate.h"
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "model/error.h"
+#include "model/state_space.h"
+
+namespace zwidth {
+
+bool SimulateOptions::IsValid(std::string* why) const {
+  auto bad = [&](const std::string& m) { if (why) *why = m; return false; };
+  if (!(std::isfinite(seconds) && seconds > 0)) return bad("--seconds must be > 0");
+  if (!(std::isfinite(sample_rate_hz) && sample_rate_hz > 0)) return bad("--rate must be > 0");
+  if (!(std::isfinite(torque_rms) && torque_rms > 0)) return bad("--torque-rms must be > 0");
+  if (!(std::isfinite(bandwidth_hz) && bandwidth_hz > 0)) return bad("--bandwidth-hz must be > 0");
+  if (!(std::isfinite(encoder_step_rad) && encoder_step_rad >= 0)) return bad("--encoder-step must be >= 0");
+  if (!(std::isfinite(noise_std_rad) && noise_std_rad >= 0)) return bad("--noise-std must be >= 0");
+  if (delay_samples < 0) return bad("--delay-samples must be >= 0");
+  if (seconds * sample_rate_hz < 2) return bad("--seconds * --rate must give at least 2 samples");
+  if (seconds * sample_rate_hz > 1e9) return bad("--seconds * --rate is over 1e9 samples");
+  return true;
+}
+
+std::vector<double> BandLimitedNoise(size_t n, double fs, double bw, double rms, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const double fc = bw / fs;  // cycles per sample
+  std::vector<double> out(n);
+  if (fc >= 0.5) {
+    for (auto& v : out) v = normal(rng);
+  } else {
+    const int half = static_cast<int>(std::ceil(8.0 / fc));
+    std::vector<double> h(2 * half + 1);
+    for (int k = -half; k <= half; ++k) {
+      const double x = 2.0 * fc * k;
+      const double sinc = (k == 0) ? 1.0 : std::sin(std::numbers::pi * x) / (std::numbers::pi * x);
+      const double t = static_cast<double>(k + half) / (2.0 * half);
+      const double blackman = 0.42 - 0.5 * std::cos(2 * std::numbers::pi * t) +
+                              0.08 * std::cos(4 * std::numbers::pi * t);
+      h[k + half] = 2.0 * fc * sinc * blackman;
+    }
+    std::vector<double> white(n + h.size() - 1);
+    for (auto& v : white) v = normal(rng);
+    for (size_t i = 0; i < n; ++i) {
+      double acc = 0.0;
+      for (size_t j = 0; j < h.size(); ++j) acc += h[j] * white[i + j];
+      out[i] = acc;
+    }
+  }
+  double ss = 0.0;
+  for (double v : out) ss += v * v;
+  const double scale = rms / std::sqrt(ss / static_cast<double>(n));
+  for (auto& v : out) v *= scale;
+  return out;
+}
+
+SimulatedLog SimulateLog(const Plant& plant_in, const SimulateOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) throw InputError(why);
+  plant_in.Validate();
+  Plant plant = plant_in;
+  plant.delay_samples += o.delay_samples;
+  const size_t n = static_cast<size_t>(std::llround(o.seconds * o.sample_rate_hz));
+  SimulatedLog log;
+  log.sample_rate_hz = o.sample_rate_hz;
+  log.torque = BandLimitedNoise(n, o.sample_rate_hz, o.bandwidth_hz, o.torque_rms, o.seed);
+  const StateSpace d = DiscretizeZoh(plant, 1.0 / o.sample_rate_hz);
+  log.position = SimulateDiscrete(d, log.torque);
+  std::mt19937_64 rng(o.seed ^ 0x9e3779b97f4a7c15ULL);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (double& y : log.position) {
+    if (o.encoder_step_rad > 0.0) y = o.encoder_step_rad * std::round(y / o.encoder_step_rad);
+    if (o.noise_std_rad > 0.0) y += o.noise_std_rad * normal(rng);
+  }
+  return log;
+}
+
+}  // namespace zwidth

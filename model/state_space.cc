@@ -1,0 +1,149 @@
+#include "model/state_space.h"
+
+#include <cassert>
+#include <cmath>
+#include <utility>
+
+#include <Eigen/Eigenvalues>
+#include <unsupported/Eigen/MatrixFunctions>
+
+#include "model/error.h"
+
+namespace zwidth {
+
+StateSpace ContinuousStateSpace(const Plant& plant) {
+  const int n = plant.num_states();
+  StateSpace ss;
+  ss.A = Eigen::MatrixXd::Zero(n, n);
+  ss.B = Eigen::VectorXd::Zero(n);
+  ss.C = Eigen::RowVectorXd::Zero(n);
+  // Cascade: the output of block k is the input of block k+1, expressed as
+  // a row "out" (over states) plus a feedthrough "feed" of the plant input.
+  Eigen::RowVectorXd in_row = Eigen::RowVectorXd::Zero(n);  // block input as C x
+  double in_feed = 1.0;                                      // ... + in_feed * u
+  int k = 0;
+  for (const Mode& md : plant.modes) {
+    const int p = k, q = k + 1;
+    ss.A(p, q) = md.omega;
+    ss.A(q, p) = -md.omega;
+    ss.A(q, q) = -md.c;
+    ss.A.row(q) += in_row;
+    ss.B(q) += in_feed;
+    const double g = (md.omega * md.omega) / (md.v * md.v);
+    Eigen::RowVectorXd out_row = g * in_row;
+    out_row(p) += g * (md.v * md.v - md.omega * md.omega) / md.omega;
+    out_row(q) += g * (md.d - md.c);
+    in_row = out_row;
+    in_feed *= g;
+    k += 2;
+  }
+  const int th = k, om = k + 1;
+  ss.A(th, om) = 1.0;
+  ss.A(om, om) = -plant.b / plant.m;
+  ss.A.row(om) += in_row / plant.m;
+  ss.B(om) += in_feed / plant.m;
+  ss.C(th) = 1.0;
+  ss.D = 0.0;
+  return ss;
+}
+
+StateSpace DiscretizeZoh(const Plant& plant, double period_s) {
+  if (!std::isfinite(period_s) || period_s <= 0.0) {
+    throw InputError("sample period = " + std::to_string(period_s) +
+                     " s: must be finite and > 0");
+  }
+  const StateSpace c = ContinuousStateSpace(plant);
+  const int n = static_cast<int>(c.A.rows());
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n + 1, n + 1);
+  M.topLeftCorner(n, n) = c.A * period_s;
+  M.topRightCorner(n, 1) = c.B * period_s;
+  const Eigen::MatrixXd E = M.exp();
+  StateSpace d;
+  d.A = E.topLeftCorner(n, n);
+  d.B = E.topRightCorner(n, 1);
+  d.C = c.C;
+  d.D = c.D;
+  d.period_s = period_s;
+  d.delay_samples = plant.delay_samples;
+  return d;
+}
+
+StateSpace WithDelayStates(const StateSpace& s) {
+  const int n = static_cast<int>(s.A.rows());
+  const int k = s.delay_samples;
+  if (k == 0) return s;
+  // States: plant x (n), then the shift register r_1..r_k with r_1 = u_{t-1},
+  // r_j = u_{t-j}; the plant is driven by r_k = u_{t-k}.
+  StateSpace out;
+  out.A = Eigen::MatrixXd::Zero(n + k, n + k);
+  out.B = Eigen::VectorXd::Zero(n + k);
+  out.C = Eigen::RowVectorXd::Zero(n + k);
+  out.A.topLeftCorner(n, n) = s.A;
+  out.A.block(0, n + k - 1, n, 1) = s.B;
+  for (int j = 1; j < k; ++j) out.A(n + j, n + j - 1) = 1.0;
+  out.B(n) = 1.0;
+  out.C.head(n) = s.C;
+  out.D = (k == 0) ? s.D : 0.0;
+  out.period_s = s.period_s;
+  out.delay_samples = 0;
+  return out;
+}
+
+DiscreteResponse::DiscreteResponse(const StateSpace& s)
+    : D_(s.D), delay_samples_(s.delay_samples) {
+  Eigen::HessenbergDecomposition<Eigen::MatrixXd> hd(s.A);
+  H_ = hd.matrixH();
+  const Eigen::MatrixXd Q = hd.matrixQ();
+  QtB_ = Q.transpose() * s.B;
+  CQ_ = s.C * Q;
+}
+
+std::complex<double> DiscreteResponse::AtZ(std::complex<double> z) const {
+  using cd = std::complex<double>;
+  const int n = static_cast<int>(H_.rows());
+  // Solve (zI - H) x = Q^T B by Gaussian elimination with partial pivoting
+  // restricted to the one subdiagonal: O(n^2).
+  Eigen::MatrixXcd M = -H_.cast<cd>();
+  M.diagonal().array() += z;
+  Eigen::VectorXcd x = QtB_.cast<cd>();
+  for (int k = 0; k + 1 < n; ++k) {
+    if (std::abs(M(k + 1, k)) > std::abs(M(k, k))) {
+      M.row(k).segment(k, n - k).swap(M.row(k + 1).segment(k, n - k));
+      std::swap(x(k), x(k + 1));
+    }
+    if (M(k + 1, k) == cd(0.0)) continue;
+    const cd l = M(k + 1, k) / M(k, k);
+    M.row(k + 1).segment(k, n - k) -= l * M.row(k).segment(k, n - k);
+    x(k + 1) -= l * x(k);
+  }
+  for (int i = n - 1; i >= 0; --i) {
+    cd acc = x(i);
+    for (int j = i + 1; j < n; ++j) acc -= M(i, j) * x(j);
+    x(i) = acc / M(i, i);
+  }
+  return (CQ_.cast<cd>() * x)(0) + D_;
+}
+
+std::complex<double> DiscreteResponse::AtTheta(double theta) const {
+  const std::complex<double> z = std::polar(1.0, theta);
+  return AtZ(z) * std::polar(1.0, -theta * delay_samples_);
+}
+
+std::vector<double> SimulateDiscrete(const StateSpace& s,
+                                     const std::vector<double>& input) {
+  const int n = static_cast<int>(s.A.rows());
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(n), next(n);
+  std::vector<double> y(input.size());
+  const size_t delay = static_cast<size_t>(s.delay_samples);
+  for (size_t t = 0; t < input.size(); ++t) {
+    const double u_now = input[t];
+    const double u_delayed = (t >= delay) ? input[t - delay] : 0.0;
+    y[t] = s.C.dot(x) + (delay == 0 ? s.D * u_now : 0.0);
+    next.noalias() = s.A * x;
+    next += s.B * u_delayed;
+    x.swap(next);
+  }
+  return y;
+}
+
+}  // namespace zwidth
