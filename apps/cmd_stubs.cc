@@ -2,7 +2,6 @@
 #include "apps/common.h"
 namespace zwidth::app {
 void AddFitCommands(CLI::App&) {}
-void AddStabilityCommands(CLI::App&) {}
 void AddExportCommand(CLI::App&) {}
 void AddRunCommand(CLI::App&) {}
 }  // namespace zwidth::app

@@ -1,0 +1,93 @@
+#include "io/stability_files.h"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "io/atomic_file.h"
+#include "model/error.h"
+
+namespace zwidth::io {
+
+nlohmann::json NumberOrNull(double v) {
+  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+}
+
+void WriteBoundaryCsv(const std::string& path, const std::vector<BoundaryRow>& rows) {
+  WriteAtomically(path, [&](const std::string& tmp) {
+    std::FILE* f = std::fopen(tmp.c_str(), "wb");
+    if (!f) throw InputError("cannot create '" + tmp + "'");
+    std::fputs("delay_samples,B,K_cr,f_cr_hz,K_margin,f_margin_hz,unstable_at_zero_k,"
+               "margin_agrees,verified\n", f);
+    for (const BoundaryRow& r : rows) {
+      const auto& p = r.point;
+      std::fprintf(f, "%d,%.12g,%.15g,%.15g,%.15g,%.15g,%d,%d,%d\n", r.delay_samples, p.B, p.K_cr,
+                   p.f_cr_hz, p.K_margin, p.f_margin_hz, p.unstable_at_zero_k ? 1 : 0,
+                   p.AgreesWithMargin() ? 1 : 0, p.verified ? 1 : 0);
+    }
+    const bool ok = std::ferror(f) == 0;
+    if (std::fclose(f) != 0 || !ok) throw InputError("failed writing '" + path + "'");
+  });
+}
+
+nlohmann::json SummaryToJson(const stability::DelaySummary& s) {
+  return {{"delay_samples", s.delay_samples},
+          {"K_cr_at_zero_B", NumberOrNull(s.K_cr_at_zero_B)},
+          {"f_at_zero_B_hz", NumberOrNull(s.f_at_zero_B_hz)},
+          {"B_t", NumberOrNull(s.B_t)},
+          {"K_cr_max", NumberOrNull(s.K_cr_max)},
+          {"B_at_K_cr_max", NumberOrNull(s.B_at_K_cr_max)},
+          {"f_before_hz", NumberOrNull(s.f_before_hz)},
+          {"f_after_hz", NumberOrNull(s.f_after_hz)},
+          {"B_max", NumberOrNull(s.B_max)}};
+}
+
+std::vector<SceneObject> ReadScene(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open scene file (does it exist?)");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(ss.str());
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InputError(path + ": not valid JSON (truncated or malformed): " + e.what());
+  }
+  if (!j.is_object() || !j.contains("objects") || !j["objects"].is_array()) {
+    throw InputError(path + ": expected {\"objects\": [{\"name\": ..., \"K\": ..., \"B\": ...}, ...]}");
+  }
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    if (it.key() != "objects") throw InputError(path + ": unknown key '" + it.key() + "'");
+  }
+  std::vector<SceneObject> out;
+  const auto& arr = j["objects"];
+  for (size_t i = 0; i < arr.size(); ++i) {
+    const auto& o = arr[i];
+    const std::string where = path + ": objects[" + std::to_string(i) + "]";
+    if (!o.is_object()) throw InputError(where + " must be an object");
+    for (auto it = o.begin(); it != o.end(); ++it) {
+      if (it.key() != "name" && it.key() != "K" && it.key() != "B") {
+        throw InputError(where + ": unknown key '" + it.key() + "' (allowed: name, K, B)");
+      }
+    }
+    SceneObject so;
+    so.name = o.contains("name") && o["name"].is_string() ? o["name"].get<std::string>()
+                                                          : "object" + std::to_string(i);
+    for (const char* key : {"K", "B"}) {
+      if (!o.contains(key) || !o[key].is_number()) {
+        throw InputError(where + ": '" + key + "' must be a number");
+      }
+      const double v = o[key].get<double>();
+      if (!std::isfinite(v) || v < 0.0) {
+        throw InputError(where + ": '" + key + "' = " + o[key].dump() + " must be finite and >= 0");
+      }
+      (key[0] == 'K' ? so.K : so.B) = v;
+    }
+    out.push_back(so);
+  }
+  if (out.empty()) throw InputError(path + ": the scene has no objects");
+  return out;
+}
+
+}  // namespace zwidth::io

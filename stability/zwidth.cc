@@ -1,0 +1,329 @@
+#include "stability/zwidth.h"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <functional>
+#include <numbers>
+
+#include "model/error.h"
+#include "stability/schur_cohn.h"
+
+namespace zwidth::stability {
+namespace internal {
+
+// Brent's method (zeroin) for f(a) f(b) <= 0.
+double BrentRoot(const std::function<double(double)>& f, double a, double b, double fa,
+                 double fb, double tol) {
+  if (fa == 0.0) return a;
+  if (fb == 0.0) return b;
+  double c = a, fc = fa, d = b - a, e = d;
+  for (int iter = 0; iter < 200; ++iter) {
+    if ((fb > 0) == (fc > 0)) { c = a; fc = fa; d = e = b - a; }
+    if (std::abs(fc) < std::abs(fb)) { a = b; b = c; c = a; fa = fb; fb = fc; fc = fa; }
+    const double tol1 = 2.0 * 1e-16 * std::abs(b) + 0.5 * tol;
+    const double xm = 0.5 * (c - b);
+    if (std::abs(xm) <= tol1 || fb == 0.0) return b;
+    if (std::abs(e) >= tol1 && std::abs(fa) > std::abs(fb)) {
+      double p, q, r;
+      const double s = fb / fa;
+      if (a == c) { p = 2.0 * xm * s; q = 1.0 - s; }
+      else {
+        q = fa / fc; r = fb / fc;
+        p = s * (2.0 * xm * q * (q - r) - (b - a) * (r - 1.0));
+        q = (q - 1.0) * (r - 1.0) * (s - 1.0);
+      }
+      if (p > 0) q = -q;
+      p = std::abs(p);
+      if (2.0 * p < std::min(3.0 * xm * q - std::abs(tol1 * q), std::abs(e * q))) { e = d; d = p / q; }
+      else { d = xm; e = d; }
+    } else { d = xm; e = d; }
+    a = b; fa = fb;
+    b += (std::abs(d) > tol1) ? d : (xm > 0 ? tol1 : -tol1);
+    fb = f(b);
+  }
+  return b;
+}
+
+// Golden-section search for the extremum of f on [a, b] (sign = +1 max, -1 min).
+double GoldenExtremum(const std::function<double(double)>& f, double a, double b, double sign,
+                      double tol) {
+  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+  double x1 = b - g * (b - a), x2 = a + g * (b - a);
+  double f1 = sign * f(x1), f2 = sign * f(x2);
+  while (b - a > tol) {
+    if (f1 > f2) { b = x2; x2 = x1; f2 = f1; x1 = b - g * (b - a); f1 = sign * f(x1); }
+    else { a = x1; x1 = x2; f1 = f2; x2 = a + g * (b - a); f2 = sign * f(x2); }
+  }
+  return 0.5 * (a + b);
+}
+
+std::vector<double> PolyMul(const std::vector<double>& a, const std::vector<double>& b) {
+  std::vector<double> r(a.size() + b.size() - 1, 0.0);
+  for (size_t i = 0; i < a.size(); ++i)
+    for (size_t j = 0; j < b.size(); ++j) r[i + j] += a[i] * b[j];
+  return r;
+}
+
+}  // namespace internal
+
+using internal::BrentRoot;
+using internal::PolyMul;
+
+bool BoundaryOptions::IsValid(std::string* why) const {
+  auto bad = [&](const char* m) { if (why) *why = m; return false; };
+  if (min_grid_points < 64) return bad("min_grid_points must be >= 64");
+  if (grid_points_per_delay < 8) return bad("grid_points_per_delay must be >= 8");
+  if (!(theta_tolerance > 0.0 && theta_tolerance < 1e-3)) return bad("theta_tolerance must be in (0, 1e-3)");
+  return true;
+}
+
+bool CriticalPoint::AgreesWithMargin(double rel_tol) const {
+  if (std::isnan(K_margin)) return K_cr == 0.0 || std::isinf(K_cr);
+  return std::abs(K_margin - K_cr) <= rel_tol * std::max(std::abs(K_cr), 1e-300);
+}
+
+ZWidth::ZWidth(const Plant& plant, double period_s, int delay_samples,
+               const BoundaryOptions& options)
+    : period_s_(period_s),
+      total_delay_(delay_samples + plant.delay_samples),
+      options_(options),
+      response_([&] {
+        plant.Validate();
+        if (delay_samples < 0) {
+          throw InputError("delay = " + std::to_string(delay_samples) + " samples: must be >= 0");
+        }
+        if (delay_samples > 100000) throw InputError("delay is over 100000 samples");
+        StateSpace d = DiscretizeZoh(plant, period_s);
+        d.delay_samples = 0;  // the delay is handled explicitly here
+        return d;
+      }()) {
+  std::string why;
+  if (!options_.IsValid(&why)) throw InputError("boundary options: " + why);
+  const double T = period_s_;
+  // Denominator from the exactly known discrete poles e^{pT}.
+  den1_ = {1.0};
+  den1_ = PolyMul(den1_, {-std::exp(-plant.b / plant.m * T), 1.0});
+  for (const Mode& md : plant.modes) {
+    const double disc = md.c * md.c / 4.0 - md.omega * md.omega;
+    if (disc < 0.0) {
+      const double r = std::exp(-md.c * T / 2.0), wd = std::sqrt(-disc);
+      den1_ = PolyMul(den1_, {r * r, -2.0 * r * std::cos(wd * T), 1.0});
+    } else {
+      const double s = std::sqrt(disc);
+      den1_ = PolyMul(den1_, {-std::exp((-md.c / 2.0 + s) * T), 1.0});
+      den1_ = PolyMul(den1_, {-std::exp((-md.c / 2.0 - s) * T), 1.0});
+    }
+  }
+  den_ = PolyMul(den1_, {-1.0, 1.0});
+  // Numerator by interpolation at n rotated roots of unity (none is a pole).
+  const int n = static_cast<int>(den_.size()) - 1;
+  num_.assign(n, 0.0);
+  for (int k = 0; k < n; ++k) {
+    const std::complex<double> z = std::polar(1.0, (2.0 * std::numbers::pi * k + std::numbers::pi) / n);
+    std::complex<double> dz = 0.0, zp = 1.0;
+    for (double c : den_) { dz += c * zp; zp *= z; }
+    const std::complex<double> nz = response_.AtZ(z) * dz;
+    std::complex<double> zm = 1.0;
+    for (int m = 0; m < n; ++m) { num_[m] += (nz / zm).real() / n; zm *= z; }
+  }
+
+  // theta grid: uniform, plus dense patches around every resonance and
+  // antiresonance (width ~ damping * T), so that sharp modes are resolved.
+  const int nu = std::max(options_.min_grid_points,
+                          options_.grid_points_per_delay * (total_delay_ + n + 1));
+  std::vector<double> th;
+  th.reserve(nu + 2600 * plant.modes.size());
+  const double pi = std::numbers::pi;
+  th.push_back(pi * 1e-7);
+  for (int i = 1; i < nu; ++i) th.push_back(pi * i / nu);
+  th.push_back(pi * (1.0 - 1e-9));
+  auto patch = [&](double w, double c) {
+    const double disc = w * w - c * c / 4.0;
+    if (disc <= 0.0) return;
+    const double center = std::sqrt(disc) * T;
+    const double h = std::max(c * T / 16.0, 1e-9);
+    for (int k = -320; k <= 320; ++k) {
+      const double t = center + k * h;
+      if (t > th.front() && t < th.back()) th.push_back(t);
+    }
+  };
+  for (const Mode& md : plant.modes) { patch(md.omega, md.c); patch(md.v, md.d); }
+  std::sort(th.begin(), th.end());
+  th.erase(std::unique(th.begin(), th.end()), th.end());
+  grid_theta_ = th;
+  grid_B_.resize(th.size());
+  grid_K_.resize(th.size());
+  for (size_t i = 0; i < th.size(); ++i) Point(th[i], &grid_B_[i], &grid_K_[i]);
+
+  // Monotone pieces of B(theta) between refined extrema.
+  auto Bof = [this](double t) { double b, k; Point(t, &b, &k); return b; };
+  std::vector<double> breaks = {th.front()};
+  for (size_t i = 1; i + 1 < th.size(); ++i) {
+    const double d1 = grid_B_[i] - grid_B_[i - 1], d2 = grid_B_[i + 1] - grid_B_[i];
+    if (d1 * d2 < 0.0) {
+      const double sign = d1 > 0 ? 1.0 : -1.0;
+      breaks.push_back(internal::GoldenExtremum(Bof, th[i - 1], th[i + 1], sign,
+                                                1e-10 * (th[i + 1] - th[i - 1]) + 1e-15));
+    }
+  }
+  breaks.push_back(th.back());
+  for (size_t i = 0; i + 1 < breaks.size(); ++i) {
+    if (!(breaks[i + 1] > breaks[i])) continue;
+    segments_.push_back({breaks[i], breaks[i + 1], Bof(breaks[i]), Bof(breaks[i + 1])});
+  }
+  const std::complex<double> gpi = response_.AtZ(-1.0);
+  const double sgn = (total_delay_ % 2 == 0) ? 1.0 : -1.0;  // z^d at z = -1
+  K_pi_at_zero_B_ = (-sgn / gpi).real();
+}
+
+void ZWidth::Point(double theta, double* B, double* K) const {
+  const std::complex<double> z = std::polar(1.0, theta);
+  const std::complex<double> W = -std::polar(1.0, theta * total_delay_) / response_.AtZ(z);
+  *B = period_s_ * W.imag() / std::sin(theta);
+  *K = W.real() - W.imag() * std::tan(0.5 * theta);
+}
+
+double ZWidth::HzOf(double theta) const { return theta / (2.0 * std::numbers::pi * period_s_); }
+
+std::vector<Crossing> ZWidth::Crossings(double B) const {
+  std::vector<Crossing> out;
+  for (const Segment& s : segments_) {
+    const double lo = std::min(s.Ba, s.Bb), hi = std::max(s.Ba, s.Bb);
+    if (B < lo || B > hi) continue;
+    auto g = [&](double t) { double b, k; Point(t, &b, &k); return b - B; };
+    const double t = BrentRoot(g, s.ta, s.tb, s.Ba - B, s.Bb - B, options_.theta_tolerance);
+    double b, k;
+    Point(t, &b, &k);
+    // Reject a spurious "root" at a singularity of B(theta) (a zero of G_d).
+    if (!std::isfinite(k) || std::abs(b - B) > 1e-6 * (std::abs(B) + std::abs(lo) + std::abs(hi) + 1e-12)) continue;
+    out.push_back({t, k});
+  }
+  out.push_back({std::numbers::pi, K_pi_at_zero_B_ - 2.0 * B / period_s_});
+  return out;
+}
+
+std::vector<double> ZWidth::CharacteristicPolynomial(double K, double B) const {
+  // z^{d+1} D(z) + (K z + (B/T)(z - 1)) N(z)
+  const int d = total_delay_;
+  std::vector<double> p(d + 1 + den_.size(), 0.0);
+  for (size_t i = 0; i < den_.size(); ++i) p[i + d + 1] += den_[i];
+  const std::vector<double> ctrl = {-B / period_s_, K + B / period_s_};
+  const std::vector<double> cn = PolyMul(ctrl, num_);
+  for (size_t i = 0; i < cn.size(); ++i) p[i] += cn[i];
+  return p;
+}
+
+bool ZWidth::IsStable(double K, double B) const {
+  if (K > 0.0) return AllRootsInsideUnitCircle(CharacteristicPolynomial(K, B));
+  if (K < 0.0) return false;  // the integrator pole leaves through z = 1
+  // K = 0+: the factor (z - 1) leaves z^{d+1} D1(z) + (B/T) N(z).
+  const int d = total_delay_;
+  std::vector<double> q(d + 1 + den1_.size(), 0.0);
+  for (size_t i = 0; i < den1_.size(); ++i) q[i + d + 1] += den1_[i];
+  for (size_t i = 0; i < num_.size(); ++i) q[i] += B / period_s_ * num_[i];
+  return AllRootsInsideUnitCircle(q);
+}
+
+CriticalPoint ZWidth::At(double B) const {
+  CriticalPoint cp;
+  cp.B = B;
+  const std::vector<Crossing> xs = Crossings(B);
+  // The paper's reading: the phase crossover with margin nearest 0 dB.
+  double best_db = std::numeric_limits<double>::infinity();
+  for (const Crossing& x : xs) {
+    if (!(x.K > 0.0)) continue;
+    const double db = std::abs(std::log(x.K));
+    if (db < best_db) { best_db = db; cp.K_margin = x.K; cp.f_margin_hz = HzOf(x.theta); }
+  }
+  if (!IsStable(0.0, B)) {
+    cp.unstable_at_zero_k = true;
+    cp.K_cr = 0.0;
+    cp.verified = true;
+    return cp;
+  }
+  cp.K_cr = std::numeric_limits<double>::infinity();
+  for (const Crossing& x : xs) {
+    if (x.K > 0.0 && x.K < cp.K_cr) { cp.K_cr = x.K; cp.f_cr_hz = HzOf(x.theta); }
+  }
+  if (std::isinf(cp.K_cr)) {
+    cp.verified = IsStable(1e6, B);  // no crossing: stable for every K we try
+    return cp;
+  }
+  cp.verified = !options_.verify ||
+                (IsStable(cp.K_cr * (1.0 - 1e-6), B) && !IsStable(cp.K_cr * (1.0 + 1e-6), B));
+  return cp;
+}
+
+double ZWidth::FindTransition(double lo, double hi) const {
+  const double f_lo = At(lo).f_cr_hz, f_hi = At(hi).f_cr_hz;
+  for (int it = 0; it < 60 && hi - lo > 1e-14 * std::max(1.0, hi); ++it) {
+    const double mid = 0.5 * (lo + hi);
+    const double f = At(mid).f_cr_hz;
+    if (std::abs(std::log(f / f_lo)) < std::abs(std::log(f / f_hi))) lo = mid;
+    else hi = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+DelaySummary ZWidth::Summarize() const {
+  DelaySummary s;
+  s.delay_samples = total_delay_;
+  const CriticalPoint c0 = At(0.0);
+  s.K_cr_at_zero_B = c0.K_cr;
+  s.f_at_zero_B_hz = c0.f_cr_hz;
+  if (c0.unstable_at_zero_k) { s.B_max = 0.0; return s; }
+  // B_max: the first B > 0 on the K = 0 boundary where K -> 0+ turns unstable.
+  std::vector<double> cand;
+  auto Kof = [this](double t) { double b, k; Point(t, &b, &k); return k; };
+  for (size_t i = 1; i < grid_theta_.size(); ++i) {
+    if ((grid_K_[i - 1] > 0) != (grid_K_[i] > 0)) {
+      const double t = BrentRoot(Kof, grid_theta_[i - 1], grid_theta_[i], grid_K_[i - 1],
+                                 grid_K_[i], options_.theta_tolerance);
+      double b, k;
+      Point(t, &b, &k);
+      if (b > 0.0 && std::isfinite(b)) cand.push_back(b);
+    }
+  }
+  if (K_pi_at_zero_B_ > 0.0) cand.push_back(0.5 * period_s_ * K_pi_at_zero_B_);
+  std::sort(cand.begin(), cand.end());
+  for (double b : cand) {
+    if (IsStable(0.0, b * (1.0 - 1e-9)) && !IsStable(0.0, b * (1.0 + 1e-9))) { s.B_max = b; break; }
+  }
+  // Scan [0, B_max) for the jump of f_CR and the maximum of K_CR.
+  const double b_hi = std::isfinite(s.B_max) ? s.B_max : (cand.empty() ? 1.0 : 2.0 * cand.back());
+  const int n = 200;
+  double prev_f = c0.f_cr_hz, prev_b = 0.0;
+  s.K_cr_max = c0.K_cr;
+  s.B_at_K_cr_max = 0.0;
+  for (int i = 1; i < n; ++i) {
+    const double b = b_hi * i / n;
+    const CriticalPoint cp = At(b);
+    if (!(cp.K_cr > 0.0) || std::isinf(cp.K_cr)) break;
+    if (cp.K_cr > s.K_cr_max) { s.K_cr_max = cp.K_cr; s.B_at_K_cr_max = b; }
+    if (!s.has_transition && std::abs(std::log(cp.f_cr_hz / prev_f)) > std::log(1.5)) {
+      s.has_transition = true;
+      s.B_t = FindTransition(prev_b, b);
+      const double eps = 1e-9 * std::max(s.B_t, 1e-12);
+      const CriticalPoint before = At(s.B_t - eps), after = At(s.B_t + eps);
+      s.f_before_hz = before.f_cr_hz;
+      s.f_after_hz = after.f_cr_hz;
+      for (const CriticalPoint& p : {before, after}) {
+        if (p.K_cr > s.K_cr_max) { s.K_cr_max = p.K_cr; s.B_at_K_cr_max = p.B; }
+      }
+    }
+    prev_f = cp.f_cr_hz;
+    prev_b = b;
+  }
+  // Refine an interior maximum that is not at the transition.
+  if (s.B_at_K_cr_max > 0.0 && (!s.has_transition || std::abs(s.B_at_K_cr_max - s.B_t) > b_hi / n)) {
+    const double lo = std::max(0.0, s.B_at_K_cr_max - b_hi / n), hi = s.B_at_K_cr_max + b_hi / n;
+    const double bm = internal::GoldenExtremum([this](double b) { return At(b).K_cr; }, lo, hi, 1.0,
+                                               1e-12 * b_hi);
+    const double km = At(bm).K_cr;
+    if (km > s.K_cr_max) { s.K_cr_max = km; s.B_at_K_cr_max = bm; }
+  }
+  return s;
+}
+
+}  // namespace zwidth::stability

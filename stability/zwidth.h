@@ -1,0 +1,110 @@
+// The Z-width: the (K, B) a device renders stably in the sampled loop of eq. (2),
+//
+//   1 + z^-d (K + B (1 - z^-1)/T) G_d(z) = 0,
+//
+// with G_d the exact ZOH plant (including the model's own input delay, which
+// adds to d). On z = e^{j theta} the equation is linear in K and B
+// (D-decomposition): with W(theta) = -z^d / G_d(z),
+//
+//   K + (B/T)(1 - cos theta) = Re W,     (B/T) sin theta = Im W,
+//
+// so each theta in (0, pi) is a boundary point B(theta) = T Im W / sin theta,
+// K(theta) = Re W - Im W tan(theta/2), and theta = pi adds the real crossing
+// K = Re W(pi) - 2B/T. For a given B the crossings are the roots of
+// B(theta) = B. B(theta) does not depend on B, so it is tabulated once on a
+// grid that is dense near every resonance and antiresonance, its extrema are
+// refined, and each monotone piece holds at most one root, found by Brent's
+// method. Every K_CR is verified by a Schur-Cohn test of the closed-loop
+// polynomial just below and just above it.
+#pragma once
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "model/plant.h"
+#include "model/state_space.h"
+
+namespace zwidth::stability {
+
+struct BoundaryOptions {
+  int min_grid_points = 2048;    // uniform theta grid on (0, pi), >= 64
+  int grid_points_per_delay = 64;  // extra resolution for the delay's phase, >= 8
+  double theta_tolerance = 1e-13;  // Brent tolerance on theta [rad]
+  bool verify = true;              // Schur-Cohn check of each K_CR
+  bool IsValid(std::string* why) const;
+};
+
+struct Crossing {
+  double theta = 0.0;  // rad/sample
+  double K = 0.0;      // N m/rad at which a closed-loop pole is at e^{j theta}
+};
+
+struct CriticalPoint {
+  double B = 0.0;
+  // Smallest K > 0 with a closed-loop pole on the unit circle; 0 when the loop
+  // is already unstable as K -> 0+; +inf when no crossing exists.
+  double K_cr = std::numeric_limits<double>::quiet_NaN();
+  double f_cr_hz = std::numeric_limits<double>::quiet_NaN();  // ultimate frequency
+  bool unstable_at_zero_k = false;
+  // Schur-Cohn agrees: stable at 0.999999 K_cr, unstable at 1.000001 K_cr.
+  bool verified = false;
+  // The paper's reading, eq. (4): the gain margin of
+  // G_d / (z^d + B (1 - z^-1)/T G_d) as MATLAB's margin() reports it (the phase
+  // crossover whose margin is nearest 0 dB). It ignores whether the loop with
+  // K = 0 is stable, so past B_max it is positive where no K is stable.
+  double K_margin = std::numeric_limits<double>::quiet_NaN();
+  double f_margin_hz = std::numeric_limits<double>::quiet_NaN();
+  bool AgreesWithMargin(double rel_tol = 1e-6) const;
+};
+
+struct DelaySummary {
+  int delay_samples = 0;   // loop delay d (the model's own delay is added)
+  double K_cr_at_zero_B = std::numeric_limits<double>::quiet_NaN();
+  double f_at_zero_B_hz = std::numeric_limits<double>::quiet_NaN();
+  bool has_transition = false;
+  double B_t = std::numeric_limits<double>::quiet_NaN();         // f_CR jumps here
+  double K_cr_max = std::numeric_limits<double>::quiet_NaN();    // max of K_CR(B)
+  double B_at_K_cr_max = std::numeric_limits<double>::quiet_NaN();
+  double f_before_hz = std::numeric_limits<double>::quiet_NaN();
+  double f_after_hz = std::numeric_limits<double>::quiet_NaN();
+  double B_max = std::numeric_limits<double>::infinity();  // K_CR reaches 0
+};
+
+class ZWidth {
+ public:
+  // Throws InputError for an invalid plant, period or delay.
+  ZWidth(const Plant& plant, double period_s, int delay_samples,
+         const BoundaryOptions& options = {});
+
+  CriticalPoint At(double B) const;
+  std::vector<Crossing> Crossings(double B) const;
+  // Schur-Cohn on the closed-loop polynomial; K = 0 is taken as 0+ (the pole
+  // at z = 1 that K = 0 leaves on the circle moves inside for K > 0).
+  bool IsStable(double K, double B) const;
+  DelaySummary Summarize() const;
+
+  int total_delay() const { return total_delay_; }
+  double period_s() const { return period_s_; }
+  // Closed-loop characteristic polynomial coefficients (z^0 first).
+  std::vector<double> CharacteristicPolynomial(double K, double B) const;
+
+ private:
+  struct Segment { double ta, tb, Ba, Bb; };
+  void Point(double theta, double* B, double* K) const;
+  double FindTransition(double b_lo, double b_hi) const;
+  double HzOf(double theta) const;
+
+  double period_s_;
+  int total_delay_;
+  BoundaryOptions options_;
+  DiscreteResponse response_;
+  std::vector<double> num_;      // N(z) of G_d = N/D, z^0 first
+  std::vector<double> den_;      // D(z) monic, z^0 first
+  std::vector<double> den1_;     // D(z) / (z - 1)
+  std::vector<Segment> segments_;
+  std::vector<double> grid_theta_, grid_K_, grid_B_;
+  double K_pi_at_zero_B_ = 0.0;  // Re W(pi)
+};
+
+}  // namespace zwidth::stability
