@@ -1,7 +1,6 @@
 // Registration of commands whose modules have not landed yet.
 #include "apps/common.h"
 namespace zwidth::app {
-void AddFitCommands(CLI::App&) {}
 void AddExportCommand(CLI::App&) {}
 void AddRunCommand(CLI::App&) {}
 }  // namespace zwidth::app

@@ -1,0 +1,147 @@
+#include "apps/fit_support.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include "io/stability_files.h"
+#include "model/error.h"
+#include "stability/zwidth.h"
+
+namespace zwidth::app {
+namespace {
+
+struct Row { std::string name, unit; double value, std; };
+
+std::vector<Row> Rows(const Plant& p, const Plant* s) {
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<Row> r = {{"m", "kg m^2", p.m, s ? s->m : inf}, {"b", "N m s/rad", p.b, s ? s->b : inf}};
+  for (size_t i = 0; i < p.modes.size(); ++i) {
+    const std::string k = std::to_string(i + 1);
+    const Mode* e = s ? &s->modes[i] : nullptr;
+    r.push_back({"omega" + k, "rad/s", p.modes[i].omega, e ? e->omega : inf});
+    r.push_back({"c" + k, "rad/s", p.modes[i].c, e ? e->c : inf});
+    r.push_back({"v" + k, "rad/s", p.modes[i].v, e ? e->v : inf});
+    r.push_back({"d" + k, "rad/s", p.modes[i].d, e ? e->d : inf});
+  }
+  return r;
+}
+
+}  // namespace
+
+std::string DefaultReferencePath() {
+  namespace fs = std::filesystem;
+  const fs::path src = fs::path(ZWIDTH_SOURCE_DIR) / "datasets/phantom/table1.json";
+  if (fs::exists(src)) return src.string();
+  return "datasets/phantom/table1.json";
+}
+
+void ResolveDelayFlag(const std::string& flag, fit::FitOptions* o) {
+  if (flag == "auto") { o->auto_delay = true; return; }
+  try {
+    size_t pos = 0;
+    const int d = std::stoi(flag, &pos);
+    if (pos != flag.size() || d < 0) throw std::invalid_argument("");
+    o->delay_samples = d;
+  } catch (const std::exception&) {
+    throw InputError("--delay-samples '" + flag + "': expected 'auto' or an integer >= 0");
+  }
+}
+
+io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::FitOptions& o,
+                             const std::string& source, fit::FitResult* out) {
+  const fit::FitResult r = fit::FitModel(frf, o);
+  if (out) *out = r;
+  for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  if (r.status != fit::FitStatus::kConverged) throw ComputationError(r.message);
+  io::ModelFile mf;
+  mf.plant = r.plant;
+  mf.plant.name = "fitted from " + source;
+  mf.std_errors = r.std_errors;
+  mf.sample_period_s = 1.0 / frf.sample_rate_hz;
+  mf.fit = {{"status", fit::ToString(r.status)},
+            {"source", source},
+            {"modes", o.num_modes},
+            {"delay_samples", r.plant.delay_samples},
+            {"delay_chosen_automatically", o.auto_delay},
+            {"chi2_per_dof", r.chi2_per_dof},
+            {"nrmse_fit_percent", r.nrmse_fit_percent},
+            {"worst_misfit_hz", r.worst_misfit_hz},
+            {"std_scale", r.std_scale},
+            {"covariance_ok", r.covariance_ok},
+            {"num_bins", r.num_residuals / 2},
+            {"num_averages", frf.num_averages},
+            {"sample_rate_hz", frf.sample_rate_hz},
+            {"f_min_hz", frf.f_hz.front()},
+            {"f_max_hz", frf.f_hz.back()},
+            {"starts_tried", r.starts_tried},
+            {"residual", "exact ZOH response, weighted by the Welch per-bin std"},
+            {"order", "canonical: pole pairs sorted by omega, zero pairs by v (G is unchanged)"},
+            {"warnings", r.warnings}};
+  return mf;
+}
+
+std::string ParameterTable(const io::ModelFile& mf) {
+  std::ostringstream os;
+  char line[160];
+  std::snprintf(line, sizeof line, "%-8s %14s %12s  %s\n", "param", "value", "std", "unit");
+  os << line;
+  for (const Row& r : Rows(mf.plant, mf.std_errors ? &*mf.std_errors : nullptr)) {
+    std::snprintf(line, sizeof line, "%-8s %14.6g %12.3g  %s\n", r.name.c_str(), r.value, r.std, r.unit.c_str());
+    os << line;
+  }
+  std::snprintf(line, sizeof line, "%-8s %14d %12s  %s\n", "delay", mf.plant.delay_samples, "", "samples");
+  os << line;
+  return os.str();
+}
+
+nlohmann::json CompareModels(const io::ModelFile& model, const io::ModelFile& ref,
+                             const std::vector<int>& delays, double T, std::string* text) {
+  std::ostringstream os;
+  nlohmann::json j;
+  j["parameters"] = nlohmann::json::array();
+  const bool same_shape = model.plant.modes.size() == ref.plant.modes.size();
+  char line[200];
+  if (same_shape) {
+    const auto a = Rows(model.plant, model.std_errors ? &*model.std_errors : nullptr);
+    const auto b = Rows(ref.plant, nullptr);
+    std::snprintf(line, sizeof line, "%-8s %24s %12s %9s %9s  %s\n", "param", "fitted +- std", "reference",
+                  "diff %", "diff/std", "unit");
+    os << line;
+    for (size_t i = 0; i < a.size(); ++i) {
+      const double pct = 100.0 * (a[i].value - b[i].value) / b[i].value;
+      const double nsd = std::isfinite(a[i].std) && a[i].std > 0 ? (a[i].value - b[i].value) / a[i].std
+                                                                : std::numeric_limits<double>::quiet_NaN();
+      std::snprintf(line, sizeof line, "%-8s %12.6g +- %-9.3g %12.6g %9.2f %9.2f  %s\n", a[i].name.c_str(),
+                    a[i].value, a[i].std, b[i].value, pct, nsd, a[i].unit.c_str());
+      os << line;
+      j["parameters"].push_back({{"name", a[i].name}, {"value", a[i].value}, {"std", io::NumberOrNull(a[i].std)},
+                                 {"reference", b[i].value}, {"diff_percent", pct},
+                                 {"diff_in_std", io::NumberOrNull(nsd)}, {"unit", a[i].unit}});
+    }
+  } else {
+    os << "the models have different numbers of modes (" << model.plant.modes.size() << " vs "
+       << ref.plant.modes.size() << "): no per-parameter comparison\n";
+  }
+  j["stability"] = nlohmann::json::array();
+  std::snprintf(line, sizeof line, "\n%-6s %-10s %12s %10s %12s %10s\n", "delay", "model", "K_cr(B=0)", "B_t",
+                "K_cr^max", "B_max");
+  os << line;
+  for (int d : delays) {
+    nlohmann::json e = {{"delay_samples", d}};
+    for (int which = 0; which < 2; ++which) {
+      const Plant& p = which == 0 ? model.plant : ref.plant;
+      const stability::DelaySummary s = stability::ZWidth(p, T, d).Summarize();
+      e[which == 0 ? "model" : "reference"] = io::SummaryToJson(s);
+      std::snprintf(line, sizeof line, "%-6d %-10s %12.5g %10.5g %12.5g %10.5g\n", d,
+                    which == 0 ? "model" : "reference", s.K_cr_at_zero_B, s.B_t, s.K_cr_max, s.B_max);
+      os << line;
+    }
+    j["stability"].push_back(e);
+  }
+  if (text) *text = os.str();
+  return j;
+}
+
+}  // namespace zwidth::app

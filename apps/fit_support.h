@@ -1,0 +1,33 @@
+// Wiring shared by `fit`, `compare` and `run`.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "fit/fit.h"
+#include "io/model_json.h"
+
+namespace zwidth::app {
+
+// Parses "auto" or an integer for --delay-samples.
+void ResolveDelayFlag(const std::string& flag, fit::FitOptions* o);
+
+// Fits and packs the model file (std, fit metrics); throws ComputationError
+// when the fit does not converge.
+io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::FitOptions& o,
+                             const std::string& source, fit::FitResult* result = nullptr);
+
+// "parameter value std unit" table.
+std::string ParameterTable(const io::ModelFile& mf);
+
+// Per-parameter comparison and the stability figures of both models at the
+// given delays. Returns JSON; *text gets the printable version.
+nlohmann::json CompareModels(const io::ModelFile& model, const io::ModelFile& reference,
+                             const std::vector<int>& delays, double period_s, std::string* text);
+
+// The default reference: datasets/phantom/table1.json of the source tree.
+std::string DefaultReferencePath();
+
+}  // namespace zwidth::app
