@@ -1,0 +1,146 @@
+#include <cmath>
+#include <complex>
+#include <numbers>
+#include <random>
+
+#include <Eigen/Dense>
+#include <gtest/gtest.h>
+
+#include "model/error.h"
+#include "model/plant.h"
+#include "model/simulate.h"
+#include "model/state_space.h"
+#include "model/zoh_modal.h"
+
+namespace zwidth {
+namespace {
+
+using cd = std::complex<double>;
+
+TEST(Plant, StateSpaceRealisesTheFactoredFormula) {
+  const Plant p = PhantomTable1();
+  const StateSpace ss = ContinuousStateSpace(p);
+  for (double f : {0.3, 5.0, 66.0, 76.0, 87.0, 184.0, 450.0, 3000.0}) {
+    const double w = 2 * std::numbers::pi * f;
+    Eigen::MatrixXcd M = cd(0, w) * Eigen::MatrixXcd::Identity(6, 6) - ss.A.cast<cd>();
+    const cd g = (ss.C.cast<cd>() * M.partialPivLu().solve(ss.B.cast<cd>()))(0) + ss.D;
+    // Factored formula written out here, independently of ContinuousResponse.
+    const cd s(0, w);
+    cd ref = 1.0 / (1.168e-3 * s * s + 0.00584 * s);
+    ref *= (479.166 * 479.166) / (417.612 * 417.612) * (s * s + 80.0 * s + 417.612 * 417.612) /
+               (s * s + 83.0 * s + 479.166 * 479.166);
+    ref *= (1159.31 * 1159.31) / (546.626 * 546.626) * (s * s + 90.0 * s + 546.626 * 546.626) /
+           (s * s + 352.0 * s + 1159.31 * 1159.31);
+    EXPECT_LT(std::abs(g - ref) / std::abs(ref), 1e-12) << f;
+    EXPECT_LT(std::abs(ContinuousResponse(p, w) - ref) / std::abs(ref), 1e-14) << f;
+  }
+}
+
+// RK4 with 2000 sub-steps per period, input held: the reference for the ZOH.
+Eigen::VectorXd Rk4Step(const StateSpace& c, const Eigen::VectorXd& x0, double u, double T, int steps) {
+  Eigen::VectorXd x = x0;
+  const double h = T / steps;
+  auto f = [&](const Eigen::VectorXd& s) { Eigen::VectorXd d = c.A * s + c.B * u; return d; };
+  for (int i = 0; i < steps; ++i) {
+    const Eigen::VectorXd k1 = f(x), k2 = f(x + 0.5 * h * k1), k3 = f(x + 0.5 * h * k2), k4 = f(x + h * k3);
+    x += h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4);
+  }
+  return x;
+}
+
+TEST(Zoh, EqualsFineStepSimulationOfTheContinuousPlantUnderAHeldInput) {
+  const Plant p = PhantomTable1();
+  const double T = 1e-3;
+  const StateSpace c = ContinuousStateSpace(p), d = DiscretizeZoh(p, T);
+  std::mt19937 rng(7);
+  std::normal_distribution<double> n(0, 0.03);
+  std::vector<double> u(200);
+  for (double& v : u) v = n(rng);
+  const std::vector<double> yd = SimulateDiscrete(d, u);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(6);
+  double max_err = 0, max_y = 0;
+  for (size_t k = 0; k < u.size(); ++k) {
+    const double y = c.C.dot(x);
+    max_err = std::max(max_err, std::abs(y - yd[k]));
+    max_y = std::max(max_y, std::abs(y));
+    x = Rk4Step(c, x, u[k], T, 2000);
+  }
+  EXPECT_LT(max_err / max_y, 1e-9);
+}
+
+TEST(Zoh, ModalFormEqualsStateSpaceResponse) {
+  const Plant p = PhantomTable1();
+  for (double T : {1e-3, 5e-4, 1e-4}) {
+    const DiscreteResponse r(DiscretizeZoh(p, T));
+    ZohModalForm<double> f;
+    std::vector<double> sec;
+    for (const Mode& m : p.modes) { sec.insert(sec.end(), {m.omega, m.c, m.v, m.d}); }
+    ASSERT_TRUE(f.Build(p.m, p.b, sec.data(), 2, T));
+    for (double th = 0.001; th < 3.14; th += 0.0137) {
+      const cd a = r.AtTheta(th);
+      const Cx<double> b = f.At(std::cos(th), std::sin(th));
+      EXPECT_LT(std::abs(a - cd(b.re, b.im)) / std::abs(a), 1e-9) << T << " " << th;
+    }
+  }
+}
+
+TEST(Zoh, RigidBodyMatchesTheClosedForm) {
+  // ZOH of 1/(s(ms+b)): G_d = T/(b(z-1)) - (1-e)/(a b) (1/(z-e)) ... check the
+  // double integrator limit b -> small against T^2 (z+1) / (2 m (z-1)^2).
+  Plant p;
+  p.m = 2.0;
+  p.b = 1e-9;
+  const double T = 0.01;
+  const DiscreteResponse r(DiscretizeZoh(p, T));
+  for (double th : {0.01, 0.3, 1.0, 2.5}) {
+    const cd z = std::polar(1.0, th);
+    const cd ref = T * T * (z + 1.0) / (2.0 * p.m * (z - 1.0) * (z - 1.0));
+    EXPECT_LT(std::abs(r.AtZ(z) - ref) / std::abs(ref), 1e-6) << th;
+  }
+}
+
+TEST(Simulate, NoiseFreeOutputIsTheConvolutionWithTheImpulseResponse) {
+  const Plant p = PhantomTable1();
+  SimulateOptions o;
+  o.seconds = 0.5;
+  o.encoder_step_rad = 0.0;
+  o.delay_samples = 3;
+  const SimulatedLog log = SimulateLog(p, o);
+  // Impulse response h of G_d z^-3 from the state space.
+  Plant pd = p;
+  pd.delay_samples = 3;
+  const StateSpace d = DiscretizeZoh(pd, 1e-3);
+  std::vector<double> imp(log.torque.size(), 0.0);
+  imp[0] = 1.0;
+  const std::vector<double> h = SimulateDiscrete(d, imp);
+  EXPECT_EQ(h[0], 0.0);
+  EXPECT_EQ(h[3], 0.0);  // strictly proper after the delay
+  for (size_t k = 0; k < log.torque.size(); k += 37) {
+    double acc = 0;
+    for (size_t j = 0; j <= k; ++j) acc += h[j] * log.torque[k - j];
+    EXPECT_NEAR(log.position[k], acc, 1e-12 * (1 + std::abs(acc)));
+  }
+}
+
+TEST(Simulate, TorqueHasTheRequestedRms) {
+  const std::vector<double> u = BandLimitedNoise(30000, 1000, 300, 0.03, 5);
+  double ss = 0;
+  for (double v : u) ss += v * v;
+  EXPECT_NEAR(std::sqrt(ss / u.size()), 0.03, 1e-12);
+}
+
+TEST(Plant, ValidationNamesTheParameter) {
+  Plant p = PhantomTable1();
+  p.modes[1].c = -3;
+  std::string why;
+  EXPECT_FALSE(p.IsValid(&why));
+  EXPECT_NE(why.find("modes[1].c"), std::string::npos) << why;
+  p = PhantomTable1();
+  p.m = std::nan("");
+  EXPECT_FALSE(p.IsValid(&why));
+  EXPECT_NE(why.find("m = "), std::string::npos);
+  EXPECT_THROW(DiscretizeZoh(PhantomTable1(), 0.0), InputError);
+}
+
+}  // namespace
+}  // namespace zwidth
