@@ -43,7 +43,7 @@ void AddFitCommands(CLI::App& app) {
   struct CompareFlags {
     std::string model, reference, summary;
     std::vector<int> delays = {2, 4, 8};
-    double period = 0.0;
+    double period = kNotGiven;
     bool json = false;
   };
   auto c = std::make_shared<CompareFlags>();
@@ -57,8 +57,7 @@ void AddFitCommands(CLI::App& app) {
     const io::ModelFile m = io::ReadModelJson(c->model);
     const io::ModelFile r = io::ReadModelJson(c->reference.empty() ? DefaultReferencePath() : c->reference);
     for (int d : c->delays) if (d < 0) throw InputError("--delays must be >= 0");
-    if (c->period < 0 || !std::isfinite(c->period)) throw InputError("--period must be > 0");
-    const double T = c->period > 0 ? c->period : (m.sample_period_s ? *m.sample_period_s : 0.001);
+    const double T = ResolvePeriod(c->period, m);
     std::string text;
     const nlohmann::json j = CompareModels(m, r, c->delays, T, &text);
     if (c->json) std::cout << j.dump(2) << std::endl;

@@ -14,13 +14,17 @@ namespace zwidth::app {
 namespace {
 
 // --period when given, else the model's sample_period_s, else 1 ms.
+}  // namespace
+
 double ResolvePeriod(double flag, const io::ModelFile& mf) {
-  double T = flag > 0.0 ? flag : (mf.sample_period_s ? *mf.sample_period_s : 0.001);
-  if (flag != 0.0 && !(flag > 0.0 && std::isfinite(flag))) {
-    throw InputError("--period = " + std::to_string(flag) + ": must be finite and > 0");
+  if (std::isnan(flag)) return mf.sample_period_s ? *mf.sample_period_s : 0.001;
+  if (!(flag > 0.0 && std::isfinite(flag))) {
+    throw InputError("--period = " + std::to_string(flag) + " s: must be finite and > 0");
   }
-  return T;
+  return flag;
 }
+
+namespace {
 
 void CheckDelay(int d, const char* flag) {
   if (d < 0) throw InputError(std::string(flag) + " = " + std::to_string(d) + ": delays must be >= 0 samples");
@@ -33,7 +37,7 @@ void AddStabilityCommands(CLI::App& app) {
   struct BoundaryFlags {
     std::string model, out, summary;
     std::vector<int> delays = {2, 4, 8};
-    double period = 0.0, b_min = 0.0, b_max = -1.0, b_step = 0.0005;
+    double period = kNotGiven, b_min = 0.0, b_max = -1.0, b_step = 0.0005;
   };
   auto bf = std::make_shared<BoundaryFlags>();
   CLI::App* b = app.add_subcommand("boundary", "exact Z-width K_CR(B) and the paper's margin reading, per delay");
@@ -109,7 +113,7 @@ void AddStabilityCommands(CLI::App& app) {
   struct RelayFlags {
     std::string model, trace;
     stability::RelayOptions o;
-    double period = 0.0;
+    double period = kNotGiven;
     bool json = false;
   };
   auto rf = std::make_shared<RelayFlags>();
@@ -162,7 +166,7 @@ void AddStabilityCommands(CLI::App& app) {
   struct CheckFlags {
     std::string scene, model;
     int delay = -1;
-    double period = 0.0;
+    double period = kNotGiven;
     bool json = false;
   };
   auto cf = std::make_shared<CheckFlags>();

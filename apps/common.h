@@ -9,6 +9,9 @@
 
 #include "ident/welch.h"
 #include "io/log.h"
+#include "io/model_json.h"
+
+#include <limits>
 
 namespace zwidth::app {
 
@@ -37,6 +40,11 @@ class StageTimer {
   bool enabled_;
   std::chrono::steady_clock::time_point start_;
 };
+
+// Flags whose absence means "use the model's value".
+inline constexpr double kNotGiven = std::numeric_limits<double>::quiet_NaN();
+// --period when given (must be > 0), else the model's sample_period_s, else 1 ms.
+double ResolvePeriod(double flag, const io::ModelFile& mf);
 
 void AddSimulateCommand(CLI::App& app);
 void AddEstimateCommand(CLI::App& app);

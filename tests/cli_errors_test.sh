@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# Bad input across subcommands: exit code 2, a message on stderr that names
+# what and where, and no output file left behind. Usage: cli_errors_test.sh ZWIDTH SRC
+set -u
+ZW=$1; SRC=$2
+T=$(mktemp -d); trap 'rm -rf "$T"' EXIT
+pass=0; fail=0
+M=$SRC/datasets/phantom/table1.json
+"$ZW" simulate --model "$M" -o "$T/good.csv" --seconds 10 2>/dev/null
+"$ZW" simulate --model "$M" -o "$T/good.h5" --seconds 10 2>/dev/null
+
+# expect NAME PATTERN OUTPUT -- command...
+expect() {
+  local name=$1 pattern=$2 out=$3; shift 4
+  "$@" >"$T/stdout" 2>"$T/stderr"; local rc=$?
+  if [ $rc -ne 2 ]; then echo "FAIL $name: exit $rc, expected 2"; cat "$T/stderr"; fail=$((fail+1)); return; fi
+  if ! grep -qiE -e "$pattern" "$T/stderr"; then echo "FAIL $name: stderr lacks /$pattern/:"; cat "$T/stderr"; fail=$((fail+1)); return; fi
+  if [ -n "$out" ] && ls "$out"* >/dev/null 2>&1; then echo "FAIL $name: left $out"; fail=$((fail+1)); return; fi
+  echo "ok   $name: $(head -c 150 "$T/stderr" | tr '\n' ' ')"; pass=$((pass+1))
+}
+
+{ head -1 "$T/good.csv"; sed -n '2,5000p' "$T/good.csv"; echo "5.0,nan,0.1"; sed -n '5002,8000p' "$T/good.csv"; } > "$T/nan.csv"
+expect nan-row "non-finite.*line 5001" "$T/o1.csv" -- "$ZW" estimate "$T/nan.csv" -o "$T/o1.csv"
+awk -F, 'NR==100{$1="0.05"}1' OFS=, "$T/good.csv" > "$T/back.csv"
+expect time-backwards "not strictly increasing at line 100" "$T/o2.csv" -- "$ZW" estimate "$T/back.csv" -o "$T/o2.csv"
+sed '1s/torque/force/' "$T/good.csv" > "$T/nocol.csv"
+expect missing-column "no column 'torque'" "$T/o3.csv" -- "$ZW" estimate "$T/nocol.csv" -o "$T/o3.csv"
+: > "$T/empty.csv"
+expect empty-file "empty file" "$T/o4.csv" -- "$ZW" estimate "$T/empty.csv" -o "$T/o4.csv"
+head -c 20000 "$T/good.h5" > "$T/trunc.h5"
+expect truncated-hdf5 "trunc.h5.*(truncated|corrupt|cannot)" "$T/o5.csv" -- "$ZW" estimate "$T/trunc.h5" -o "$T/o5.csv"
+awk -F, 'NR>1{$2="0.5"}1' OFS=, "$T/good.csv" > "$T/const.csv"
+expect constant-input "constant" "$T/o6.csv" -- "$ZW" estimate "$T/const.csv" -o "$T/o6.csv"
+sed 's/"m": 1.168e-3/"m": -1.168e-3/' "$M" > "$T/neg.json"
+expect model-negative "'?m'? = -0.001168|m = -" "$T/o7.csv" -- "$ZW" boundary "$T/neg.json" -o "$T/o7.csv"
+grep -v '"b"' "$M" > "$T/miss.json"
+expect model-missing "missing key 'b'" "$T/o8.csv" -- "$ZW" boundary "$T/miss.json" -o "$T/o8.csv"
+sed 's/"b": 0.00584/"b": NaN/' "$M" > "$T/nan.json"
+expect model-nan "not valid JSON|not finite|number" "$T/o9.csv" -- "$ZW" boundary "$T/nan.json" -o "$T/o9.csv"
+head -c 60 "$M" > "$T/trunc.json"
+expect model-truncated "not valid JSON" "$T/o10.csv" -- "$ZW" boundary "$T/trunc.json" -o "$T/o10.csv"
+sed 's/"modes"/"mdoes"/' "$M" > "$T/typo.json"
+expect model-unknown-key "unknown key 'mdoes'" "$T/o11.csv" -- "$ZW" boundary "$T/typo.json" -o "$T/o11.csv"
+expect negative-delay "delays must be >= 0" "$T/o12.csv" -- "$ZW" boundary "$M" --delays 2,-1 -o "$T/o12.csv"
+expect zero-period "period" "$T/o13.csv" -- "$ZW" boundary "$M" --period 0 -o "$T/o13.csv"
+expect window-longer "10000 samples.*fewer than one window of 16384.*--window-length 8192" "$T/o14.csv" -- "$ZW" estimate "$T/good.h5" --window-length 16384 -o "$T/o14.csv"
+expect overlap-one "overlap" "$T/o15.csv" -- "$ZW" estimate "$T/good.h5" --overlap 1 -o "$T/o15.csv"
+expect no-output-folder "output folder .* does not exist" "" -- "$ZW" estimate "$T/good.h5" -o "$T/nope/frf.csv"
+expect missing-file "cannot open|does it exist" "$T/o16.csv" -- "$ZW" estimate "$T/absent.csv" -o "$T/o16.csv"
+expect bad-window-name "--window 'kaiser'" "$T/o17.csv" -- "$ZW" estimate "$T/good.h5" --window kaiser -o "$T/o17.csv"
+expect relay-negative-delay "delay" "" -- "$ZW" relay "$M" --delay -2 --damping 0
+expect check-negative-K "'K'" "" -- "$ZW" check <(echo '{"objects":[{"name":"w","K":-1,"B":0}]}') --model "$M" --delay 2
+expect unknown-flag "unknown|extra|not expected" "" -- "$ZW" boundary "$M" --bogus 1 -o "$T/x.csv"
+awk -F, 'NR!=200' OFS=, "$T/good.csv" > "$T/gap.csv"
+expect not-uniform "not uniformly sampled" "$T/o18.csv" -- "$ZW" estimate "$T/gap.csv" -o "$T/o18.csv"
+expect fit-bad-delay "delay-samples 'soon'" "$T/o19.json" -- "$ZW" fit "$T/good.h5" --delay-samples soon -o "$T/o19.json"
+echo "$pass passed, $fail failed"
+[ $fail -eq 0 ]

@@ -1,0 +1,122 @@
+#include <cmath>
+#include <numbers>
+
+#include <gtest/gtest.h>
+
+#include "fit/fit.h"
+#include "ident/welch.h"
+#include "model/plant.h"
+#include "model/simulate.h"
+
+namespace zwidth::fit {
+namespace {
+
+// Logs are simulated by SimulateLog (default settings: 30 s, band-limited
+// white torque 0.03 N m RMS to 300 Hz, encoder 2 pi / 40960 rad per count).
+ident::FrequencyResponse Frf(const Plant& p, uint64_t seed, double rate = 1000, int delay = 0) {
+  SimulateOptions so;
+  so.seed = seed;
+  so.sample_rate_hz = rate;
+  so.delay_samples = delay;
+  const SimulatedLog log = SimulateLog(p, so);
+  return ident::EstimateFrequencyResponse(log.torque, log.position, rate, ident::WelchOptions{});
+}
+
+struct Score { int ok = 0; std::vector<std::vector<double>> values, stds; };
+
+std::vector<double> Flat(const Plant& p) {
+  std::vector<double> v = {p.m, p.b};
+  for (const Mode& m : p.modes) v.insert(v.end(), {m.omega, m.c, m.v, m.d});
+  return v;
+}
+
+// m, b and the frequencies within 2%, the dampings within 10%.
+bool WithinTolerance(const Plant& fit, const Plant& truth) {
+  const auto a = Flat(fit), b = Flat(truth);
+  for (size_t i = 0; i < a.size(); ++i) {
+    const bool damping = i >= 2 && ((i - 2) % 2 == 1);
+    if (std::abs(a[i] / b[i] - 1) > (damping ? 0.10 : 0.02)) return false;
+  }
+  return true;
+}
+
+Score FitSeeds(const Plant& truth, int seeds, double rate = 1000, int delay = 0, bool auto_delay = false) {
+  Score s;
+  for (int seed = 1; seed <= seeds; ++seed) {
+    FitOptions o;
+    o.num_modes = static_cast<int>(truth.modes.size());
+    o.auto_delay = auto_delay;
+    const FitResult r = FitModel(Frf(truth, seed, rate, delay), o);
+    if (r.status == FitStatus::kConverged && WithinTolerance(r.plant, truth) &&
+        r.plant.delay_samples == delay) {
+      ++s.ok;
+    }
+    s.values.push_back(Flat(r.plant));
+    s.stds.push_back(Flat(r.std_errors));
+  }
+  return s;
+}
+
+TEST(Fit, TableOneFromTheAutomaticStartOnTwentySeeds) {
+  const Plant truth = PhantomTable1();
+  const Score s = FitSeeds(truth, 20);
+  EXPECT_GE(s.ok, 18);
+  // Reported standard errors against the scatter over seeds (factor 1.5).
+  const size_t np = s.values[0].size();
+  for (size_t i = 0; i < np; ++i) {
+    double mean = 0, sd_rep = 0;
+    for (const auto& v : s.values) mean += v[i];
+    mean /= s.values.size();
+    double var = 0;
+    for (const auto& v : s.values) var += (v[i] - mean) * (v[i] - mean);
+    const double scatter = std::sqrt(var / (s.values.size() - 1));
+    for (const auto& v : s.stds) sd_rep += v[i];
+    sd_rep /= s.stds.size();
+    EXPECT_GT(sd_rep / scatter, 1 / 1.5) << "parameter " << i << " reported " << sd_rep << " scatter " << scatter;
+    EXPECT_LT(sd_rep / scatter, 1.5) << "parameter " << i << " reported " << sd_rep << " scatter " << scatter;
+  }
+}
+
+Plant OtherDevice() {
+  Plant p;
+  p.m = 4e-3;
+  p.b = 0.04;  // b/m = 10 rad/s: the rigid pole inside the 0.7-300 Hz band
+  p.modes = {{2 * std::numbers::pi * 40, 30, 2 * std::numbers::pi * 33, 20},
+             {2 * std::numbers::pi * 130, 90, 2 * std::numbers::pi * 110, 60}};
+  return p;
+}
+
+TEST(Fit, AnotherDeviceOnATwoKilohertzLog) {
+  EXPECT_GE(FitSeeds(OtherDevice(), 6, 2000).ok, 5);
+}
+
+TEST(Fit, FindsAOneSampleDelayAutomatically) {
+  EXPECT_GE(FitSeeds(PhantomTable1(), 5, 1000, 1, true).ok, 4);
+}
+
+TEST(Fit, RigidBodyAlone) {
+  Plant p = PhantomTable1();
+  p.modes.clear();
+  EXPECT_GE(FitSeeds(p, 5).ok, 4);  // b scatters by ~1.5%: 2% is 1.4 sigma
+}
+
+TEST(Fit, CanonicalOrderKeepsTheResponse) {
+  Plant p = PhantomTable1();
+  std::swap(p.modes[0].omega, p.modes[1].omega);
+  std::swap(p.modes[0].c, p.modes[1].c);
+  Plant q = p;
+  CanonicalOrder(&q, nullptr);
+  EXPECT_LT(q.modes[0].omega, q.modes[1].omega);
+  EXPECT_LT(q.modes[0].v, q.modes[1].v);
+  for (double w : {10.0, 300.0, 800.0, 1500.0}) {
+    EXPECT_LT(std::abs(ContinuousResponse(p, w) - ContinuousResponse(q, w)) / std::abs(ContinuousResponse(p, w)), 1e-12);
+  }
+}
+
+TEST(Fit, DefaultOptionsAreValid) {
+  std::string why;
+  EXPECT_TRUE(FitOptions{}.IsValid(&why)) << why;
+}
+
+}  // namespace
+}  // namespace zwidth::fit
