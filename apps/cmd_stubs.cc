@@ -2,5 +2,4 @@
 #include "apps/common.h"
 namespace zwidth::app {
 void AddExportCommand(CLI::App&) {}
-void AddRunCommand(CLI::App&) {}
 }  // namespace zwidth::app

@@ -443,12 +443,15 @@ FitResult FitModel(const ident::FrequencyResponse& frf, const FitOptions& o) {
     std::vector<Plant> starts;
     if (o.init) starts.push_back(*o.init);
     for (Plant& s : AutomaticStarts(frf, n, d, o.max_starts)) starts.push_back(s);
+    // Screen every start with a few iterations; only the best goes on to
+    // convergence below (most of the time goes into bad starts otherwise).
+    FitOptions screen = o;
+    screen.max_iterations = std::min(o.max_iterations, 15);
     for (const Plant& s : starts) {
       ++res.starts_tried;
-      const SingleFit f = Solve(bins, n, s, o);
+      const SingleFit f = Solve(bins, n, s, screen);
       res.iterations += f.iterations;
-      // Prefer converged fits; among them the lowest cost.
-      if ((f.converged && !best.converged) || (f.converged == best.converged && f.cost < best.cost)) {
+      if (f.cost < best.cost) {
         best = f;
         best_delay = d;
       }
@@ -459,7 +462,7 @@ FitResult FitModel(const ident::FrequencyResponse& frf, const FitOptions& o) {
     res.message = "no start produced a usable fit";
     return res;
   }
-  // Re-solve from the best point to hold the problem for the covariance.
+  // Converge from the best screened point, holding the problem for the covariance.
   const Bins bins = MakeBins(frf, best_delay, o.relative_std_floor);
   ceres::Problem problem;
   std::vector<double> x;
