@@ -1,0 +1,32 @@
+#include <cmath>
+
+#include "apps/common.h"
+#include "io/atomic_file.h"
+#include "io/export.h"
+#include "model/error.h"
+
+namespace zwidth::app {
+
+void AddExportCommand(CLI::App& app) {
+  struct Flags { std::string model, out, format = "json"; double period = kNotGiven; };
+  auto f = std::make_shared<Flags>();
+  CLI::App* cmd = app.add_subcommand("export", "export a model for MATLAB/Octave, Python, HDF5 or as state space");
+  cmd->add_option("model", f->model, "model JSON")->required();
+  cmd->add_option("--format", f->format, "json | hdf5 | matlab | python | statespace")->capture_default_str();
+  cmd->add_option("--period", f->period, "sample period T [s] for the discrete model (default: the model's, if any)");
+  cmd->add_option("-o,--output", f->out, "file to write")->required();
+  cmd->callback([f] {
+    io::CheckOutputFolder(f->out);
+    io::ExportFormat fmt;
+    if (!io::FromString(f->format, &fmt)) {
+      throw InputError("--format '" + f->format + "' is not one of json, hdf5, matlab, python, statespace");
+    }
+    const io::ModelFile mf = io::ReadModelJson(f->model);
+    double T = 0.0;
+    if (!std::isnan(f->period)) T = ResolvePeriod(f->period, mf);
+    else if (mf.sample_period_s) T = *mf.sample_period_s;
+    io::ExportModel(mf, fmt, T, f->out);
+  });
+}
+
+}  // namespace zwidth::app
