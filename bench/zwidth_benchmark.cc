@@ -1,0 +1,111 @@
+// Time against error for each stage, on fixed seeded inputs (Table I, 30 s
+// log at 1 kHz, seed 1). Each benchmark reports its error as a counter and
+// sweeps the knob that trades one for the other.
+#include <cmath>
+#include <numbers>
+
+#include <benchmark/benchmark.h>
+
+#include "fit/fit.h"
+#include "ident/welch.h"
+#include "model/plant.h"
+#include "model/simulate.h"
+#include "model/state_space.h"
+#include "stability/zwidth.h"
+
+namespace zwidth {
+namespace {
+
+const SimulatedLog& Log() {
+  static const SimulatedLog log = [] { SimulateOptions o; o.seed = 1; return SimulateLog(PhantomTable1(), o); }();
+  return log;
+}
+
+// 95th-percentile relative error against the exact sampled response over bins
+// with coherence > 0.99.
+double ResponseError(const ident::FrequencyResponse& r) {
+  const DiscreteResponse g(DiscretizeZoh(PhantomTable1(), 1e-3));
+  std::vector<double> e;
+  for (size_t k = 0; k < r.f_hz.size(); ++k) {
+    if (r.coherence[k] < 0.99) continue;
+    const auto t = g.AtTheta(2 * std::numbers::pi * r.f_hz[k] / 1000);
+    e.push_back(std::abs(r.H[k] - t) / std::abs(t));
+  }
+  std::sort(e.begin(), e.end());
+  return e.empty() ? NAN : e[e.size() * 95 / 100];
+}
+
+void BM_Estimate(benchmark::State& state) {
+  ident::WelchOptions o;
+  o.window_length = static_cast<int>(state.range(0));
+  o.overlap = state.range(1) / 100.0;
+  ident::FrequencyResponse r;
+  for (auto _ : state) {
+    r = ident::EstimateFrequencyResponse(Log().torque, Log().position, 1000, o);
+    benchmark::DoNotOptimize(r.H.data());
+  }
+  state.counters["p95_rel_err"] = ResponseError(r);
+  state.counters["averages"] = r.num_averages;
+}
+BENCHMARK(BM_Estimate)->ArgsProduct({{1024, 2048, 4096}, {0, 50, 75}})->Unit(benchmark::kMicrosecond);
+
+double MaxParamError(const Plant& a, const Plant& b) {
+  double e = std::max(std::abs(a.m / b.m - 1), std::abs(a.b / b.b - 1));
+  for (size_t i = 0; i < a.modes.size(); ++i) {
+    e = std::max({e, std::abs(a.modes[i].omega / b.modes[i].omega - 1), std::abs(a.modes[i].v / b.modes[i].v - 1)});
+  }
+  return e;
+}
+
+void BM_Fit(benchmark::State& state) {
+  const ident::FrequencyResponse r =
+      ident::EstimateFrequencyResponse(Log().torque, Log().position, 1000, ident::WelchOptions{});
+  fit::FitOptions o;
+  o.max_starts = static_cast<int>(state.range(0));
+  o.function_tolerance = std::pow(10.0, -static_cast<double>(state.range(1)));
+  fit::FitResult res;
+  for (auto _ : state) res = fit::FitModel(r, o);
+  state.counters["max_rel_err_m_b_freqs"] = MaxParamError(res.plant, PhantomTable1());
+  state.counters["chi2_per_dof"] = res.chi2_per_dof;
+  state.counters["converged"] = res.status == fit::FitStatus::kConverged;
+}
+BENCHMARK(BM_Fit)->ArgsProduct({{1, 3, 6}, {6, 10}})->Unit(benchmark::kMillisecond);
+
+// 100-point sweep at d = 2 (construction included), error against a reference
+// computed with a 16x finer grid and verification.
+void BM_BoundarySweep(benchmark::State& state) {
+  stability::BoundaryOptions o;
+  o.min_grid_points = static_cast<int>(state.range(0));
+  o.verify = state.range(1) != 0;
+  stability::BoundaryOptions ref_o;
+  ref_o.min_grid_points = 32768;
+  const stability::ZWidth ref(PhantomTable1(), 1e-3, 2, ref_o);
+  double err = 0;
+  for (auto _ : state) {
+    const stability::ZWidth z(PhantomTable1(), 1e-3, 2, o);
+    for (int i = 0; i < 100; ++i) benchmark::DoNotOptimize(z.At(0.001 * i).K_cr);
+  }
+  const stability::ZWidth z(PhantomTable1(), 1e-3, 2, o);
+  for (int i = 0; i < 100; ++i) {
+    const double a = z.At(0.001 * i).K_cr, b = ref.At(0.001 * i).K_cr;
+    if (b > 0) err = std::max(err, std::abs(a / b - 1));
+  }
+  state.counters["max_rel_err_K_cr"] = err;
+}
+BENCHMARK(BM_BoundarySweep)->ArgsProduct({{256, 2048}, {0, 1}})->Unit(benchmark::kMillisecond);
+
+// The 8010-point map: d = 1..10, B = 0:0.0005:0.4.
+void BM_BoundaryMap(benchmark::State& state) {
+  for (auto _ : state) {
+    for (int d = 1; d <= 10; ++d) {
+      const stability::ZWidth z(PhantomTable1(), 1e-3, d);
+      for (int i = 0; i <= 800; ++i) benchmark::DoNotOptimize(z.At(0.0005 * i).K_cr);
+    }
+  }
+}
+BENCHMARK(BM_BoundaryMap)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace zwidth
+
+BENCHMARK_MAIN();
