@@ -126,7 +126,7 @@ ident::FrequencyResponse ReadFrequencyResponseCsv(const std::string& path, doubl
     for (double x : v) {
       if (std::isnan(x)) throw InputError(path + ": line " + std::to_string(line_no) + " has a NaN");
     }
-    const std::complex<double> h(v[col["f_hz"] == 0 ? col["H_re"] : col["H_re"]], v[col["H_im"]]);
+    const std::complex<double> h(v[col["H_re"]], v[col["H_im"]]);
     const double f = v[col["f_hz"]];
     if (!r.f_hz.empty() && !(f > r.f_hz.back())) {
       throw InputError(path + ": line " + std::to_string(line_no) + ": f_hz is not increasing");

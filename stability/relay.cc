@@ -88,7 +88,7 @@ RelayResult SimulateRelay(const Plant& plant, const RelayOptions& o) {
   const size_t start = static_cast<size_t>(o.settle_fraction * n);
   const size_t m = n - start;
   // Averaged power spectrum of force and position (normalised each), zero-
-  // padded, peak refined by a parabola through the log-power neighbours.
+  // padded, peak refined by golden-section search on the exact DFT power.
   std::vector<double> rf(r.relay_force.begin() + start, r.relay_force.end());
   std::vector<double> ps(r.position.begin() + start, r.position.end());
   auto detrend = [](std::vector<double>& v) {

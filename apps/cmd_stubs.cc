@@ -1,4 +1,0 @@
-// Registration of commands whose modules have not landed yet.
-#include "apps/common.h"
-namespace zwidth::app {
-}  // namespace zwidth::app
