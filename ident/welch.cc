@@ -34,22 +34,23 @@ struct PlanCache {
   }
 };
 
-void DetrendInPlace(Detrend d, double* x, int n) {
-  if (d == Detrend::kNone) return;
-  double mean = 0.0;
-  for (int i = 0; i < n; ++i) mean += x[i];
-  mean /= n;
-  if (d == Detrend::kMean) {
-    for (int i = 0; i < n; ++i) x[i] -= mean;
-    return;
-  }
-  // Least-squares line against the centred index (i - (n-1)/2).
+// out = w .* (x - trend), in two passes over x.
+void DetrendAndWindow(Detrend d, const double* x, const double* w, double* out, int n) {
+  double mean = 0.0, slope = 0.0;
   const double c = 0.5 * (n - 1);
-  double sxy = 0.0;
-  for (int i = 0; i < n; ++i) sxy += (i - c) * x[i];
-  const double sxx = static_cast<double>(n) * (static_cast<double>(n) * n - 1.0) / 12.0;
-  const double slope = sxy / sxx;
-  for (int i = 0; i < n; ++i) x[i] -= mean + slope * (i - c);
+  if (d != Detrend::kNone) {
+    double sx = 0.0, sxy = 0.0;
+    for (int i = 0; i < n; ++i) {
+      sx += x[i];
+      sxy += (i - c) * x[i];
+    }
+    mean = sx / n;
+    if (d == Detrend::kLinear) {
+      slope = sxy / (static_cast<double>(n) * (static_cast<double>(n) * n - 1.0) / 12.0);
+    }
+  }
+  const double offset = mean - slope * c;  // trend_i = offset + slope * i
+  for (int i = 0; i < n; ++i) out[i] = w[i] * (x[i] - offset - slope * i);
 }
 
 }  // namespace internal
@@ -149,6 +150,24 @@ WelchEstimator::WelchEstimator(const WelchOptions& options) : options_(options) 
   const int n = options_.window_length;
   fft_ = std::make_unique<Fft>(n);
   window_ = MakeWindow(options_.window, n);
+  sw2_ = 0.0;
+  for (double w : window_) sw2_ += w * w;
+  // Bin correlation kappa = sum_k |c_k|^2, c_k = DFT(w^2)_k / sum(w^2), from
+  // one transform of w^2 (the negative lags mirror the positive ones).
+  for (int i = 0; i < n; ++i) fft_->in[i] = window_[i] * window_[i];
+  fftw_execute_dft_r2c(fft_->plan, fft_->in, fft_->out_u);
+  bin_correlation_ = 0.0;
+  for (int k = 0; k <= n / 2; ++k) {
+    const double m2 = (fft_->out_u[k][0] * fft_->out_u[k][0] + fft_->out_u[k][1] * fft_->out_u[k][1]) / (sw2_ * sw2_);
+    bin_correlation_ += (k == 0 || (n % 2 == 0 && k == n / 2)) ? m2 : 2.0 * m2;
+  }
+  // Overlap correlations rho_j of segments j steps apart (Welch 1967).
+  const int step = n - options_.overlap_samples();
+  for (int j = 1; j * step < n; ++j) {
+    double rho = 0.0;
+    for (int i = 0; i + j * step < n; ++i) rho += window_[i] * window_[i + j * step];
+    overlap_rho_.push_back(rho / sw2_);
+  }
   acc_uu_.assign(n / 2 + 1, 0.0);
   acc_yy_.assign(n / 2 + 1, 0.0);
   acc_uy_.assign(n / 2 + 1, 0.0);
@@ -160,14 +179,8 @@ void WelchEstimator::ProcessSegment(const double* u, const double* y) {
   const int n = options_.window_length;
   double* a = fft_->in;
   double* b = fft_->in_y;
-  std::copy(u, u + n, a);
-  std::copy(y, y + n, b);
-  internal::DetrendInPlace(options_.detrend, a, n);
-  internal::DetrendInPlace(options_.detrend, b, n);
-  for (int i = 0; i < n; ++i) {
-    a[i] *= window_[i];
-    b[i] *= window_[i];
-  }
+  internal::DetrendAndWindow(options_.detrend, u, window_.data(), a, n);
+  internal::DetrendAndWindow(options_.detrend, y, window_.data(), b, n);
   fftw_execute_dft_r2c(fft_->plan, a, fft_->out_u);
   fftw_execute_dft_r2c(fft_->plan, b, fft_->out_y);
   const int nb = n / 2 + 1;
@@ -235,38 +248,15 @@ FrequencyResponse WelchEstimator::Finish(double fs) const {
   r.num_averages = segments_;
   // Welch (1967): equivalent independent averages for overlapped segments.
   {
-    const int step = n - options_.overlap_samples();
-    double sw2 = 0.0;
-    for (double w : window_) sw2 += w * w;
     double denom = 1.0;
-    for (int j = 1; j < segments_ && j * step < n; ++j) {
-      double rho = 0.0;
-      for (int i = 0; i + j * step < n; ++i) rho += window_[i] * window_[i + j * step];
-      rho /= sw2;
+    for (size_t j = 1; j <= overlap_rho_.size() && static_cast<int>(j) < segments_; ++j) {
+      const double rho = overlap_rho_[j - 1];
       denom += 2.0 * (1.0 - static_cast<double>(j) / segments_) * rho * rho;
     }
     r.effective_averages = segments_ / denom;
-    // Bin correlation: c_k = DFT(w^2)_k / sum(w^2) summed in square over all k.
-    std::vector<double> w2(n);
-    for (int i = 0; i < n; ++i) w2[i] = window_[i] * window_[i];
-    double kappa = 0.0;
-    for (int k = 0; k < n; ++k) {
-      double re = 0.0, im = 0.0;
-      // Windows here are sums of few cosines, so only |k| <= 4 is non-zero;
-      // evaluate those lags directly.
-      if (k > 4 && k < n - 4) continue;
-      for (int i = 0; i < n; ++i) {
-        const double ang = -2.0 * std::numbers::pi * static_cast<double>(k) * i / n;
-        re += w2[i] * std::cos(ang);
-        im += w2[i] * std::sin(ang);
-      }
-      kappa += (re * re + im * im) / (sw2 * sw2);
-    }
-    r.bin_correlation = kappa;
+    r.bin_correlation = bin_correlation_;
   }
-  double sw2 = 0.0;
-  for (double w : window_) sw2 += w * w;
-  const double scale = 1.0 / (fs * sw2 * segments_);
+  const double scale = 1.0 / (fs * sw2_ * segments_);
   const double df = fs / n;
   const double fmax = std::min(options_.fmax_hz, 0.5 * fs * (1.0 - 1e-12));
   const int nb = n / 2 + 1;

@@ -83,6 +83,9 @@ class WelchEstimator {
   struct Fft;
   std::unique_ptr<Fft> fft_;
   std::vector<double> window_;
+  double sw2_ = 0.0;                 // sum of squared window
+  double bin_correlation_ = 1.0;
+  std::vector<double> overlap_rho_;  // rho_j for segments j steps apart
   std::vector<double> buf_u_, buf_y_;  // pending samples
   std::vector<double> acc_uu_, acc_yy_;
   std::vector<std::complex<double>> acc_uy_;
