@@ -8,7 +8,8 @@
 //   p' = w q,   q' = -w p - c q + u_i,
 //   y_i = (w^2/v^2) [ (v^2 - w^2)/w p + (d - c) q + u_i ],
 // which realises (w^2/v^2)(s^2 + d s + v^2)/(s^2 + c s + w^2) exactly.
-// Rigid body with states (theta, theta'): theta'' = (u - b theta')/m.
+// Rigid body with states (m theta, m theta'): (m theta')' = u - (b/m)(m theta'),
+// position = (m theta)/m.
 #pragma once
 
 #include <complex>

@@ -101,6 +101,19 @@ ZWidth::ZWidth(const Plant& plant, double period_s, int delay_samples,
   std::string why;
   if (!options_.IsValid(&why)) throw InputError("boundary options: " + why);
   const double T = period_s_;
+  {
+    std::vector<double> sec;
+    for (const Mode& md : plant.modes) sec.insert(sec.end(), {md.omega, md.c, md.v, md.d});
+    use_modal_ = modal_.Build(plant.m, plant.b, sec.data(), static_cast<int>(plant.modes.size()), T);
+    // Trust the faster form only where it agrees with the state-space response
+    // (near-coincident poles make its residues cancel).
+    for (int k = 1; use_modal_ && k <= 16; ++k) {
+      const std::complex<double> z = std::polar(1.0, std::numbers::pi * (k - 0.5) / 16.0);
+      const Cx<double> a = modal_.At(z.real(), z.imag());
+      const std::complex<double> b = response_.AtZ(z);
+      if (!(std::abs(std::complex<double>(a.re, a.im) - b) <= 1e-10 * std::abs(b))) use_modal_ = false;
+    }
+  }
   // Denominator from the exactly known discrete poles e^{pT}.
   den1_ = {1.0};
   den1_ = PolyMul(den1_, {-std::exp(-plant.b / plant.m * T), 1.0});
@@ -177,9 +190,15 @@ ZWidth::ZWidth(const Plant& plant, double period_s, int delay_samples,
   K_pi_at_zero_B_ = (-sgn / gpi).real();
 }
 
+std::complex<double> ZWidth::Gd(std::complex<double> z) const {
+  if (!use_modal_) return response_.AtZ(z);
+  const Cx<double> g = modal_.At(z.real(), z.imag());
+  return {g.re, g.im};
+}
+
 void ZWidth::Point(double theta, double* B, double* K) const {
   const std::complex<double> z = std::polar(1.0, theta);
-  const std::complex<double> W = -std::polar(1.0, theta * total_delay_) / response_.AtZ(z);
+  const std::complex<double> W = -std::polar(1.0, theta * total_delay_) / Gd(z);
   *B = period_s_ * W.imag() / std::sin(theta);
   *K = W.real() - W.imag() * std::tan(0.5 * theta);
 }

@@ -24,6 +24,7 @@
 
 #include "model/plant.h"
 #include "model/state_space.h"
+#include "model/zoh_modal.h"
 
 namespace zwidth::stability {
 
@@ -94,11 +95,16 @@ class ZWidth {
   void Point(double theta, double* B, double* K) const;
   double FindTransition(double b_lo, double b_hi) const;
   double HzOf(double theta) const;
+  // G_d(z) without the delay: the pole-residue form when it reproduces the
+  // state-space response (distinct underdamped modes), else the Hessenberg solve.
+  std::complex<double> Gd(std::complex<double> z) const;
 
   double period_s_;
   int total_delay_;
   BoundaryOptions options_;
   DiscreteResponse response_;
+  ZohModalForm<double> modal_;
+  bool use_modal_ = false;
   std::vector<double> num_;      // N(z) of G_d = N/D, z^0 first
   std::vector<double> den_;      // D(z) monic, z^0 first
   std::vector<double> den1_;     // D(z) / (z - 1)
