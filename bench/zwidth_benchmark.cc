@@ -69,7 +69,7 @@ void BM_Fit(benchmark::State& state) {
   state.counters["chi2_per_dof"] = res.chi2_per_dof;
   state.counters["converged"] = res.status == fit::FitStatus::kConverged;
 }
-BENCHMARK(BM_Fit)->ArgsProduct({{1, 3, 6}, {6, 10}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Fit)->ArgsProduct({{1, 3, 6}, {6, 8, 10}})->Unit(benchmark::kMillisecond);
 
 // 100-point sweep at d = 2 (construction included), error against a reference
 // computed with a 16x finer grid and verification.

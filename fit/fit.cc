@@ -26,10 +26,11 @@ struct Bins {
   double period_s = 0.0;
 };
 
-Bins MakeBins(const ident::FrequencyResponse& frf, int delay, double floor) {
+// Every `stride`-th bin (stride > 1 for the cheap screening of starts).
+Bins MakeBins(const ident::FrequencyResponse& frf, int delay, double floor, int stride = 1) {
   Bins b;
   b.period_s = 1.0 / frf.sample_rate_hz;
-  for (size_t k = 0; k < frf.f_hz.size(); ++k) {
+  for (size_t k = 0; k < frf.f_hz.size(); k += stride) {
     const double theta = 2.0 * std::numbers::pi * frf.f_hz[k] * b.period_s;
     double s = std::max(frf.H_std[k], floor * std::abs(frf.H[k]));
     if (!(s > 0.0) || !std::isfinite(s) || !std::isfinite(std::abs(frf.H[k]))) continue;
@@ -133,6 +134,9 @@ class ZohResidual : public ceres::CostFunction {
       const double w = bins_->weight[k];
       const cd model = g * bins_->delay[k];
       const cd r = (bins_->H[k] - model) * w;
+      // A non-finite value means an invalid step: say so (Ceres then shrinks
+      // the step) rather than hand Ceres NaNs, which it reports at length.
+      if (!std::isfinite(r.real()) || !std::isfinite(r.imag())) return false;
       residuals[2 * k] = r.real();
       residuals[2 * k + 1] = r.imag();
       if (want_j) {
@@ -141,6 +145,7 @@ class ZohResidual : public ceres::CostFunction {
         double* row_im = row_re + p_;
         for (int q = 0; q < p_; ++q) {
           const cd jq = scale * grad[q];
+          if (!std::isfinite(jq.real()) || !std::isfinite(jq.imag())) return false;
           row_re[q] = jq.real();
           row_im[q] = jq.imag();
         }
@@ -386,13 +391,19 @@ SingleFit Solve(const Bins& bins, int n, const Plant& start, const FitOptions& o
     problem.SetParameterLowerBound(xs.data(), 5 + 4 * i, std::log(o.min_damping_ratio));
     problem.SetParameterUpperBound(xs.data(), 5 + 4 * i, std::log(o.max_zero_damping_ratio));
   }
+  // m and b within a factor e^8 (~3000) of the start: wide, but it keeps a wild
+  // step of a bad start from overflowing exp().
+  for (int i = 0; i < 2; ++i) {
+    problem.SetParameterLowerBound(xs.data(), i, xs[i] - 8.0);
+    problem.SetParameterUpperBound(xs.data(), i, xs[i] + 8.0);
+  }
   (void)p;
   ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_QR;
+  so.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;  // 10-30 columns: J^T J is small
   so.max_num_iterations = o.max_iterations;
   so.function_tolerance = o.function_tolerance;
   so.gradient_tolerance = 1e-12;
-  so.parameter_tolerance = 1e-10;
+  so.parameter_tolerance = 1e-9;
   so.logging_type = ceres::SILENT;
   so.num_threads = 1;
   ceres::Solver::Summary sum;
@@ -443,13 +454,15 @@ FitResult FitModel(const ident::FrequencyResponse& frf, const FitOptions& o) {
     std::vector<Plant> starts;
     if (o.init) starts.push_back(*o.init);
     for (Plant& s : AutomaticStarts(frf, n, d, o.max_starts)) starts.push_back(s);
-    // Screen every start with a few iterations; only the best goes on to
-    // convergence below (most of the time goes into bad starts otherwise).
+    // Screen every start with a few iterations on every 6th bin; only the
+    // best goes on to convergence on all bins below (most of the time would
+    // otherwise go into starts that lose).
     FitOptions screen = o;
-    screen.max_iterations = std::min(o.max_iterations, 15);
+    screen.max_iterations = std::min(o.max_iterations, 8);
+    const Bins coarse = MakeBins(frf, d, o.relative_std_floor, bins.z.size() > 600 ? 6 : 1);
     for (const Plant& s : starts) {
       ++res.starts_tried;
-      const SingleFit f = Solve(bins, n, s, screen);
+      const SingleFit f = Solve(coarse, n, s, screen);
       res.iterations += f.iterations;
       if (f.cost < best.cost) {
         best = f;

@@ -30,7 +30,7 @@ struct FitOptions {
   double max_frequency_fraction = 0.98;  // w, v below this fraction of Nyquist, (0, 1)
   double relative_std_floor = 1e-3;      // per-bin std floor relative to |H|, >= 0
   int max_iterations = 200;              // per start, >= 1
-  double function_tolerance = 1e-10;     // Ceres, > 0
+  double function_tolerance = 1e-8;      // Ceres relative cost change, > 0
   int max_starts = 6;                    // automatic starts tried, >= 1
   std::optional<Plant> init;             // a user's starting point (tried first)
 
