@@ -1,0 +1,103 @@
+// Stress (ctest label `stress`): the fit on random devices, and from random
+// starting points. Devices: m log-uniform in [3e-4, 1e-2] kg m^2, b/m in
+// [2, 22] rad/s, 1-3 sections with resonances from 30 Hz upward (each next
+// one 1.6-2.4 times higher, up to 260 Hz), antiresonances at 0.6-0.9 of their
+// resonance, damping ratios 0.03-0.15; torque RMS scaled with m so that the
+// encoder resolution weighs alike. Logs: SimulateLog defaults otherwise.
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "fit/fit.h"
+#include "ident/welch.h"
+#include "model/simulate.h"
+
+namespace zwidth::fit {
+namespace {
+
+Plant RandomDevice(std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> U(0, 1);
+  Plant p;
+  p.m = std::pow(10.0, -3.5 + 1.5 * U(rng));
+  p.b = p.m * (2 + 20 * U(rng));
+  const int n = 1 + static_cast<int>(3 * U(rng));
+  double f = 30 + 40 * U(rng);
+  for (int i = 0; i < n; ++i) {
+    const double fp = f * (1.0 + 0.3 * U(rng)), fz = fp * (0.6 + 0.3 * U(rng));
+    const double zp = 0.03 + 0.12 * U(rng), zz = 0.03 + 0.12 * U(rng);
+    const double w = 2 * std::numbers::pi;
+    p.modes.push_back({w * fp, 2 * zp * w * fp, w * fz, 2 * zz * w * fz});
+    f = fp * (1.6 + 0.8 * U(rng));
+    if (f > 260) break;
+  }
+  return p;
+}
+
+ident::FrequencyResponse Frf(const Plant& p, uint64_t seed) {
+  SimulateOptions so;
+  so.seed = seed;
+  so.torque_rms = 0.03 * p.m / 1.168e-3;
+  const SimulatedLog log = SimulateLog(p, so);
+  return ident::EstimateFrequencyResponse(log.torque, log.position, 1000, ident::WelchOptions{});
+}
+
+// Largest relative error of (m, b, frequencies) and of the dampings.
+std::pair<double, double> Errors(const Plant& fit, Plant truth) {
+  CanonicalOrder(&truth, nullptr);
+  double ef = std::max(std::abs(fit.m / truth.m - 1), std::abs(fit.b / truth.b - 1)), ed = 0;
+  for (size_t i = 0; i < truth.modes.size(); ++i) {
+    ef = std::max({ef, std::abs(fit.modes[i].omega / truth.modes[i].omega - 1),
+                   std::abs(fit.modes[i].v / truth.modes[i].v - 1)});
+    ed = std::max({ed, std::abs(fit.modes[i].c / truth.modes[i].c - 1), std::abs(fit.modes[i].d / truth.modes[i].d - 1)});
+  }
+  return {ef, ed};
+}
+
+TEST(FitStress, RandomDevicesFromTheAutomaticStart) {
+  std::mt19937_64 rng(2024);
+  int ok = 0;
+  const int total = 40;
+  for (int t = 0; t < total; ++t) {
+    const Plant p = RandomDevice(rng);
+    FitOptions o;
+    o.num_modes = static_cast<int>(p.modes.size());
+    const FitResult r = FitModel(Frf(p, t + 1), o);
+    const auto [ef, ed] = Errors(r.plant, p);
+    const bool good = r.status == FitStatus::kConverged && ef < 0.02 && ed < 0.10;
+    ok += good;
+    if (!good) std::printf("device %d (%zu modes): freq err %.3f, damping err %.3f\n", t, p.modes.size(), ef, ed);
+  }
+  EXPECT_GE(ok, 36) << ok << " of " << total;
+}
+
+TEST(FitStress, RandomStartingPointsReachTheSameMinimum) {
+  const Plant truth = PhantomTable1();
+  const ident::FrequencyResponse frf = Frf(truth, 3);
+  FitOptions o;
+  const FitResult ref = FitModel(frf, o);
+  ASSERT_EQ(ref.status, FitStatus::kConverged);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> U(-1, 1);
+  int same = 0;
+  for (int t = 0; t < 20; ++t) {
+    Plant init = truth;  // every parameter scaled by up to +-30%
+    init.m *= 1 + 0.3 * U(rng);
+    init.b *= 1 + 0.3 * U(rng);
+    for (Mode& m : init.modes) {
+      m.omega *= 1 + 0.3 * U(rng); m.c *= 1 + 0.3 * U(rng);
+      m.v *= 1 + 0.3 * U(rng); m.d *= 1 + 0.3 * U(rng);
+    }
+    FitOptions oi;
+    oi.init = init;
+    oi.max_starts = 1;  // the given start, and the first automatic one
+    const FitResult r = FitModel(frf, oi);
+    if (r.status == FitStatus::kConverged && std::abs(r.cost / ref.cost - 1) < 1e-6) ++same;
+  }
+  EXPECT_GE(same, 18);
+}
+
+}  // namespace
+}  // namespace zwidth::fit
