@@ -10,6 +10,10 @@
 #include <sstream>
 
 #include <H5Cpp.h>
+#include <cerrno>
+#include <csignal>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "io/atomic_file.h"
 #include "model/error.h"
@@ -239,7 +243,7 @@ void ReadSlab(const H5::DataSet& ds, hsize_t offset, hsize_t count, double* out,
   }
 }
 
-LogInfo StreamHdf5(const std::string& path, const LogSelect& sel, const LogSink& sink) {
+LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& sel, const LogSink& sink) {
   H5::Exception::dontPrint();
   std::unique_ptr<H5::H5File> file;
   try {
@@ -320,6 +324,127 @@ LogInfo StreamHdf5(const std::string& path, const LogSelect& sel, const LogSink&
   } catch (const H5::Exception& e) {
     throw InputError(path + ": HDF5 error (" + e.getDetailMsg() + "): truncated or corrupt file?");
   }
+}
+
+// libhdf5 (1.10) can read out of bounds, even crash, on a corrupt file (our
+// fuzzing found an H5Aexists crash). The file is therefore read in a child
+// process that streams the chunks through a pipe: a crash in the library
+// becomes an InputError here, and the data is still read once.
+namespace pipe_msg {
+constexpr char kChunk = 1, kDone = 2, kError = 3;
+}
+
+bool WriteAll(int fd, const void* data, size_t n) {
+  const char* p = static_cast<const char*>(data);
+  while (n > 0) {
+    const ssize_t w = ::write(fd, p, n);
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0) return false;
+    p += w;
+    n -= static_cast<size_t>(w);
+  }
+  return true;
+}
+
+bool ReadAll(int fd, void* data, size_t n) {
+  char* p = static_cast<char*>(data);
+  while (n > 0) {
+    const ssize_t r = ::read(fd, p, n);
+    if (r < 0 && errno == EINTR) continue;
+    if (r <= 0) return false;
+    p += r;
+    n -= static_cast<size_t>(r);
+  }
+  return true;
+}
+
+LogInfo StreamHdf5(const std::string& path, const LogSelect& sel, const LogSink& sink) {
+  int fds[2];
+  if (::pipe(fds) != 0) return StreamHdf5InProcess(path, sel, sink);
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(fds[0]);
+    ::close(fds[1]);
+    return StreamHdf5InProcess(path, sel, sink);
+  }
+  if (pid == 0) {  // child: read, stream, and leave without running destructors
+    ::close(fds[0]);
+    const int out = fds[1];
+    int code = 0;
+    try {
+      const LogInfo info = StreamHdf5InProcess(path, sel, [&](const double* u, const double* y, size_t n) {
+        const uint64_t count = n;
+        if (!WriteAll(out, &pipe_msg::kChunk, 1) || !WriteAll(out, &count, sizeof count) ||
+            !WriteAll(out, u, n * sizeof(double)) || !WriteAll(out, y, n * sizeof(double))) {
+          ::_exit(3);
+        }
+      });
+      const uint64_t count = info.num_samples;
+      WriteAll(out, &pipe_msg::kDone, 1);
+      WriteAll(out, &count, sizeof count);
+      WriteAll(out, &info.sample_rate_hz, sizeof info.sample_rate_hz);
+    } catch (const std::exception& e) {
+      const std::string msg = e.what();
+      const uint64_t len = msg.size();
+      WriteAll(out, &pipe_msg::kError, 1);
+      WriteAll(out, &len, sizeof len);
+      WriteAll(out, msg.data(), msg.size());
+      code = 2;
+    }
+    ::close(out);
+    ::_exit(code);
+  }
+  ::close(fds[1]);
+  const int in = fds[0];
+  auto reap = [&](bool kill_child) {
+    if (kill_child) ::kill(pid, SIGKILL);
+    int status = 0;
+    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    ::close(in);
+    return status;
+  };
+  LogInfo info;
+  std::string error;
+  bool done = false;
+  try {
+    std::vector<double> u, y;
+    char type = 0;
+    while (!done && error.empty() && ReadAll(in, &type, 1)) {
+      uint64_t count = 0;
+      if (!ReadAll(in, &count, sizeof count)) break;
+      if (type == pipe_msg::kChunk) {
+        if (count > (1u << 24)) break;
+        u.resize(count);
+        y.resize(count);
+        if (!ReadAll(in, u.data(), count * sizeof(double)) || !ReadAll(in, y.data(), count * sizeof(double))) break;
+        sink(u.data(), y.data(), count);
+      } else if (type == pipe_msg::kDone) {
+        info.source = path;
+        info.num_samples = count;
+        if (!ReadAll(in, &info.sample_rate_hz, sizeof info.sample_rate_hz)) break;
+        done = true;
+      } else if (type == pipe_msg::kError) {
+        if (count > (1u << 20)) break;
+        error.resize(count);
+        if (!ReadAll(in, error.data(), count)) error = path + ": unreadable HDF5 file";
+      } else {
+        break;
+      }
+    }
+  } catch (...) {
+    reap(true);
+    throw;
+  }
+  const int status = reap(false);
+  if (!error.empty()) throw InputError(error);
+  if (WIFSIGNALED(status)) {
+    throw InputError(path + ": the HDF5 library crashed reading this file (signal " +
+                     std::to_string(WTERMSIG(status)) + "): the file is corrupt or truncated");
+  }
+  if (!done) throw InputError(path + ": could not read the HDF5 file (corrupt or truncated?)");
+  return info;
 }
 
 void WriteCsvLog(const std::string& tmp, double rate, const std::vector<double>& u,

@@ -83,7 +83,7 @@ ModelFile ParseModelJson(const std::string& text, const std::string& source) {
   json j;
   try {
     j = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for 1e999
     Fail(source, std::string("not valid JSON (truncated or malformed): ") + e.what());
   }
   if (!j.is_object()) Fail(source, "top level must be a JSON object");

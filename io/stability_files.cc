@@ -51,7 +51,7 @@ std::vector<SceneObject> ReadScene(const std::string& path) {
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(ss.str());
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {  // parse_error, out_of_range (1e999)
     throw InputError(path + ": not valid JSON (truncated or malformed): " + e.what());
   }
   if (!j.is_object() || !j.contains("objects") || !j["objects"].is_array()) {
