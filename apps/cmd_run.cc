@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
 #include <fstream>
 #include <numbers>
 #include <sstream>
@@ -86,27 +87,24 @@ void AddRunCommand(CLI::App& app) {
     const io::ModelFile model = FitToModelFile(frf, f->o, f->log, &fr);
     t_total += timer.Lap("fit");
     const double T = 1.0 / frf.sample_rate_hz;
-    std::string cmp_text;
+    // The model's Z-width per delay, computed once for the summary, the
+    // comparison, the boundary rows and the figures.
+    std::vector<stability::ZWidth> zs;
+    std::vector<stability::DelaySummary> sums;
     nlohmann::json summary;
-    summary["comparison"] = CompareModels(model, ref, f->delays, T, &cmp_text);
-    t_total += timer.Lap("compare (with stability)");
-    // Boundary for each delay, for the model, the reference and the model with no modes.
-    Plant rigid = model.plant;
-    rigid.modes.clear();
-    std::vector<io::BoundaryRow> rows;
     summary["boundary"] = nlohmann::json::array();
     double b_max = 0.0;
-    std::vector<stability::ZWidth> zs;
     for (int d : f->delays) {
       zs.emplace_back(model.plant, T, d);
-      const stability::DelaySummary s = zs.back().Summarize();
-      if (std::isfinite(s.B_max)) b_max = std::max(b_max, s.B_max);
-      nlohmann::json e = io::SummaryToJson(s);
+      sums.push_back(zs.back().Summarize());
+      if (std::isfinite(sums.back().B_max)) b_max = std::max(b_max, sums.back().B_max);
+      nlohmann::json e = io::SummaryToJson(sums.back());
       e["delay_samples"] = d;
       summary["boundary"].push_back(e);
     }
     if (b_max <= 0) b_max = 0.4;
     const int nB = static_cast<int>(std::floor(1.02 * b_max / f->b_step)) + 1;
+    std::vector<io::BoundaryRow> rows;
     int disagree = 0;
     for (size_t i = 0; i < zs.size(); ++i) {
       for (int k = 0; k < nB; ++k) {
@@ -116,6 +114,11 @@ void AddRunCommand(CLI::App& app) {
     }
     summary["margin_disagreements"] = disagree;
     t_total += timer.Lap("boundary");
+    std::string cmp_text;
+    summary["comparison"] = CompareModels(model, ref, f->delays, T, &cmp_text, &sums);
+    t_total += timer.Lap("compare (reference Z-width)");
+    Plant rigid = model.plant;
+    rigid.modes.clear();
     // Write the outputs.
     io::WriteModelJson((out / "model.json").string(), model);
     io::WriteFrequencyResponse((out / "frf.csv").string(), frf);
@@ -144,14 +147,17 @@ void AddRunCommand(CLI::App& app) {
           << std::abs(gm) << " " << std::arg(gm) * 180 / std::numbers::pi << " " << frf.coherence[k] << "\n";
       }
       io::WriteTextAtomically((fig / "bode.dat").string(), b.str());
-      for (int which = 0; which < 3; ++which) {  // model, reference, rigid
+      // Curves: the model's are the boundary rows; reference and rigid-only
+      // are computed here, for the figures alone.
+      for (int which = 0; which < 3; ++which) {
         std::ostringstream o;
         o.precision(10);
-        for (int d : f->delays) {
-          const Plant& p = which == 0 ? model.plant : which == 1 ? ref.plant : rigid;
-          const stability::ZWidth z(p, T, d);
+        for (size_t i = 0; i < f->delays.size(); ++i) {
+          const Plant& p = which == 1 ? ref.plant : rigid;
+          std::unique_ptr<stability::ZWidth> z;
+          if (which != 0) z = std::make_unique<stability::ZWidth>(p, T, f->delays[i]);
           for (int k = 0; k < nB; ++k) {
-            const auto c = z.At(k * f->b_step);
+            const auto c = which == 0 ? rows[i * nB + k].point : z->At(k * f->b_step);
             o << k * f->b_step << " " << c.K_cr << " " << c.f_cr_hz << "\n";
           }
           o << "\n\n";
@@ -196,6 +202,7 @@ void AddRunCommand(CLI::App& app) {
       }
       io::WriteTextAtomically((fig / "figures.gp").string(), gp.str());
     }
+    timer.Lap("figure data (reference, rigid)");
     bool have_figures = false;
     if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
       const std::string cmdline = "cd '" + fig.string() + "' && gnuplot figures.gp 2>gnuplot.log";

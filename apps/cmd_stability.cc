@@ -149,7 +149,8 @@ void AddStabilityCommands(CLI::App& app) {
         if (std::fclose(f) != 0) throw InputError("failed writing '" + rf->trace + "'");
       });
     }
-    nlohmann::json j = {{"K_cr", res.K_cr}, {"f_cr_hz", res.f_cr_hz},
+    nlohmann::json j = {{"K_cr", res.K_cr}, {"f_cr_hz", res.f_cr_hz}, {"refined", res.refined},
+                        {"K_cr_peak", res.K_cr_peak}, {"f_cr_peak_hz", res.f_cr_peak_hz},
                         {"K_cr_exact", io::NumberOrNull(cp.K_cr)},
                         {"f_cr_exact_hz", io::NumberOrNull(cp.f_cr_hz)},
                         {"delay_samples", rf->o.delay_samples}, {"B", rf->o.damping},
@@ -157,8 +158,12 @@ void AddStabilityCommands(CLI::App& app) {
     if (rf->json) {
       std::cout << j.dump() << std::endl;
     } else {
-      std::printf("relay estimate: K_cr = %.6g N m/rad at f_cr = %.5g Hz\n", res.K_cr, res.f_cr_hz);
-      std::printf("exact (eq. 2):  K_cr = %.6g N m/rad at f_cr = %.5g Hz\n", cp.K_cr, cp.f_cr_hz);
+      std::printf("relay, paper's reading (spectral peak, first harmonics): K_cr = %.6g N m/rad at %.5g Hz\n",
+                  res.K_cr_peak, res.f_cr_peak_hz);
+      std::printf("relay, -180 deg crossing interpolated on the harmonics: K_cr = %.6g N m/rad at %.5g Hz%s\n",
+                  res.K_cr, res.f_cr_hz, res.refined ? "" : " (not refined: the paper's reading)");
+      std::printf("exact (eq. 2):                                          K_cr = %.6g N m/rad at %.5g Hz\n",
+                  cp.K_cr, cp.f_cr_hz);
     }
   });
 

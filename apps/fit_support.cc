@@ -97,7 +97,8 @@ std::string ParameterTable(const io::ModelFile& mf) {
 }
 
 nlohmann::json CompareModels(const io::ModelFile& model, const io::ModelFile& ref,
-                             const std::vector<int>& delays, double T, std::string* text) {
+                             const std::vector<int>& delays, double T, std::string* text,
+                             const std::vector<stability::DelaySummary>* model_summaries) {
   std::ostringstream os;
   nlohmann::json j;
   j["parameters"] = nlohmann::json::array();
@@ -128,11 +129,14 @@ nlohmann::json CompareModels(const io::ModelFile& model, const io::ModelFile& re
   std::snprintf(line, sizeof line, "\n%-6s %-10s %12s %10s %12s %10s\n", "delay", "model", "K_cr(B=0)", "B_t",
                 "K_cr^max", "B_max");
   os << line;
-  for (int d : delays) {
+  for (size_t i = 0; i < delays.size(); ++i) {
+    const int d = delays[i];
     nlohmann::json e = {{"delay_samples", d}};
     for (int which = 0; which < 2; ++which) {
       const Plant& p = which == 0 ? model.plant : ref.plant;
-      const stability::DelaySummary s = stability::ZWidth(p, T, d).Summarize();
+      const stability::DelaySummary s = (which == 0 && model_summaries && model_summaries->size() == delays.size())
+                                            ? (*model_summaries)[i]
+                                            : stability::ZWidth(p, T, d).Summarize();
       e[which == 0 ? "model" : "reference"] = io::SummaryToJson(s);
       std::snprintf(line, sizeof line, "%-6d %-10s %12.5g %10.5g %12.5g %10.5g\n", d,
                     which == 0 ? "model" : "reference", s.K_cr_at_zero_B, s.B_t, s.K_cr_max, s.B_max);

@@ -8,6 +8,7 @@
 
 #include "fit/fit.h"
 #include "io/model_json.h"
+#include "stability/zwidth.h"
 
 namespace zwidth::app {
 
@@ -23,9 +24,11 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
 std::string ParameterTable(const io::ModelFile& mf);
 
 // Per-parameter comparison and the stability figures of both models at the
-// given delays. Returns JSON; *text gets the printable version.
+// given delays. Returns JSON; *text gets the printable version. Summaries
+// already computed by the caller (one per delay, in order) are reused.
 nlohmann::json CompareModels(const io::ModelFile& model, const io::ModelFile& reference,
-                             const std::vector<int>& delays, double period_s, std::string* text);
+                             const std::vector<int>& delays, double period_s, std::string* text,
+                             const std::vector<stability::DelaySummary>* model_summaries = nullptr);
 
 // The default reference: datasets/phantom/table1.json of the source tree.
 std::string DefaultReferencePath();

@@ -20,6 +20,10 @@ namespace internal {
 struct PlanCache {
   std::mutex mu;
   std::map<int, fftw_plan> plans;
+  ~PlanCache() {
+    for (auto& [n, plan] : plans) fftw_destroy_plan(plan);
+    fftw_cleanup();
+  }
   static PlanCache& Get() {
     static PlanCache cache;
     return cache;

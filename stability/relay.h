@@ -26,8 +26,14 @@ struct RelayOptions {
 };
 
 struct RelayResult {
+  // The estimate: the -180 deg crossing interpolated on the harmonics where
+  // L is smooth enough to trust it (refined), else the paper's reading.
   double K_cr = 0.0;     // N m/rad
   double f_cr_hz = 0.0;  // Hz
+  bool refined = false;
+  // The paper's reading: spectral peak, |F1|/|X1| at the peak.
+  double K_cr_peak = 0.0;
+  double f_cr_peak_hz = 0.0;
   bool oscillating = false;  // a steady oscillation was found
   std::vector<double> relay_force, damping_force, command, position;  // per sample
 };
