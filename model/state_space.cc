@@ -11,6 +11,43 @@
 
 namespace zwidth {
 
+namespace internal {
+
+// Parlett-Reinsch balancing (as LAPACK's dgebal, scaling only): the diagonal
+// scales s, powers of two, such that diag(s)^-1 M diag(s) has rows and columns
+// of comparable norm.
+Eigen::VectorXd BalancingScales(const Eigen::MatrixXd& M) {
+  const int n = static_cast<int>(M.rows());
+  Eigen::VectorXd s = Eigen::VectorXd::Ones(n);
+  Eigen::MatrixXd A = M;
+  bool changed = true;
+  for (int sweep = 0; changed && sweep < 100; ++sweep) {
+    changed = false;
+    for (int i = 0; i < n; ++i) {
+      double c = 0.0, r = 0.0;
+      for (int j = 0; j < n; ++j) {
+        if (j == i) continue;
+        c += std::abs(A(j, i));
+        r += std::abs(A(i, j));
+      }
+      if (c == 0.0 || r == 0.0) continue;
+      double f = 1.0;
+      const double total = c + r;
+      while (c < r / 2.0) { c *= 2.0; r /= 2.0; f *= 2.0; }
+      while (c >= r * 2.0) { c /= 2.0; r *= 2.0; f /= 2.0; }
+      if ((c + r) < 0.95 * total) {
+        changed = true;
+        s(i) *= f;
+        A.row(i) /= f;
+        A.col(i) *= f;
+      }
+    }
+  }
+  return s;
+}
+
+}  // namespace internal
+
 StateSpace ContinuousStateSpace(const Plant& plant) {
   const int n = plant.num_states();
   StateSpace ss;
@@ -61,7 +98,12 @@ StateSpace DiscretizeZoh(const Plant& plant, double period_s) {
   Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n + 1, n + 1);
   M.topLeftCorner(n, n) = c.A * period_s;
   M.topRightCorner(n, 1) = c.B * period_s;
-  const Eigen::MatrixXd E = M.exp();
+  // Balance first (diagonal similarity by powers of two, exact): models whose
+  // zeros lie far below their poles carry gains of 1e7 along the cascade, and
+  // the exponential of the unbalanced matrix lost up to 5 digits on them.
+  const Eigen::VectorXd s = internal::BalancingScales(M);
+  const Eigen::MatrixXd Mb = s.cwiseInverse().asDiagonal() * M * s.asDiagonal();
+  const Eigen::MatrixXd E = s.asDiagonal() * Mb.exp() * s.cwiseInverse().asDiagonal();
   StateSpace d;
   d.A = E.topLeftCorner(n, n);
   d.B = E.topRightCorner(n, 1);
@@ -95,11 +137,14 @@ StateSpace WithDelayStates(const StateSpace& s) {
 
 DiscreteResponse::DiscreteResponse(const StateSpace& s)
     : D_(s.D), delay_samples_(s.delay_samples) {
-  Eigen::HessenbergDecomposition<Eigen::MatrixXd> hd(s.A);
+  // Balance (exact similarity by powers of two), then reduce to Hessenberg.
+  const Eigen::VectorXd sc = internal::BalancingScales(s.A);
+  const Eigen::MatrixXd Ab = sc.cwiseInverse().asDiagonal() * s.A * sc.asDiagonal();
+  Eigen::HessenbergDecomposition<Eigen::MatrixXd> hd(Ab);
   H_ = hd.matrixH();
   const Eigen::MatrixXd Q = hd.matrixQ();
-  QtB_ = Q.transpose() * s.B;
-  CQ_ = s.C * Q;
+  QtB_ = Q.transpose() * (sc.cwiseInverse().asDiagonal() * s.B);
+  CQ_ = (s.C * sc.asDiagonal()) * Q;
 }
 
 std::complex<double> DiscreteResponse::AtZ(std::complex<double> z) const {

@@ -71,4 +71,9 @@ class DiscreteResponse {
 std::vector<double> SimulateDiscrete(const StateSpace& discrete,
                                      const std::vector<double>& input);
 
+namespace internal {
+// Diagonal scales (powers of two) that balance M: diag(s)^-1 M diag(s).
+Eigen::VectorXd BalancingScales(const Eigen::MatrixXd& M);
+}  // namespace internal
+
 }  // namespace zwidth
