@@ -140,11 +140,19 @@ void AddRunCommand(CLI::App& app) {
       b.precision(10);
       b << "# f_hz |H| phase_deg |G| phase_G_deg coherence\n";
       const DiscreteResponse g(DiscretizeZoh(model.plant, T));
+      // Phases unwrapped along frequency (the model's continuously; the
+      // measured one kept within half a turn of the model's).
+      double pm_prev = 0.0;
       for (size_t k = 0; k < frf.f_hz.size(); ++k) {
         const double th = 2 * std::numbers::pi * frf.f_hz[k] * T;
         const auto gm = g.AtTheta(th);
-        b << frf.f_hz[k] << " " << std::abs(frf.H[k]) << " " << std::arg(frf.H[k]) * 180 / std::numbers::pi << " "
-          << std::abs(gm) << " " << std::arg(gm) * 180 / std::numbers::pi << " " << frf.coherence[k] << "\n";
+        double pm = std::arg(gm) * 180 / std::numbers::pi;
+        if (k > 0) pm += 360.0 * std::round((pm_prev - pm) / 360.0);
+        pm_prev = pm;
+        double ph = std::arg(frf.H[k]) * 180 / std::numbers::pi;
+        ph += 360.0 * std::round((pm - ph) / 360.0);
+        b << frf.f_hz[k] << " " << std::abs(frf.H[k]) << " " << ph << " " << std::abs(gm) << " " << pm << " "
+          << frf.coherence[k] << "\n";
       }
       io::WriteTextAtomically((fig / "bode.dat").string(), b.str());
       // Curves: the model's are the boundary rows; reference and rigid-only
@@ -173,7 +181,10 @@ void AddRunCommand(CLI::App& app) {
       }
       io::WriteTextAtomically((fig / "table2.dat").string(), t2.str());
       std::ostringstream gp;
-      gp << "set datafile missing 'nan'\nset grid\nset key outside right\n";
+      gp << "set datafile missing 'nan'\nset grid\nset key outside right\n"
+         << "set linetype 1 lc rgb '#1f77b4' lw 2\nset linetype 2 lc rgb '#d62728' lw 2\n"
+         << "set linetype 3 lc rgb '#2ca02c' lw 2\nset linetype 4 lc rgb '#9467bd' lw 2\n"
+         << "set linetype 5 lc rgb '#ff7f0e' lw 2\nset linetype 6 lc rgb '#8c564b' lw 2\n";
       std::string dl;
       for (size_t i = 0; i < f->delays.size(); ++i) dl += (i ? " " : "") + std::to_string(f->delays[i]);
       gp << "delays = '" << dl << "'\n";
@@ -189,16 +200,16 @@ void AddRunCommand(CLI::App& app) {
            << "plot 'bode.dat' u 1:6 w l lc rgb '#1f77b4' t 'coherence'\nset yrange [*:*]\nunset logscale x\nunset title\n";
         gp << "set output 'kcr." << ext << "'\nset multiplot layout 2,1 title 'Critical stiffness and ultimate frequency vs damping - Fig. 6 / Fig. 10'\n"
            << "set xlabel 'B [N m s/rad]'\nset ylabel 'K_{CR} [N m/rad]'\n"
-           << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:2 w l lw 2 t 'model, d='.word(delays,i), "
-           << "for [i=1:words(delays)] 'kcr_reference.dat' index i-1 u 1:2 w l dt 2 t 'reference, d='.word(delays,i)"
+           << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:2 w l lt i t 'model, d='.word(delays,i), "
+           << "for [i=1:words(delays)] 'kcr_reference.dat' index i-1 u 1:2 w l lt i dt 2 lw 1 t 'reference, d='.word(delays,i)"
            << (table1 ? ", 'table2.dat' u 2:3 w p pt 7 ps 0.8 lc rgb 'red' t 'Table II (relay)'" : "") << "\n"
            << "set logscale y\nset ylabel 'f_{CR} [Hz]'\n"
-           << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:3 w l lw 2 t 'model, d='.word(delays,i)"
+           << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:3 w l lt i t 'model, d='.word(delays,i)"
            << (table1 ? ", 'table2.dat' u 2:4 w p pt 7 ps 0.8 lc rgb 'red' t 'Table II (relay)'" : "") << "\nunset logscale y\nunset multiplot\n";
         gp << "set output 'rigid." << ext << "'\nset title 'With the vibration modes and without (rigid body only) - Fig. 7'\n"
            << "set xlabel 'B [N m s/rad]'\nset ylabel 'K_{CR} [N m/rad]'\n"
-           << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:2 w l lw 2 t 'with modes, d='.word(delays,i), "
-           << "for [i=1:words(delays)] 'kcr_rigid.dat' index i-1 u 1:2 w l dt 2 t 'rigid only, d='.word(delays,i)\nunset title\n";
+           << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:2 w l lt i t 'with modes, d='.word(delays,i), "
+           << "for [i=1:words(delays)] 'kcr_rigid.dat' index i-1 u 1:2 w l lt i dt 2 t 'rigid only, d='.word(delays,i)\nunset title\n";
       }
       io::WriteTextAtomically((fig / "figures.gp").string(), gp.str());
     }
