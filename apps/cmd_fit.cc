@@ -23,6 +23,7 @@ void AddFitCommands(CLI::App& app) {
   cmd->add_option("--delay-samples", f->delay, "input delay [samples] or 'auto'")->capture_default_str();
   cmd->add_option("--init", f->init, "model JSON to start from (tried before the automatic starts)");
   cmd->add_option("--starts", f->o.max_starts, "automatic starts tried")->capture_default_str();
+  cmd->add_option("--max-iterations", f->o.max_iterations, "solver iterations per start")->capture_default_str();
   AddEstimateFlags(cmd, &f->est);
   cmd->callback([f] {
     io::CheckOutputFolder(f->out);

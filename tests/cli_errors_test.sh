@@ -54,5 +54,12 @@ expect unknown-flag "unknown|extra|not expected" "" -- "$ZW" boundary "$M" --bog
 awk -F, 'NR!=200' OFS=, "$T/good.csv" > "$T/gap.csv"
 expect not-uniform "not uniformly sampled" "$T/o18.csv" -- "$ZW" estimate "$T/gap.csv" -o "$T/o18.csv"
 expect fit-bad-delay "delay-samples 'soon'" "$T/o19.json" -- "$ZW" fit "$T/good.h5" --delay-samples soon -o "$T/o19.json"
+# A fit that does not converge: exit 1 (not 2), a message, no model file.
+"$ZW" fit "$T/good.h5" --max-iterations 1 -o "$T/nc.json" >"$T/stdout" 2>"$T/stderr"; rc=$?
+if [ $rc -eq 1 ] && grep -q "did not converge" "$T/stderr" && [ ! -e "$T/nc.json" ]; then
+  echo "ok   fit-no-convergence: exit 1, $(head -c 100 "$T/stderr" | tr '\n' ' ')"; pass=$((pass+1))
+else
+  echo "FAIL fit-no-convergence: exit $rc"; cat "$T/stderr"; fail=$((fail+1))
+fi
 echo "$pass passed, $fail failed"
 [ $fail -eq 0 ]

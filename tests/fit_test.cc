@@ -113,6 +113,14 @@ TEST(Fit, CanonicalOrderKeepsTheResponse) {
   }
 }
 
+TEST(Fit, OneIterationIsReportedAsNoConvergence) {
+  FitOptions o;
+  o.max_iterations = 1;
+  const FitResult r = FitModel(Frf(PhantomTable1(), 1), o);
+  EXPECT_EQ(r.status, FitStatus::kNoConvergence);
+  EXPECT_NE(r.message.find("did not converge"), std::string::npos) << r.message;
+}
+
 TEST(Fit, DefaultOptionsAreValid) {
   std::string why;
   EXPECT_TRUE(FitOptions{}.IsValid(&why)) << why;
