@@ -160,7 +160,7 @@ void AddStabilityCommands(CLI::App& app) {
     } else {
       std::printf("relay, paper's reading (spectral peak, first harmonics): K_cr = %.6g N m/rad at %.5g Hz\n",
                   res.K_cr_peak, res.f_cr_peak_hz);
-      std::printf("relay, -180 deg crossing interpolated on the harmonics: K_cr = %.6g N m/rad at %.5g Hz%s\n",
+      std::printf("relay, -180 deg crossing bracketed by lead/lag runs:   K_cr = %.6g N m/rad at %.5g Hz%s\n",
                   res.K_cr, res.f_cr_hz, res.refined ? "" : " (not refined: the paper's reading)");
       std::printf("exact (eq. 2):                                          K_cr = %.6g N m/rad at %.5g Hz\n",
                   cp.K_cr, cp.f_cr_hz);

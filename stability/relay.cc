@@ -40,17 +40,24 @@ std::complex<double> Harmonic(const std::vector<double>& x, size_t start, double
   return acc;
 }
 
-}  // namespace
 
-RelayResult SimulateRelay(const Plant& plant, const RelayOptions& o) {
-  std::string why;
-  if (!o.IsValid(&why)) throw InputError(why);
-  plant.Validate();
-  StateSpace ss = DiscretizeZoh(plant, o.period_s);
-  const int d = o.delay_samples + plant.delay_samples;
-  ss.delay_samples = 0;
-  const size_t n = static_cast<size_t>(std::llround(o.seconds / o.period_s));
+// One relay run: the output is the ideal relay -A sign(y(t)) averaged over the
+// sample centred on t = k + lead, with y linear through y_{k-1} and y_k (a
+// plain sign(y_k) switches up to one sample late, which alone pulls the limit
+// cycle 5-10% low at 1 kHz). lead > 0 acts on the position extrapolated ahead:
+// a phase lead of lead * theta, without the chattering of a negative
+// hysteresis; lead < 0 is a lag.
+struct Run {
   RelayResult r;
+  double theta = 0.0;            // oscillation, rad/sample (spectral peak)
+  std::complex<double> L = 0.0;  // X1/F1: the loop's response at theta, exact
+  double amplitude = 0.0;        // of the position in steady state
+};
+
+Run RunOnce(const StateSpace& ss, int d, const RelayOptions& o, double lead) {
+  Run run;
+  RelayResult& r = run.r;
+  const size_t n = static_cast<size_t>(std::llround(o.seconds / o.period_s));
   r.relay_force.resize(n);
   r.damping_force.resize(n);
   r.command.resize(n);
@@ -60,14 +67,13 @@ RelayResult SimulateRelay(const Plant& plant, const RelayOptions& o) {
   double y_prev = 0.0;
   for (size_t k = 0; k < n; ++k) {
     const double y = ss.C.dot(x);
-    // The ideal relay -A sign(y(t)) averaged over the sample centred on t = k,
-    // with y linear through y_{k-1}, y_k (extrapolated half a sample ahead).
-    // A plain sign(y_k) switches up to one sample late, and that lag alone
-    // pulls the limit cycle 5-10% below the ultimate frequency at 1 kHz.
-    const double ya = 0.5 * (y_prev + y), yb = 1.5 * y - 0.5 * y_prev;
+    // y(t) extrapolated linearly through y_{k-1}, y_k over the sample centred
+    // on t = k + lead (lead in samples; 0 for the plain relay).
+    const double slope = y - y_prev;
+    const double ya = y + slope * (lead - 0.5), yb = y + slope * (lead + 0.5);
     double relay;
     if ((ya > 0.0) == (yb > 0.0) || ya == yb) {
-      relay = (y > 0.0) ? -o.amplitude : o.amplitude;
+      relay = (0.5 * (ya + yb) > 0.0) ? -o.amplitude : o.amplitude;
     } else {
       const double phi = ya / (ya - yb);  // zero crossing within the sample
       const double positive = ya > 0.0 ? phi : 1.0 - phi;
@@ -102,7 +108,7 @@ RelayResult SimulateRelay(const Plant& plant, const RelayOptions& o) {
   // Normalise the two spectra so that neither dominates the average.
   double ef = 0.0, ey = 0.0;
   for (size_t i = 0; i < m; ++i) { ef += rf[i] * rf[i]; ey += ps[i] * ps[i]; }
-  if (!(ey > 0.0) || !(ef > 0.0)) return r;
+  if (!(ey > 0.0) || !(ef > 0.0)) return run;
   for (double& v : ps) v *= std::sqrt(ef / ey);
   auto power = [&](double theta) {
     return std::norm(Harmonic(rf, 0, theta)) + std::norm(Harmonic(ps, 0, theta));
@@ -134,53 +140,72 @@ RelayResult SimulateRelay(const Plant& plant, const RelayOptions& o) {
   const double theta = 0.5 * (lo + hi);
   const std::complex<double> F1 = Harmonic(r.relay_force, start, theta);
   const std::complex<double> X1 = Harmonic(r.position, start, theta);
-  if (!(std::abs(X1) > 0.0)) return r;
+  if (!(std::abs(X1) > 0.0) || !(std::abs(F1) > 0.0)) return run;
   r.oscillating = true;
+  run.theta = theta;
+  run.L = X1 / F1;
+  double lo_y = r.position[start], hi_y = lo_y;
+  for (size_t k = start; k < n; ++k) { lo_y = std::min(lo_y, r.position[k]); hi_y = std::max(hi_y, r.position[k]); }
+  run.amplitude = 0.5 * (hi_y - lo_y);
+  return run;
+}
+
+// Phase of L in (-2 pi, 0]: near the crossover it is close to -pi.
+double LagPhase(std::complex<double> L) {
+  double p = std::arg(L);
+  if (p > 0.0) p -= 2.0 * std::numbers::pi;
+  return p;
+}
+
+}  // namespace
+
+RelayResult SimulateRelay(const Plant& plant, const RelayOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) throw InputError(why);
+  plant.Validate();
+  StateSpace ss = DiscretizeZoh(plant, o.period_s);
+  const int d = o.delay_samples + plant.delay_samples;
+  ss.delay_samples = 0;
+  const Run base = RunOnce(ss, d, o, 0.0);
+  RelayResult r = base.r;
+  if (!r.oscillating) return r;
   const double to_hz = 1.0 / (2.0 * std::numbers::pi * o.period_s);
-  // The paper's reading: the peak frequency, and |F1|/|X1| there.
-  r.K_cr_peak = std::abs(F1) / std::abs(X1);
-  r.f_cr_peak_hz = theta * to_hz;
+  // The paper's reading: the spectral peak, and |F1|/|X1| there.
+  r.K_cr_peak = 1.0 / std::abs(base.L);
+  r.f_cr_peak_hz = base.theta * to_hz;
   r.K_cr = r.K_cr_peak;
   r.f_cr_hz = r.f_cr_peak_hz;
-  // In a periodic steady state X(k theta)/F(k theta) is the loop's response
-  // L(e^{jk theta}) exactly, at every odd harmonic k. The relay locks where
-  // only its first harmonic is near -180 deg (the describing-function error:
-  // up to 7% in f and 13% in K here, where the phase of 1/(m s^2 + b s) with a
-  // delay stays near -180 deg over a wide band). Where L's phase is linear in
-  // f over [f, 5f] - the 5th harmonic lies within 10 deg of the line through
-  // the 1st and 3rd, as with a rigid body and a delay, not with a resonance in
-  // between - the -180 deg crossing is interpolated on that line, with the
-  // log-magnitude likewise, and only close to f.
-  if (5.0 * theta < std::numbers::pi) {
-    std::complex<double> L[3];
-    bool ok = true;
-    for (int i = 0; i < 3 && ok; ++i) {
-      const double th = (2 * i + 1) * theta;
-      const std::complex<double> F = Harmonic(r.relay_force, start, th);
-      const std::complex<double> X = Harmonic(r.position, start, th);
-      ok = std::abs(F) > 0.0 && std::abs(X) > 0.0;
-      if (ok) L[i] = X / F;
+  // X1/F1 is the loop's response L exactly at the oscillation frequency, but
+  // the relay oscillates only near the -180 deg crossing (the describing-
+  // function error: up to 7% in f and 13% in K here, where L's phase stays near
+  // -180 deg over a wide band). A relay acting on the position extrapolated
+  // ahead (or behind) moves the oscillation while X1/F1 stays exact, so runs
+  // with a growing lead (or lag: 0.5 deg, times 1.5 up to 43 deg) bracket the crossing
+  // between two exact values of L, interpolated linearly in f (phase and
+  // log-magnitude). A run that jumps to another limit cycle (f off by 50%,
+  // a vibration mode near B_t) stops the search: the paper's reading stays.
+  const double target = -std::numbers::pi;
+  double p_prev = LagPhase(base.L);
+  if (p_prev == target) { r.refined = true; return r; }
+  const double dir = p_prev > target ? 1.0 : -1.0;  // short of -180 deg: lead; past it: lag
+  Run prev = base;
+  double phi = 0.5 * std::numbers::pi / 180.0;
+  for (int attempt = 0; attempt < 12; ++attempt, phi *= 1.5) {
+    const Run run = RunOnce(ss, d, o, dir * phi / base.theta);
+    if (!run.r.oscillating || std::abs(run.theta / base.theta - 1.0) > 0.5) break;  // another limit cycle
+    const double p = LagPhase(run.L);
+    if ((p - target) * (p_prev - target) <= 0.0) {
+      const double t = (target - p_prev) / (p - p_prev);
+      const double theta = prev.theta + t * (run.theta - prev.theta);
+      const double logmag = std::log(std::abs(prev.L)) + t * (std::log(std::abs(run.L)) - std::log(std::abs(prev.L)));
+      r.K_cr = std::exp(-logmag);
+      r.f_cr_hz = theta * to_hz;
+      r.refined = true;
+      break;
     }
-    if (ok) {
-      const double pi = std::numbers::pi;
-      double p[3] = {std::arg(L[0]), std::arg(L[1]), std::arg(L[2])};
-      for (int i = 1; i < 3; ++i) {  // unwrap: lagging, by less than a turn per step
-        while (p[i] > p[i - 1]) p[i] -= 2.0 * pi;
-        while (p[i] < p[i - 1] - 2.0 * pi) p[i] += 2.0 * pi;
-      }
-      const double slope = (p[1] - p[0]) / 2.0;       // per unit of theta/theta_1
-      const double p5_line = p[0] + 4.0 * slope;
-      double target = -pi;                            // -180 deg (mod 360) nearest p1
-      while (target > p[0] + pi) target -= 2.0 * pi;
-      while (target < p[0] - pi) target += 2.0 * pi;
-      const double x = slope < 0.0 ? (target - p[0]) / slope : 1e9;  // theta*/theta_1 - 1
-      if (std::abs(p[2] - p5_line) < 10.0 * pi / 180.0 && std::abs(x) <= 0.25) {
-        const double l1 = std::log(std::abs(L[0])), l3 = std::log(std::abs(L[1]));
-        r.K_cr = std::exp(-(l1 + x * (l3 - l1) / 2.0));
-        r.f_cr_hz = theta * (1.0 + x) * to_hz;
-        r.refined = true;
-      }
-    }
+    if (std::abs(p - p_prev) < 1e-9) continue;  // locked on the same period: no new point
+    prev = run;
+    p_prev = p;
   }
   return r;
 }

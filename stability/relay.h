@@ -26,8 +26,10 @@ struct RelayOptions {
 };
 
 struct RelayResult {
-  // The estimate: the -180 deg crossing interpolated on the harmonics where
-  // L is smooth enough to trust it (refined), else the paper's reading.
+  // The estimate: the -180 deg crossing bracketed by relay runs with a
+  // growing phase lead or lag, each giving L exactly at its own oscillation
+  // frequency (refined); else (another limit cycle took over) the paper's
+  // reading.
   double K_cr = 0.0;     // N m/rad
   double f_cr_hz = 0.0;  // Hz
   bool refined = false;
