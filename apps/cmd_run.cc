@@ -71,7 +71,7 @@ void AddRunCommand(CLI::App& app) {
     if (!(f->b_step > 0)) throw InputError("--b-step must be > 0");
     const fs::path out(f->outdir);
     if (!fs::is_directory(out)) {
-      io::CheckOutputFolder((out / "x").string().substr(0, 0) + f->outdir);
+      io::CheckOutputFolder(f->outdir);  // its parent must exist
       std::error_code ec;
       fs::create_directory(out, ec);
       if (ec) throw InputError("cannot create output folder '" + f->outdir + "': " + ec.message());

@@ -360,26 +360,23 @@ struct SingleFit {
   std::string message;
 };
 
-SingleFit Solve(const Bins& bins, int n, const Plant& start, const FitOptions& o,
-                ceres::Problem* keep_problem = nullptr, std::vector<double>* keep_x = nullptr) {
+// Solves from the log-space parameters x (clamped into the box, then updated
+// in place) on a problem the caller owns, so that it can ask for the
+// covariance afterwards.
+SingleFit Solve(const Bins& bins, int n, std::vector<double>& xs, const FitOptions& o,
+                ceres::Problem& problem) {
   SingleFit out;
-  std::vector<double> x = ToLog(start);
-  const int p = static_cast<int>(x.size());
   const double nyq_w = std::numbers::pi / bins.period_s;
   const double w_hi = std::log(o.max_frequency_fraction * nyq_w);
   const double w_lo = std::log(2.0 * std::numbers::pi * 1e-3);
   // Clamp the start into the box.
   for (int i = 0; i < n; ++i) {
-    auto clamp = [&](int idx, double lo, double hi) { x[idx] = std::min(std::max(x[idx], lo + 1e-9), hi - 1e-9); };
+    auto clamp = [&](int idx, double lo, double hi) { xs[idx] = std::min(std::max(xs[idx], lo + 1e-9), hi - 1e-9); };
     clamp(2 + 4 * i, w_lo, w_hi);
     clamp(3 + 4 * i, std::log(o.min_damping_ratio), std::log(o.max_pole_damping_ratio));
     clamp(4 + 4 * i, w_lo, w_hi);
     clamp(5 + 4 * i, std::log(o.min_damping_ratio), std::log(o.max_zero_damping_ratio));
   }
-  ceres::Problem local;
-  ceres::Problem& problem = keep_problem ? *keep_problem : local;
-  std::vector<double>& xs = keep_x ? *keep_x : x;
-  if (keep_x) xs = x;
   problem.AddResidualBlock(new ZohResidual(&bins, n), nullptr, xs.data());
   for (int i = 0; i < n; ++i) {
     problem.SetParameterLowerBound(xs.data(), 2 + 4 * i, w_lo);
@@ -397,7 +394,6 @@ SingleFit Solve(const Bins& bins, int n, const Plant& start, const FitOptions& o
     problem.SetParameterLowerBound(xs.data(), i, xs[i] - 8.0);
     problem.SetParameterUpperBound(xs.data(), i, xs[i] + 8.0);
   }
-  (void)p;
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;  // 10-30 columns: J^T J is small
   so.max_num_iterations = o.max_iterations;
@@ -443,14 +439,15 @@ FitResult FitModel(const ident::FrequencyResponse& frf, const FitOptions& o) {
   if (o.auto_delay) for (int d = 0; d <= o.max_auto_delay; ++d) delays.push_back(d);
   else delays.push_back(o.delay_samples);
 
+  // Which bins are usable does not depend on the delay.
+  const size_t usable = MakeBins(frf, 0, o.relative_std_floor).z.size();
+  if (static_cast<int>(2 * usable) <= p) {
+    throw InputError("the response has " + std::to_string(usable) + " usable bins, too few for " +
+                     std::to_string(p) + " parameters; widen --fmin/--fmax or use fewer --modes");
+  }
   int best_delay = -1;
   SingleFit best;
   for (int d : delays) {
-    const Bins bins = MakeBins(frf, d, o.relative_std_floor);
-    if (static_cast<int>(2 * bins.z.size()) <= p) {
-      throw InputError("the response has " + std::to_string(bins.z.size()) + " usable bins, too few for " +
-                       std::to_string(p) + " parameters; widen --fmin/--fmax or use fewer --modes");
-    }
     std::vector<Plant> starts;
     if (o.init) starts.push_back(*o.init);
     for (Plant& s : AutomaticStarts(frf, n, d, o.max_starts)) starts.push_back(s);
@@ -459,10 +456,12 @@ FitResult FitModel(const ident::FrequencyResponse& frf, const FitOptions& o) {
     // otherwise go into starts that lose).
     FitOptions screen = o;
     screen.max_iterations = std::min(o.max_iterations, 8);
-    const Bins coarse = MakeBins(frf, d, o.relative_std_floor, bins.z.size() > 600 ? 6 : 1);
+    const Bins coarse = MakeBins(frf, d, o.relative_std_floor, usable > 600 ? 6 : 1);
     for (const Plant& s : starts) {
       ++res.starts_tried;
-      const SingleFit f = Solve(coarse, n, s, screen);
+      std::vector<double> xs = ToLog(s);
+      ceres::Problem screen_problem;
+      const SingleFit f = Solve(coarse, n, xs, screen, screen_problem);
       res.iterations += f.iterations;
       if (f.cost < best.cost) {
         best = f;
@@ -478,8 +477,9 @@ FitResult FitModel(const ident::FrequencyResponse& frf, const FitOptions& o) {
   // Converge from the best screened point, holding the problem for the covariance.
   const Bins bins = MakeBins(frf, best_delay, o.relative_std_floor);
   ceres::Problem problem;
-  std::vector<double> x;
-  const SingleFit fin = Solve(bins, n, FromLog(best.x, n), o, &problem, &x);
+  std::vector<double> x = best.x;
+  const SingleFit fin = Solve(bins, n, x, o, problem);
+  res.iterations += fin.iterations;
   res.status = fin.converged ? FitStatus::kConverged : FitStatus::kNoConvergence;
   res.message = fin.message;
   res.cost = fin.cost;

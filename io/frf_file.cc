@@ -97,6 +97,12 @@ ident::FrequencyResponse ReadFrequencyResponseCsv(const std::string& path, doubl
   for (const char* need : {"f_hz", "H_re", "H_im"}) {
     if (!col.count(need)) throw InputError(path + ": no column '" + std::string(need) + "' in the header");
   }
+  // Column positions, -1 where absent.
+  auto index = [&](const char* name) { auto it = col.find(name); return it == col.end() ? -1 : it->second; };
+  const int i_f = index("f_hz"), i_re = index("H_re"), i_im = index("H_im"), i_coh = index("coherence"),
+            i_std = index("H_std"), i_suu = index("S_uu"), i_syy = index("S_yy"),
+            i_rate = index("sample_rate_hz"), i_navg = index("num_averages"),
+            i_neff = index("effective_averages"), i_kappa = index("bin_correlation");
   ident::FrequencyResponse r;
   r.num_averages = 0;
   r.effective_averages = 0;
@@ -126,22 +132,22 @@ ident::FrequencyResponse ReadFrequencyResponseCsv(const std::string& path, doubl
     for (double x : v) {
       if (std::isnan(x)) throw InputError(path + ": line " + std::to_string(line_no) + " has a NaN");
     }
-    const std::complex<double> h(v[col["H_re"]], v[col["H_im"]]);
-    const double f = v[col["f_hz"]];
+    const std::complex<double> h(v[i_re], v[i_im]);
+    const double f = v[i_f];
     if (!r.f_hz.empty() && !(f > r.f_hz.back())) {
       throw InputError(path + ": line " + std::to_string(line_no) + ": f_hz is not increasing");
     }
     r.f_hz.push_back(f);
     r.H.push_back(h);
-    r.coherence.push_back(col.count("coherence") ? v[col["coherence"]] : 1.0);
-    r.H_std.push_back(col.count("H_std") ? v[col["H_std"]] : 1e-3 * std::abs(h));
-    r.S_uu.push_back(col.count("S_uu") ? v[col["S_uu"]] : 0.0);
-    r.S_yy.push_back(col.count("S_yy") ? v[col["S_yy"]] : 0.0);
+    r.coherence.push_back(i_coh >= 0 ? v[i_coh] : 1.0);
+    r.H_std.push_back(i_std >= 0 ? v[i_std] : 1e-3 * std::abs(h));
+    r.S_uu.push_back(i_suu >= 0 ? v[i_suu] : 0.0);
+    r.S_yy.push_back(i_syy >= 0 ? v[i_syy] : 0.0);
     r.S_uy.push_back(0.0);
-    if (col.count("sample_rate_hz")) r.sample_rate_hz = v[col["sample_rate_hz"]];
-    if (col.count("num_averages")) r.num_averages = static_cast<int>(v[col["num_averages"]]);
-    if (col.count("effective_averages")) r.effective_averages = v[col["effective_averages"]];
-    if (col.count("bin_correlation")) r.bin_correlation = v[col["bin_correlation"]];
+    if (i_rate >= 0) r.sample_rate_hz = v[i_rate];
+    if (i_navg >= 0) r.num_averages = static_cast<int>(v[i_navg]);
+    if (i_neff >= 0) r.effective_averages = v[i_neff];
+    if (i_kappa >= 0) r.bin_correlation = v[i_kappa];
   }
   if (r.f_hz.empty()) throw InputError(path + ": no data rows");
   if (rate > 0.0) r.sample_rate_hz = rate;

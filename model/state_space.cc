@@ -1,6 +1,5 @@
 #include "model/state_space.h"
 
-#include <cassert>
 #include <cmath>
 #include <utility>
 
@@ -129,7 +128,7 @@ StateSpace WithDelayStates(const StateSpace& s) {
   for (int j = 1; j < k; ++j) out.A(n + j, n + j - 1) = 1.0;
   out.B(n) = 1.0;
   out.C.head(n) = s.C;
-  out.D = (k == 0) ? s.D : 0.0;
+  out.D = 0.0;  // the input reaches the output through the register only
   out.period_s = s.period_s;
   out.delay_samples = 0;
   return out;
@@ -185,9 +184,8 @@ std::vector<double> SimulateDiscrete(const StateSpace& s,
   std::vector<double> y(input.size());
   const size_t delay = static_cast<size_t>(s.delay_samples);
   for (size_t t = 0; t < input.size(); ++t) {
-    const double u_now = input[t];
     const double u_delayed = (t >= delay) ? input[t - delay] : 0.0;
-    y[t] = s.C.dot(x) + (delay == 0 ? s.D * u_now : 0.0);
+    y[t] = s.C.dot(x) + s.D * u_delayed;
     next.noalias() = s.A * x;
     next += s.B * u_delayed;
     x.swap(next);

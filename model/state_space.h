@@ -65,7 +65,7 @@ class DiscreteResponse {
   int delay_samples_ = 0;
 };
 
-// Sampled simulation: x_{k+1} = A x_k + B u_{k-delay}, y_k = C x_k + D u_k,
+// Sampled simulation: x_{k+1} = A x_k + B u_{k-delay}, y_k = C x_k + D u_{k-delay},
 // from rest. With a ZOH plant this is exactly the continuous plant driven by
 // the input held over each period and sampled at the start of each period.
 std::vector<double> SimulateDiscrete(const StateSpace& discrete,

@@ -188,7 +188,8 @@ RelayResult SimulateRelay(const Plant& plant, const RelayOptions& o) {
   double p_prev = LagPhase(base.L);
   if (p_prev == target) { r.refined = true; return r; }
   const double dir = p_prev > target ? 1.0 : -1.0;  // short of -180 deg: lead; past it: lag
-  Run prev = base;
+  double prev_theta = base.theta;       // the last run on this side of -180 deg
+  std::complex<double> prev_L = base.L;
   double phi = 0.5 * std::numbers::pi / 180.0;
   for (int attempt = 0; attempt < 12; ++attempt, phi *= 1.5) {
     const Run run = RunOnce(ss, d, o, dir * phi / base.theta);
@@ -196,15 +197,16 @@ RelayResult SimulateRelay(const Plant& plant, const RelayOptions& o) {
     const double p = LagPhase(run.L);
     if ((p - target) * (p_prev - target) <= 0.0) {
       const double t = (target - p_prev) / (p - p_prev);
-      const double theta = prev.theta + t * (run.theta - prev.theta);
-      const double logmag = std::log(std::abs(prev.L)) + t * (std::log(std::abs(run.L)) - std::log(std::abs(prev.L)));
+      const double theta = prev_theta + t * (run.theta - prev_theta);
+      const double logmag = std::log(std::abs(prev_L)) + t * (std::log(std::abs(run.L)) - std::log(std::abs(prev_L)));
       r.K_cr = std::exp(-logmag);
       r.f_cr_hz = theta * to_hz;
       r.refined = true;
       break;
     }
     if (std::abs(p - p_prev) < 1e-9) continue;  // locked on the same period: no new point
-    prev = run;
+    prev_theta = run.theta;
+    prev_L = run.L;
     p_prev = p;
   }
   return r;

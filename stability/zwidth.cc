@@ -274,8 +274,7 @@ CriticalPoint ZWidth::At(double B) const {
   return cp;
 }
 
-double ZWidth::FindTransition(double lo, double hi) const {
-  const double f_lo = At(lo).f_cr_hz, f_hi = At(hi).f_cr_hz;
+double ZWidth::FindTransition(double lo, double hi, double f_lo, double f_hi) const {
   for (int it = 0; it < 60 && hi - lo > 1e-14 * std::max(1.0, hi); ++it) {
     const double mid = 0.5 * (lo + hi);
     const double f = At(mid).f_cr_hz;
@@ -322,7 +321,7 @@ DelaySummary ZWidth::Summarize() const {
     if (cp.K_cr > s.K_cr_max) { s.K_cr_max = cp.K_cr; s.B_at_K_cr_max = b; }
     if (!s.has_transition && std::abs(std::log(cp.f_cr_hz / prev_f)) > std::log(1.5)) {
       s.has_transition = true;
-      s.B_t = FindTransition(prev_b, b);
+      s.B_t = FindTransition(prev_b, b, prev_f, cp.f_cr_hz);
       const double eps = 1e-9 * std::max(s.B_t, 1e-12);
       const CriticalPoint before = At(s.B_t - eps), after = At(s.B_t + eps);
       s.f_before_hz = before.f_cr_hz;

@@ -93,7 +93,8 @@ class ZWidth {
  private:
   struct Segment { double ta, tb, Ba, Bb; };
   void Point(double theta, double* B, double* K) const;
-  double FindTransition(double b_lo, double b_hi) const;
+  // Bisection for the B where f_CR jumps between f_lo (at b_lo) and f_hi.
+  double FindTransition(double b_lo, double b_hi, double f_lo, double f_hi) const;
   double HzOf(double theta) const;
   // G_d(z) without the delay: the pole-residue form when it reproduces the
   // state-space response (distinct underdamped modes), else the Hessenberg solve.

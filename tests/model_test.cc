@@ -87,8 +87,8 @@ TEST(Zoh, ModalFormEqualsStateSpaceResponse) {
 }
 
 TEST(Zoh, RigidBodyMatchesTheClosedForm) {
-  // ZOH of 1/(s(ms+b)): G_d = T/(b(z-1)) - (1-e)/(a b) (1/(z-e)) ... check the
-  // double integrator limit b -> small against T^2 (z+1) / (2 m (z-1)^2).
+  // The double-integrator limit (b -> 0) of the rigid body has the closed
+  // form ZOH T^2 (z + 1) / (2 m (z - 1)^2).
   Plant p;
   p.m = 2.0;
   p.b = 1e-9;
