@@ -134,7 +134,7 @@ void AddStabilityCommands(CLI::App& app) {
     std::fprintf(stderr, "simulating %.3g s of relay feedback (d = %d, B = %g)...\n", rf->o.seconds,
                  rf->o.delay_samples, rf->o.damping);
     const stability::RelayResult res = stability::SimulateRelay(mf.plant, rf->o);
-    if (!res.oscillating) throw ComputationError("the relay loop did not oscillate");
+    if (!res.oscillating && !res.diverged) throw ComputationError("the relay loop did not oscillate");
     const stability::ZWidth z(mf.plant, rf->o.period_s, rf->o.delay_samples);
     const stability::CriticalPoint cp = z.At(rf->o.damping);
     if (!rf->trace.empty()) {
@@ -149,19 +149,40 @@ void AddStabilityCommands(CLI::App& app) {
         if (std::fclose(f) != 0) throw InputError("failed writing '" + rf->trace + "'");
       });
     }
-    nlohmann::json j = {{"K_cr", res.K_cr}, {"f_cr_hz", res.f_cr_hz}, {"refined", res.refined},
-                        {"K_cr_peak", res.K_cr_peak}, {"f_cr_peak_hz", res.f_cr_peak_hz},
+    nlohmann::json j = {{"K_cr", io::NumberOrNull(res.K_cr)}, {"f_cr_hz", io::NumberOrNull(res.f_cr_hz)},
+                        {"refined", res.refined}, {"diverged", res.diverged},
+                        {"K_cr_peak", io::NumberOrNull(res.K_cr_peak)},
+                        {"f_cr_peak_hz", io::NumberOrNull(res.f_cr_peak_hz)}, {"relay_runs", res.relay_runs},
+                        {"unsettled", res.unsettled},
+                        {"uncertainty", io::NumberOrNull(res.uncertainty)}, {"below_band", res.below_band},
+                        {"band_low_hz", io::NumberOrNull(res.band_low_hz)},
                         {"K_cr_exact", io::NumberOrNull(cp.K_cr)},
                         {"f_cr_exact_hz", io::NumberOrNull(cp.f_cr_hz)},
                         {"delay_samples", rf->o.delay_samples}, {"B", rf->o.damping},
                         {"period_s", rf->o.period_s}};
+    if (res.refined && !(res.uncertainty <= 1e-3)) {
+      std::fprintf(stderr,
+                   "warning: the estimate is uncertain to about %.2g%% (L from the two halves of the steady part "
+                   "differs by %.2g%%, the oscillation was still settling); simulate longer with --seconds\n",
+                   100.0 * res.uncertainty, 100.0 * res.unsettled);
+    }
+    if (res.below_band) {
+      std::fprintf(stderr,
+                   "warning: the relay run at %.3g Hz, the lowest this record resolves (20 cycles in the steady part), "
+                   "is already past -180 deg: the critical crossing lies below it; simulate longer with --seconds\n",
+                   res.band_low_hz);
+    }
     if (rf->json) {
       std::cout << j.dump() << std::endl;
+    } else if (res.diverged) {
+      std::printf("relay: the loop diverges with the relay alone, so no K > 0 is stable here (B past B_max): K_cr = 0\n");
     } else {
       std::printf("relay, paper's reading (spectral peak, first harmonics): K_cr = %.6g N m/rad at %.5g Hz\n",
                   res.K_cr_peak, res.f_cr_peak_hz);
-      std::printf("relay, -180 deg crossing bracketed by lead/lag runs:   K_cr = %.6g N m/rad at %.5g Hz%s\n",
-                  res.K_cr, res.f_cr_hz, res.refined ? "" : " (not refined: the paper's reading)");
+      std::printf("relay, -180 deg crossings measured by steered runs:    K_cr = %.6g N m/rad at %.5g Hz%s\n",
+                  res.K_cr, res.f_cr_hz, res.refined ? "" : " (no crossing found: the paper's reading)");
+    }
+    if (!rf->json) {
       std::printf("exact (eq. 2):                                          K_cr = %.6g N m/rad at %.5g Hz\n",
                   cp.K_cr, cp.f_cr_hz);
     }

@@ -11,6 +11,7 @@
 #include "model/plant.h"
 #include "model/simulate.h"
 #include "model/state_space.h"
+#include "stability/relay.h"
 #include "stability/zwidth.h"
 
 namespace zwidth {
@@ -125,6 +126,31 @@ void BM_BoundaryMap(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_BoundaryMap)->Unit(benchmark::kMillisecond);
+
+// The relay experiment at d = 2: record length (s) against the error of the
+// estimate and of the paper's reading, at B = 0 and 0.9 B_t (where the plain
+// relay locks onto a cycle 40 samples long).
+void BM_Relay(benchmark::State& state) {
+  const Plant p = PhantomTable1();
+  const stability::ZWidth z(p, 1e-3, 2);
+  stability::RelayOptions o;
+  o.delay_samples = 2;
+  o.seconds = static_cast<double>(state.range(0));
+  o.damping = 0.01 * static_cast<double>(state.range(1)) * z.Summarize().B_t;
+  stability::RelayResult r;
+  for (auto _ : state) {
+    r = stability::SimulateRelay(p, o);
+    benchmark::DoNotOptimize(r.K_cr);
+  }
+  const stability::CriticalPoint c = z.At(o.damping);
+  state.counters["rel_err_K_cr"] = std::abs(r.K_cr / c.K_cr - 1);
+  state.counters["rel_err_f_cr"] = std::abs(r.f_cr_hz / c.f_cr_hz - 1);
+  state.counters["paper_rel_err_K"] = std::abs(r.K_cr_peak / c.K_cr - 1);
+  state.counters["paper_rel_err_f"] = std::abs(r.f_cr_peak_hz / c.f_cr_hz - 1);
+  state.counters["uncertainty"] = r.uncertainty;
+  state.counters["runs"] = r.relay_runs;
+}
+BENCHMARK(BM_Relay)->ArgsProduct({{10, 30, 120}, {0, 90}})->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace zwidth

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <limits>
 #include <numbers>
+#include <optional>
 
 #include "model/error.h"
 #include "model/state_space.h"
@@ -29,32 +31,118 @@ bool RelayOptions::IsValid(std::string* why) const {
 
 namespace {
 
-// Single-frequency DFT of x[start..] with a Hann window.
-std::complex<double> Harmonic(const std::vector<double>& x, size_t start, double theta) {
-  const size_t n = x.size() - start;
-  std::complex<double> acc = 0.0;
+constexpr double kResonatorQ = 2.0;  // of each of the two resonators
+constexpr int kMaxScanRuns = 40;       // filtered runs of the scan
+constexpr int kMaxRefineRuns = 10;     // filtered runs per crossing or dip
+constexpr double kDipDeg = 10.0;       // a dip of the phase this close to -180 deg is probed
+
+// Single-frequency DFT of x[0..n) times a window w[0..n): sum w_i x_i e^{-j theta i}.
+// The phasor advances by one complex product per sample and is reset from
+// std::polar every 256 samples (rounding stays near 1e-14).
+std::complex<double> Harmonic(const double* x, const std::vector<double>& w, double theta) {
+  const size_t n = w.size();
+  const std::complex<double> step = std::polar(1.0, -theta);
+  std::complex<double> acc = 0.0, e = 1.0;
   for (size_t i = 0; i < n; ++i) {
-    const double w = 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * i / n);
-    acc += w * x[start + i] * std::polar(1.0, -theta * static_cast<double>(i));
+    if ((i & 255u) == 0) e = std::polar(1.0, -theta * static_cast<double>(i));
+    acc += (w[i] * x[i]) * e;
+    e *= step;
   }
   return acc;
 }
 
+// The 4-term Blackman-Harris window (sidelobes 92 dB down): the drift of the
+// position and the square wave's other harmonics leak far less than with Hann.
+std::vector<double> BlackmanHarris(size_t n) {
+  std::vector<double> w(n);
+  const double k = 2.0 * std::numbers::pi / static_cast<double>(n);
+  for (size_t i = 0; i < n; ++i) {
+    const double x = k * static_cast<double>(i);
+    w[i] = 0.35875 - 0.48829 * std::cos(x) + 0.14128 * std::cos(2 * x) - 0.01168 * std::cos(3 * x);
+  }
+  return w;
+}
 
-// One relay run: the output is the ideal relay -A sign(y(t)) averaged over the
-// sample centred on t = k + lead, with y linear through y_{k-1} and y_k (a
-// plain sign(y_k) switches up to one sample late, which alone pulls the limit
-// cycle 5-10% low at 1 kHz). lead > 0 acts on the position extrapolated ahead:
-// a phase lead of lead * theta, without the chattering of a negative
-// hysteresis; lead < 0 is a lag.
+// |X(theta)|^2 of a windowed signal and its first two derivatives in theta,
+// in one pass (the index centred on the window keeps the sums well scaled).
+struct PowerDerivatives {
+  double d1 = 0.0, d2 = 0.0;
+};
+PowerDerivatives Power(const double* x, const std::vector<double>& w, double theta) {
+  const size_t n = w.size();
+  const double c = 0.5 * static_cast<double>(n);
+  const std::complex<double> step = std::polar(1.0, -theta);
+  std::complex<double> X = 0.0, X1 = 0.0, X2 = 0.0, e = 1.0;
+  for (size_t i = 0; i < n; ++i) {
+    const double t = static_cast<double>(i) - c;
+    if ((i & 255u) == 0) e = std::polar(1.0, -theta * t);
+    const std::complex<double> a = (w[i] * x[i]) * e;
+    X += a;
+    X1 += t * a;
+    X2 += (t * t) * a;
+    e *= step;
+  }
+  // X' = -j X1, X'' = -X2.
+  const std::complex<double> dX(X1.imag(), -X1.real());
+  PowerDerivatives p;
+  p.d1 = 2.0 * std::real(std::conj(X) * dX);
+  p.d2 = 2.0 * (std::norm(dX) - std::real(std::conj(X) * X2));
+  return p;
+}
+
+// The windows of a relay estimate, built once for all its runs (same length).
+class WindowCache {
+ public:
+  const std::vector<double>& Full(size_t m) {
+    if (full_.size() != m) full_ = BlackmanHarris(m);
+    return full_;
+  }
+  const std::vector<double>& Half(size_t m) {
+    if (half_.size() != m / 2) half_ = BlackmanHarris(m / 2);
+    return half_;
+  }
+
+ private:
+  std::vector<double> full_, half_;
+};
+
+// A second-order resonator (band-pass, RBJ form): unit gain and zero phase at
+// its centre w0 [rad/sample], a phase lead below it and a lag above it (up to
+// +-90 deg), and a roll-off of 1/(q x) at x times w0 or w0 / x.
+struct Resonator {
+  double b0 = 1.0, b2 = 0.0, a1 = 0.0, a2 = 0.0;
+  double x1 = 0.0, x2 = 0.0, y1 = 0.0, y2 = 0.0;
+  static Resonator At(double w0, double q) {
+    Resonator r;
+    const double alpha = std::sin(w0) / (2.0 * q), a0 = 1.0 + alpha;
+    r.b0 = alpha / a0;
+    r.b2 = -alpha / a0;
+    r.a1 = -2.0 * std::cos(w0) / a0;
+    r.a2 = (1.0 - alpha) / a0;
+    return r;
+  }
+  double Step(double x) {
+    const double y = b0 * x + b2 * x2 - a1 * y1 - a2 * y2;
+    x2 = x1; x1 = x; y2 = y1; y1 = y;
+    return y;
+  }
+};
+
+// One relay run: the output is the ideal relay -A sign(s(t)) averaged over the
+// sample centred on t = k, with s linear through s_{k-1} and s_k (a plain
+// sign(s_k) switches up to one sample late, which alone pulls the limit cycle
+// 5-10% low at 1 kHz). s is the position, or (centre > 0) the position through
+// two resonators at that centre: they steer the oscillation towards the centre
+// and keep the square wave's harmonics (which can lock the cycle onto a
+// vibration mode) out of the switching.
 struct Run {
   RelayResult r;
   double theta = 0.0;            // oscillation, rad/sample (spectral peak)
   std::complex<double> L = 0.0;  // X1/F1: the loop's response at theta, exact
-  double amplitude = 0.0;        // of the position in steady state
+  double unsettled = 0.0;        // |L(first half) - L(second half)| / |L| of the steady part
 };
 
-Run RunOnce(const StateSpace& ss, int d, const RelayOptions& o, double lead) {
+Run RunOnce(const StateSpace& ss, int d, const RelayOptions& o, double centre, WindowCache& windows) {
   Run run;
   RelayResult& r = run.r;
   const size_t n = static_cast<size_t>(std::llround(o.seconds / o.period_s));
@@ -64,13 +152,16 @@ Run RunOnce(const StateSpace& ss, int d, const RelayOptions& o, double lead) {
   r.position.resize(n);
   const int ns = static_cast<int>(ss.A.rows());
   Eigen::VectorXd x = Eigen::VectorXd::Zero(ns), next(ns);
-  double y_prev = 0.0;
+  const bool filtered = centre > 0.0;
+  Resonator f1, f2;
+  if (filtered) f1 = f2 = Resonator::At(centre, kResonatorQ);
+  double y_prev = 0.0, s_prev = 0.0;
   for (size_t k = 0; k < n; ++k) {
     const double y = ss.C.dot(x);
-    // y(t) extrapolated linearly through y_{k-1}, y_k over the sample centred
-    // on t = k + lead (lead in samples; 0 for the plain relay).
-    const double slope = y - y_prev;
-    const double ya = y + slope * (lead - 0.5), yb = y + slope * (lead + 0.5);
+    const double s = filtered ? f2.Step(f1.Step(y)) : y;
+    // s(t) linear through s_{k-1}, s_k over the sample centred on t = k.
+    const double slope = s - s_prev;
+    const double ya = s - 0.5 * slope, yb = s + 0.5 * slope;
     double relay;
     if ((ya > 0.0) == (yb > 0.0) || ya == yb) {
       relay = (0.5 * (ya + yb) > 0.0) ? -o.amplitude : o.amplitude;
@@ -79,6 +170,7 @@ Run RunOnce(const StateSpace& ss, int d, const RelayOptions& o, double lead) {
       const double positive = ya > 0.0 ? phi : 1.0 - phi;
       relay = -o.amplitude * (2.0 * positive - 1.0);
     }
+    s_prev = s;
     const double damp = -o.damping * (y - y_prev) / o.period_s;
     y_prev = y;
     r.position[k] = y;
@@ -93,8 +185,27 @@ Run RunOnce(const StateSpace& ss, int d, const RelayOptions& o, double lead) {
   }
   const size_t start = static_cast<size_t>(o.settle_fraction * n);
   const size_t m = n - start;
-  // Averaged power spectrum of force and position (normalised each), zero-
-  // padded, peak refined by golden-section search on the exact DFT power.
+  // Diverging (the loop is unstable without the relay, past B_max): the peak
+  // grows by the same factor, over 1.2, from each quarter of the steady part
+  // to the next (exponential growth; a cycle still building up or changing
+  // over grows by changing factors), or overflows.
+  auto peak = [&](size_t q) {
+    double v = 0.0;
+    for (size_t k = start + q * m / 4; k < start + (q + 1) * m / 4; ++k) {
+      if (!std::isfinite(r.position[k])) return std::numeric_limits<double>::infinity();
+      v = std::max(v, std::abs(r.position[k]));
+    }
+    return v;
+  };
+  const double q0 = peak(0), q1 = peak(1), q2 = peak(2), q3 = peak(3);
+  const double g1 = q1 / q0, g2 = q2 / q1, g3 = q3 / q2;
+  const double g_lo = std::min({g1, g2, g3}), g_hi = std::max({g1, g2, g3});
+  if (!std::isfinite(q3) || (g_lo > 1.2 && g_hi < 1.25 * g_lo)) {
+    r.diverged = true;
+    return run;
+  }
+  // The peak of the averaged power spectra of force and position (each
+  // normalised, mean removed), as the paper reads the oscillation frequency.
   std::vector<double> rf(r.relay_force.begin() + start, r.relay_force.end());
   std::vector<double> ps(r.position.begin() + start, r.position.end());
   auto detrend = [](std::vector<double>& v) {
@@ -110,52 +221,74 @@ Run RunOnce(const StateSpace& ss, int d, const RelayOptions& o, double lead) {
   for (size_t i = 0; i < m; ++i) { ef += rf[i] * rf[i]; ey += ps[i] * ps[i]; }
   if (!(ey > 0.0) || !(ef > 0.0)) return run;
   for (double& v : ps) v *= std::sqrt(ef / ey);
-  auto power = [&](double theta) {
-    return std::norm(Harmonic(rf, 0, theta)) + std::norm(Harmonic(ps, 0, theta));
-  };
-  // Coarse peak from a zero-padded FFT of the Hann-windowed signals.
+  const std::vector<double>& window = windows.Full(m);
+  // Coarse peak from a zero-padded FFT of the windowed signals.
   size_t nfft = 1;
-  while (nfft < 4 * m) nfft *= 2;
+  while (nfft < m) nfft *= 2;
   std::vector<double> bufa(nfft, 0.0), bufb(nfft, 0.0);
   for (size_t i = 0; i < m; ++i) {
-    const double w = 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * i / m);
-    bufa[i] = w * rf[i];
-    bufb[i] = w * ps[i];
+    bufa[i] = window[i] * rf[i];
+    bufb[i] = window[i] * ps[i];
   }
   Eigen::FFT<double> fft;
   std::vector<std::complex<double>> sa, sb;
   fft.fwd(sa, bufa);
   fft.fwd(sb, bufb);
-  double best_t = 0.0, best_p = -1.0;
+  size_t best_k = 1;
+  double best_p = -1.0;
   for (size_t k = 1; k < nfft / 2; ++k) {
     const double p = std::norm(sa[k]) + std::norm(sb[k]);
-    if (p > best_p) { best_p = p; best_t = 2.0 * std::numbers::pi * k / nfft; }
+    if (p > best_p) { best_p = p; best_k = k; }
   }
-  const double dtheta = 2.0 * std::numbers::pi / nfft;
-  double lo = std::max(dtheta, best_t - dtheta), hi = std::min(std::numbers::pi - dtheta, best_t + dtheta);
-  for (int it = 0; it < 60; ++it) {  // golden refinement of the peak
-    const double a = lo + (hi - lo) * 0.381966, b = lo + (hi - lo) * 0.618034;
-    if (power(a) > power(b)) hi = b; else lo = a;
+  // Newton on the derivative of the exact DFT power, kept inside the bins
+  // either side of the coarse peak (bisection on its sign where Newton would
+  // leave them), to 1e-10 rad/sample.
+  const double dtheta = 2.0 * std::numbers::pi / static_cast<double>(nfft);
+  double lo = std::max(1e-9, (static_cast<double>(best_k) - 1.0) * dtheta);
+  double hi = std::min(std::numbers::pi - 1e-9, (static_cast<double>(best_k) + 1.0) * dtheta);
+  double theta = static_cast<double>(best_k) * dtheta;
+  for (int it = 0; it < 40 && hi - lo > 1e-10; ++it) {
+    const PowerDerivatives pa = Power(rf.data(), window, theta), pb = Power(ps.data(), window, theta);
+    const double d1 = pa.d1 + pb.d1, d2 = pa.d2 + pb.d2;
+    if (d1 > 0.0) lo = theta; else hi = theta;
+    const double step = d2 < 0.0 ? -d1 / d2 : 0.0;
+    const double next = theta + step;
+    if (d2 < 0.0 && next > lo && next < hi) {
+      theta = next;
+      if (std::abs(step) < 1e-10) break;
+    } else {
+      theta = 0.5 * (lo + hi);
+    }
   }
-  const double theta = 0.5 * (lo + hi);
-  const std::complex<double> F1 = Harmonic(r.relay_force, start, theta);
-  const std::complex<double> X1 = Harmonic(r.position, start, theta);
+  const std::complex<double> F1 = Harmonic(r.relay_force.data() + start, window, theta);
+  const std::complex<double> X1 = Harmonic(r.position.data() + start, window, theta);
   if (!(std::abs(X1) > 0.0) || !(std::abs(F1) > 0.0)) return run;
   r.oscillating = true;
   run.theta = theta;
   run.L = X1 / F1;
-  double lo_y = r.position[start], hi_y = lo_y;
-  for (size_t k = start; k < n; ++k) { lo_y = std::min(lo_y, r.position[k]); hi_y = std::max(hi_y, r.position[k]); }
-  run.amplitude = 0.5 * (hi_y - lo_y);
+  // Still settling (a slow transient, e.g. near B_max): the two halves disagree.
+  const std::vector<double>& half = windows.Half(m);
+  const size_t mid = start + m - half.size();
+  const std::complex<double> La = Harmonic(r.position.data() + start, half, theta) /
+                                  Harmonic(r.relay_force.data() + start, half, theta);
+  const std::complex<double> Lb = Harmonic(r.position.data() + mid, half, theta) /
+                                  Harmonic(r.relay_force.data() + mid, half, theta);
+  run.unsettled = std::abs(La - Lb) / std::abs(run.L);
   return run;
 }
 
-// Phase of L in (-2 pi, 0]: near the crossover it is close to -pi.
-double LagPhase(std::complex<double> L) {
-  double p = std::arg(L);
-  if (p > 0.0) p -= 2.0 * std::numbers::pi;
-  return p;
+// The phase of L minus -180 deg, wrapped to [-pi, pi].
+double PhaseError(std::complex<double> L) {
+  return std::remainder(std::arg(L) + std::numbers::pi, 2.0 * std::numbers::pi);
 }
+
+// One filtered run: its centre, its oscillation theta [rad/sample], L there
+// and g = PhaseError(L).
+struct Point {
+  double centre, theta, g;
+  std::complex<double> L;
+  double unsettled;
+};
 
 }  // namespace
 
@@ -166,49 +299,178 @@ RelayResult SimulateRelay(const Plant& plant, const RelayOptions& o) {
   StateSpace ss = DiscretizeZoh(plant, o.period_s);
   const int d = o.delay_samples + plant.delay_samples;
   ss.delay_samples = 0;
-  const Run base = RunOnce(ss, d, o, 0.0);
+  WindowCache windows;
+  const Run base = RunOnce(ss, d, o, 0.0, windows);  // the plain relay
   RelayResult r = base.r;
-  if (!r.oscillating) return r;
+  if (!r.oscillating) {
+    if (r.diverged) r.K_cr = r.K_cr_peak = 0.0;  // no K > 0 is stable
+    return r;
+  }
   const double to_hz = 1.0 / (2.0 * std::numbers::pi * o.period_s);
   // The paper's reading: the spectral peak, and |F1|/|X1| there.
   r.K_cr_peak = 1.0 / std::abs(base.L);
   r.f_cr_peak_hz = base.theta * to_hz;
   r.K_cr = r.K_cr_peak;
   r.f_cr_hz = r.f_cr_peak_hz;
+  r.unsettled = base.unsettled;
   // X1/F1 is the loop's response L exactly at the oscillation frequency, but
-  // the relay oscillates only near the -180 deg crossing (the describing-
+  // the relay oscillates only near a -180 deg crossing (the describing-
   // function error: up to 7% in f and 13% in K here, where L's phase stays near
-  // -180 deg over a wide band). A relay acting on the position extrapolated
-  // ahead (or behind) moves the oscillation while X1/F1 stays exact, so runs
-  // with a growing lead (or lag: 0.5 deg, times 1.5 up to 43 deg) bracket the crossing
-  // between two exact values of L, interpolated linearly in f (phase and
-  // log-magnitude). A run that jumps to another limit cycle (f off by 50%,
-  // a vibration mode near B_t) stops the search: the paper's reading stays.
-  const double target = -std::numbers::pi;
-  double p_prev = LagPhase(base.L);
-  if (p_prev == target) { r.refined = true; return r; }
-  const double dir = p_prev > target ? 1.0 : -1.0;  // short of -180 deg: lead; past it: lag
-  double prev_theta = base.theta;       // the last run on this side of -180 deg
-  std::complex<double> prev_L = base.L;
-  double phi = 0.5 * std::numbers::pi / 180.0;
-  for (int attempt = 0; attempt < 12; ++attempt, phi *= 1.5) {
-    const Run run = RunOnce(ss, d, o, dir * phi / base.theta);
-    if (!run.r.oscillating || std::abs(run.theta / base.theta - 1.0) > 0.5) break;  // another limit cycle
-    const double p = LagPhase(run.L);
-    if ((p - target) * (p_prev - target) <= 0.0) {
-      const double t = (target - p_prev) / (p - p_prev);
-      const double theta = prev_theta + t * (run.theta - prev_theta);
-      const double logmag = std::log(std::abs(prev_L)) + t * (std::log(std::abs(run.L)) - std::log(std::abs(prev_L)));
-      r.K_cr = std::exp(-logmag);
-      r.f_cr_hz = theta * to_hz;
-      r.refined = true;
-      break;
-    }
-    if (std::abs(p - p_prev) < 1e-9) continue;  // locked on the same period: no new point
-    prev_theta = run.theta;
-    prev_L = run.L;
-    p_prev = p;
+  // -180 deg over a wide band), and near B_t it can lock onto a vibration
+  // mode's cycle, which is not the critical one. Runs with the resonators in
+  // the relay path oscillate near a chosen centre, each measuring L exactly at
+  // its own oscillation. A scan of centres (x sqrt 2, from 20 cycles in the
+  // steady part to 0.9 Nyquist; halved where the phase moves over 45 deg or |L|
+  // over 2x between runs; dips towards -180 deg probed) finds the -180 deg
+  // crossings; the Illinois method on the centre narrows each bracket to 1e-4
+  // in f, where K and f are interpolated linearly in f (phase and log-
+  // magnitude). K_cr is the smallest K over the crossings. A crossing below
+  // the scan's lowest frequency is reported (below_band), not guessed.
+  const size_t steady = r.position.size() - static_cast<size_t>(o.settle_fraction * r.position.size());
+  const double theta_min = 2.0 * std::numbers::pi * 20.0 / static_cast<double>(steady);
+  const double theta_max = 0.9 * std::numbers::pi;
+  r.band_low_hz = theta_min * to_hz;
+  int runs = 0;
+  auto measure = [&](double centre) -> std::optional<Point> {
+    ++runs;
+    const Run run = RunOnce(ss, d, o, centre, windows);
+    // Not steered (another cycle, or a drift, took over): no use for the search.
+    if (!run.r.oscillating || std::abs(std::log(run.theta / centre)) > std::log(2.0)) return std::nullopt;
+    return Point{centre, run.theta, PhaseError(run.L), run.L, run.unsettled};
+  };
+  std::vector<Point> scan;
+  for (double c = theta_min; c < theta_max && runs < kMaxScanRuns; c *= std::numbers::sqrt2) {
+    if (auto p = measure(c)) scan.push_back(*p);
   }
+  auto by_theta = [](const Point& a, const Point& b) { return a.theta < b.theta; };
+  std::sort(scan.begin(), scan.end(), by_theta);
+  for (size_t i = 0; i + 1 < scan.size() && runs < kMaxScanRuns;) {
+    const Point& a = scan[i];
+    const Point& b = scan[i + 1];
+    const double jump = std::abs(std::remainder(b.g - a.g, 2.0 * std::numbers::pi));
+    const double gain = std::abs(std::log(std::abs(b.L) / std::abs(a.L)));
+    if ((jump <= std::numbers::pi / 4 && gain <= std::log(2.0)) ||
+        std::abs(std::log(b.centre / a.centre)) < std::log(1.02)) {
+      ++i;
+      continue;
+    }
+    const auto p = measure(std::sqrt(a.centre * b.centre));
+    if (p && p->theta > a.theta && p->theta < b.theta) {
+      scan.insert(scan.begin() + static_cast<std::ptrdiff_t>(i) + 1, *p);
+    } else {
+      ++i;  // another cycle took over: leave this pair as it is
+    }
+  }
+  // The lowest run already past -180 deg: a crossing lies below the band, where
+  // it cannot be measured in this record.
+  if (scan.empty() || scan.front().g < 0.0) {
+    r.below_band = true;
+    r.relay_runs = runs + 1;
+    return r;
+  }
+  // A dip: the phase comes within 10 deg of -180 deg and turns back between
+  // two scan runs. Successive parabolic steps towards its extremum look for a
+  // run on the other side, which makes two brackets of a close pair of crossings.
+  for (size_t i = 1; i + 1 < scan.size(); ++i) {
+    const double sgn = scan[i].g > 0.0 ? 1.0 : -1.0;
+    auto depth = [&](const Point& q) { return sgn * q.g; };  // > 0 on the dip's side
+    if (!(depth(scan[i]) < kDipDeg * std::numbers::pi / 180.0 && depth(scan[i - 1]) > depth(scan[i]) &&
+          depth(scan[i + 1]) > depth(scan[i]))) {
+      continue;
+    }
+    Point a = scan[i - 1], b = scan[i], c = scan[i + 1];
+    for (int it = 0; it < kMaxRefineRuns; ++it) {
+      // Vertex of the parabola through (log theta, depth) of a, b, c.
+      const double xa = std::log(a.theta), xb = std::log(b.theta), xc = std::log(c.theta);
+      const double da = depth(a), db = depth(b), dc = depth(c);
+      const double num = (xb - xa) * (xb - xa) * (db - dc) - (xb - xc) * (xb - xc) * (db - da);
+      const double den = (xb - xa) * (db - dc) - (xb - xc) * (db - da);
+      if (!(std::abs(den) > 0.0)) break;
+      const double xv = std::clamp(xb - 0.5 * num / den, xa + 0.01 * (xc - xa), xc - 0.01 * (xc - xa));
+      const auto q = measure(std::exp(xv) * b.centre / b.theta);
+      if (!q || !(q->theta > a.theta && q->theta < c.theta) || std::abs(q->theta / b.theta - 1.0) < 1e-5) break;
+      if (depth(*q) <= 0.0) {  // through -180 deg: two crossings
+        scan.insert(std::upper_bound(scan.begin(), scan.end(), *q, by_theta), *q);
+        break;
+      }
+      if (depth(*q) < db) {
+        (q->theta < b.theta ? c : a) = b;
+        b = *q;
+      } else {
+        (q->theta < b.theta ? a : c) = *q;
+      }
+    }
+  }
+  // A -180 deg crossing: g changes sign without a jump of 2 pi (that is a 0 deg
+  // one). Within a bracket |L| changes by under 2x (the scan split it
+  // otherwise), so a bracket whose ends are both over twice the best K found
+  // cannot hold the smallest: those are skipped, the likeliest refined first.
+  auto k_at = [](const Point& lo, const Point& hi, double* f) {
+    const double t = lo.g == hi.g ? 0.0 : lo.g / (lo.g - hi.g);
+    *f = lo.theta + t * (hi.theta - lo.theta);
+    return std::exp(-(std::log(std::abs(lo.L)) + t * (std::log(std::abs(hi.L)) - std::log(std::abs(lo.L)))));
+  };
+  std::vector<std::pair<double, size_t>> brackets;  // (interpolated K, index of the lower end)
+  for (size_t i = 0; i + 1 < scan.size(); ++i) {
+    const Point& lo = scan[i];
+    const Point& hi = scan[i + 1];
+    if ((lo.g > 0.0) == (hi.g > 0.0) || std::abs(hi.g - lo.g) >= std::numbers::pi) continue;
+    double f;
+    brackets.emplace_back(k_at(lo, hi, &f), i);
+  }
+  std::sort(brackets.begin(), brackets.end());
+  bool found = false;
+  for (const auto& [k_guess, i] : brackets) {
+    Point lo = scan[i], hi = scan[i + 1];
+    if (found && 0.5 * std::min(1.0 / std::abs(lo.L), 1.0 / std::abs(hi.L)) > r.K_cr) continue;
+    // Slopes of the phase and of log |L| against log f over the scan's bracket.
+    const double span = std::log(hi.theta / lo.theta);
+    const double slope_g = std::abs(hi.g - lo.g) / span;
+    const double slope_m = std::abs(std::log(std::abs(hi.L) / std::abs(lo.L))) / span;
+    // Illinois: the end kept twice running has its phase error halved.
+    double g_lo = lo.g, g_hi = hi.g;
+    int kept = 0;  // +1: lo kept last time, -1: hi kept
+    for (int it = 0; it < kMaxRefineRuns && hi.theta - lo.theta > 1e-4 * hi.theta; ++it) {
+      const auto p = measure(lo.centre + (hi.centre - lo.centre) * g_lo / (g_lo - g_hi));
+      if (!p || !(p->theta > lo.theta && p->theta < hi.theta) || std::abs(p->g) >= std::numbers::pi / 2) {
+        break;  // no narrower bracket
+      }
+      if (std::abs(p->g) < 1e-7) {  // on the crossing
+        lo = hi = *p;
+        break;
+      }
+      if ((p->g > 0.0) == (lo.g > 0.0)) {
+        lo = *p;
+        g_lo = p->g;
+        if (kept == -1) g_hi *= 0.5;
+        kept = -1;
+      } else {
+        hi = *p;
+        g_hi = p->g;
+        if (kept == 1) g_lo *= 0.5;
+        kept = 1;
+      }
+    }
+    double f;
+    const double K = k_at(lo, hi, &f);
+    if (!found || K < r.K_cr) {
+      r.K_cr = K;
+      r.f_cr_hz = f * to_hz;
+      r.unsettled = std::max(lo.unsettled, hi.unsettled);
+      // L is good to about `unsettled` (relative, so in phase too, radians):
+      // that moves the crossing by unsettled / slope_g in log f, and K by
+      // that times slope_m, plus unsettled itself.
+      // A bracket left wide (the oscillation locked to a whole number of
+      // samples per period) adds up to half its spread in K and f.
+      const double dlogf = r.unsettled / slope_g;
+      r.uncertainty = std::max({dlogf, r.unsettled + slope_m * dlogf,
+                                0.5 * std::abs(std::log(std::abs(hi.L) / std::abs(lo.L))),
+                                0.5 * std::log(hi.theta / lo.theta)});
+    }
+    found = true;
+  }
+  r.refined = found;
+  r.relay_runs = runs + 1;
   return r;
 }
 

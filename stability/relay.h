@@ -1,13 +1,17 @@
 // The relay experiment of section IV (Fig. 9), simulated: a relay of amplitude
 // A replaces the virtual spring, the virtual damping B (backward difference)
 // is added to the relay force, and both are delayed by d samples before the
-// zero-order hold. In steady state the loop oscillates near the ultimate
-// frequency; as in the paper, f_CR is the peak of the averaged power spectra of
-// force and position, and K_CR is |F1|/|X1|, the ratio of the first harmonics
-// of the relay force and the position at that frequency (Astrom & Hagglund's
-// describing-function reading of the gain margin).
+// zero-order hold. In steady state the loop oscillates near a -180 deg
+// crossing of the loop L seen by the relay. The paper's reading: f_CR is the
+// peak of the averaged power spectra of force and position, and K_CR is
+// |F1|/|X1| there (Astrom & Hagglund's describing-function reading), which is
+// biased (about -12% in K here) and, near B_t, can be a vibration mode's cycle.
+// The estimate: X1/F1 is L exactly at the oscillation frequency, so relay runs
+// steered to chosen frequencies (two resonators in the relay path) measure L
+// where needed, find every -180 deg crossing, and keep the smallest K.
 #pragma once
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -26,17 +30,34 @@ struct RelayOptions {
 };
 
 struct RelayResult {
-  // The estimate: the -180 deg crossing bracketed by relay runs with a
-  // growing phase lead or lag, each giving L exactly at its own oscillation
-  // frequency (refined); else (another limit cycle took over) the paper's
-  // reading.
-  double K_cr = 0.0;     // N m/rad
-  double f_cr_hz = 0.0;  // Hz
+  // The estimate (refined): the smallest K over the -180 deg crossings of the
+  // loop, measured by relay runs steered by two resonators in the relay path,
+  // each giving L exactly at its own oscillation; else the paper's reading.
+  double K_cr = std::numeric_limits<double>::quiet_NaN();     // N m/rad
+  double f_cr_hz = std::numeric_limits<double>::quiet_NaN();  // Hz
   bool refined = false;
+  int relay_runs = 1;  // simulated runs, the plain one included
+  // |L| from the first and second halves of the steady part differ by this,
+  // relative (the worst of the runs behind K_cr): over 1e-3 the oscillation
+  // was still settling and a longer run (--seconds) is needed.
+  double unsettled = 0.0;
+  // From `unsettled` and the slopes of L's phase and magnitude at the
+  // crossing: a rough bound (measured 1.5-4x above the error) on the relative
+  // error of K_cr and f_cr when refined; NaN otherwise. Where the phase is flat
+  // near -180 deg a small error in L moves the crossing far.
+  double uncertainty = std::numeric_limits<double>::quiet_NaN();
+  // The steered run at the lowest frequency that the record resolves (20
+  // cycles in the steady part) was already past -180 deg: the critical
+  // crossing lies below it (not refined; a longer --seconds reaches it).
+  bool below_band = false;
+  double band_low_hz = std::numeric_limits<double>::quiet_NaN();
   // The paper's reading: spectral peak, |F1|/|X1| at the peak.
-  double K_cr_peak = 0.0;
-  double f_cr_peak_hz = 0.0;
+  double K_cr_peak = std::numeric_limits<double>::quiet_NaN();
+  double f_cr_peak_hz = std::numeric_limits<double>::quiet_NaN();
   bool oscillating = false;  // a steady oscillation was found
+  // The plain run grows without bound: the loop is unstable at K = 0 (B past
+  // B_max), so K_cr = K_cr_peak = 0 and the frequencies are NaN.
+  bool diverged = false;
   std::vector<double> relay_force, damping_force, command, position;  // per sample
 };
 
