@@ -17,7 +17,7 @@ void AddFitCommands(CLI::App& app) {
   };
   auto f = std::make_shared<FitFlags>();
   CLI::App* cmd = app.add_subcommand("fit", "fit the parameters of eq. (1) to a log or a saved frequency response");
-  cmd->add_option("input", f->input, "log (.h5/.csv) or frequency response CSV from `zwidth estimate`")->required();
+  cmd->add_option("input", f->input, "log (.h5/.csv) or frequency response (.csv/.h5) from `zwidth estimate`")->required();
   cmd->add_option("-o,--output", f->out, "model JSON to write")->required();
   cmd->add_option("--modes", f->o.num_modes, "resonance/antiresonance sections (0: rigid body)")->capture_default_str();
   cmd->add_option("--delay-samples", f->delay, "input delay [samples] or 'auto'")->capture_default_str();
@@ -31,7 +31,7 @@ void AddFitCommands(CLI::App& app) {
     if (!f->init.empty()) f->o.init = io::ReadModelJson(f->init).plant;
     StageTimer timer(false);
     const ident::FrequencyResponse frf = io::IsFrequencyResponseFile(f->input)
-        ? io::ReadFrequencyResponseCsv(f->input, f->est.select.sample_rate_hz)
+        ? io::ReadFrequencyResponse(f->input, f->est.select.sample_rate_hz)
         : EstimateFromLog(f->input, f->est);
     fit::FitResult r;
     const io::ModelFile mf = FitToModelFile(frf, f->o, f->input, &r);

@@ -3,6 +3,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <numbers>
@@ -10,6 +11,7 @@
 #include <H5Cpp.h>
 
 #include "io/atomic_file.h"
+#include "io/isolated.h"
 #include "io/log.h"
 #include "model/error.h"
 
@@ -62,21 +64,7 @@ void WriteH5(const std::string& tmp, const ident::FrequencyResponse& r) {
   }
 }
 
-}  // namespace
-
-void WriteFrequencyResponse(const std::string& path, const ident::FrequencyResponse& r) {
-  const bool h5 = DetectLogFormat(path) == LogFormat::kHdf5;
-  WriteAtomically(path, [&](const std::string& tmp) { h5 ? WriteH5(tmp, r) : WriteCsv(tmp, r); });
-}
-
-bool IsFrequencyResponseFile(const std::string& path) {
-  std::ifstream in(path);
-  std::string line;
-  if (!std::getline(in, line)) return false;
-  return line.rfind("f_hz", 0) == 0 || line.rfind("\"f_hz\"", 0) == 0;
-}
-
-ident::FrequencyResponse ReadFrequencyResponseCsv(const std::string& path, double rate) {
+ident::FrequencyResponse ReadCsv(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path + ": cannot open frequency-response file");
   std::string line;
@@ -150,14 +138,139 @@ ident::FrequencyResponse ReadFrequencyResponseCsv(const std::string& path, doubl
     if (i_kappa >= 0) r.bin_correlation = v[i_kappa];
   }
   if (r.f_hz.empty()) throw InputError(path + ": no data rows");
+  return r;
+}
+
+// The rate (--rate wins over the file's) and the checks common to both formats.
+void Finish(ident::FrequencyResponse& r, const std::string& path, double rate) {
   if (rate > 0.0) r.sample_rate_hz = rate;
-  if (!(r.sample_rate_hz > 0.0)) {
-    throw InputError(path + ": no sample_rate_hz column; pass --rate (the log's sample rate)");
+  if (!(r.sample_rate_hz > 0.0) || !std::isfinite(r.sample_rate_hz)) {
+    throw InputError(path + ": no sample_rate_hz column or attribute; pass --rate (the log's sample rate)");
   }
   if (r.f_hz.back() >= 0.5 * r.sample_rate_hz) {
-    throw InputError(path + ": frequencies reach the Nyquist frequency of " +
-                     std::to_string(r.sample_rate_hz) + " Hz; wrong --rate?");
+    char msg[160];
+    std::snprintf(msg, sizeof msg, ": frequencies reach %g Hz, the Nyquist frequency of %g Hz; wrong --rate?",
+                  r.f_hz.back(), 0.5 * r.sample_rate_hz);
+    throw InputError(path + msg);
   }
+}
+
+// /frf/{f_hz,H_re,H_im[,coherence,H_std,S_uu,S_yy]} and root attributes, as
+// WriteH5 writes them, read in this process (RunIsolated calls it in a child)
+// and packed as doubles: n, the four scalars, then the seven columns.
+std::string ReadH5Packed(const std::string& path) {
+  H5::Exception::dontPrint();
+  try {
+    if (!H5::H5File::isHdf5(path)) throw InputError(path + ": not an HDF5 file");
+    H5::H5File file(path, H5F_ACC_RDONLY);
+    if (!file.nameExists("/frf")) throw InputError(path + ": no group /frf (not written by `zwidth estimate`?)");
+    size_t n = 0;
+    auto get = [&](const char* name, bool required) {
+      const std::string full = std::string("/frf/") + name;
+      std::vector<double> v;
+      if (!file.nameExists(full)) {
+        if (required) throw InputError(path + ": no dataset '" + full + "'");
+        return v;
+      }
+      H5::DataSet ds = file.openDataSet(full);
+      H5::DataSpace sp = ds.getSpace();
+      if (sp.getSimpleExtentNdims() != 1) throw InputError(path + ":" + full + ": expected a 1-D dataset");
+      hsize_t len = 0;
+      sp.getSimpleExtentDims(&len);
+      if (n == 0) n = len;
+      if (len != n || len == 0) throw InputError(path + ":" + full + ": length " + std::to_string(len) +
+                                                 ", expected " + std::to_string(n));
+      v.resize(len);
+      ds.read(v.data(), H5::PredType::NATIVE_DOUBLE);
+      for (size_t k = 0; k < len; ++k) {
+        if (!std::isfinite(v[k])) {
+          throw InputError(path + ":" + full + ": value " + std::to_string(k) + " is not finite");
+        }
+      }
+      return v;
+    };
+    const std::vector<double> f = get("f_hz", true), re = get("H_re", true), im = get("H_im", true);
+    std::vector<double> coh = get("coherence", false), sd = get("H_std", false);
+    std::vector<double> suu = get("S_uu", false), syy = get("S_yy", false);
+    if (coh.empty()) coh.assign(n, 1.0);
+    if (sd.empty()) {
+      sd.resize(n);
+      for (size_t k = 0; k < n; ++k) sd[k] = 1e-3 * std::hypot(re[k], im[k]);
+    }
+    if (suu.empty()) suu.assign(n, 0.0);
+    if (syy.empty()) syy.assign(n, 0.0);
+    for (size_t k = 1; k < n; ++k) {
+      if (!(f[k] > f[k - 1])) throw InputError(path + ":/frf/f_hz: not increasing at " + std::to_string(k));
+    }
+    auto attr = [&](const char* name, double fallback) {
+      if (!file.attrExists(name)) return fallback;
+      double v = fallback;
+      file.openAttribute(name).read(H5::PredType::NATIVE_DOUBLE, &v);
+      return v;
+    };
+    std::vector<double> packed = {static_cast<double>(n), attr("sample_rate_hz", 0.0), attr("num_averages", 0.0),
+                                  attr("effective_averages", 0.0), attr("bin_correlation", 1.0)};
+    for (const std::vector<double>* col : std::initializer_list<const std::vector<double>*>{&f, &re, &im, &coh, &sd, &suu, &syy}) {
+      packed.insert(packed.end(), col->begin(), col->end());
+    }
+    return std::string(reinterpret_cast<const char*>(packed.data()), packed.size() * sizeof(double));
+  } catch (const H5::Exception& e) {
+    throw InputError(path + ": HDF5 error (" + e.getDetailMsg() + "): truncated or corrupt file?");
+  }
+}
+
+ident::FrequencyResponse ReadH5(const std::string& path) {
+  const std::string bytes = RunIsolated(path, [&] { return ReadH5Packed(path); });
+  std::vector<double> v(bytes.size() / sizeof(double));
+  std::memcpy(v.data(), bytes.data(), v.size() * sizeof(double));
+  if (v.size() < 5) throw InputError(path + ": could not read the frequency response");
+  const size_t n = static_cast<size_t>(v[0]);
+  if (v.size() != 5 + 7 * n) throw InputError(path + ": could not read the frequency response");
+  ident::FrequencyResponse r;
+  r.sample_rate_hz = v[1];
+  r.num_averages = static_cast<int>(v[2]);
+  r.effective_averages = v[3];
+  r.bin_correlation = v[4];
+  const double* c = v.data() + 5;
+  r.f_hz.assign(c, c + n);
+  r.H.resize(n);
+  for (size_t k = 0; k < n; ++k) r.H[k] = {c[n + k], c[2 * n + k]};
+  r.coherence.assign(c + 3 * n, c + 4 * n);
+  r.H_std.assign(c + 4 * n, c + 5 * n);
+  r.S_uu.assign(c + 5 * n, c + 6 * n);
+  r.S_yy.assign(c + 6 * n, c + 7 * n);
+  r.S_uy.assign(n, 0.0);
+  return r;
+}
+
+}  // namespace
+
+void WriteFrequencyResponse(const std::string& path, const ident::FrequencyResponse& r) {
+  const bool h5 = DetectLogFormat(path) == LogFormat::kHdf5;
+  WriteAtomically(path, [&](const std::string& tmp) { h5 ? WriteH5(tmp, r) : WriteCsv(tmp, r); });
+}
+
+bool IsFrequencyResponseFile(const std::string& path) {
+  if (DetectLogFormat(path) == LogFormat::kHdf5) {
+    return RunIsolated(path, [&] {
+             H5::Exception::dontPrint();
+             try {
+               return std::string(H5::H5File::isHdf5(path) && H5::H5File(path, H5F_ACC_RDONLY).nameExists("/frf")
+                                      ? "1" : "0");
+             } catch (const H5::Exception&) {
+               return std::string("0");  // not readable as HDF5: the log reader says why
+             }
+           }) == "1";
+  }
+  std::ifstream in(path);
+  std::string line;
+  if (!std::getline(in, line)) return false;
+  return line.rfind("f_hz", 0) == 0 || line.rfind("\"f_hz\"", 0) == 0;
+}
+
+ident::FrequencyResponse ReadFrequencyResponse(const std::string& path, double rate) {
+  ident::FrequencyResponse r = DetectLogFormat(path) == LogFormat::kHdf5 ? ReadH5(path) : ReadCsv(path);
+  Finish(r, path, rate);
   return r;
 }
 

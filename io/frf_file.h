@@ -12,12 +12,15 @@
 namespace zwidth::io {
 
 void WriteFrequencyResponse(const std::string& path, const ident::FrequencyResponse& frf);
-// Reads a CSV written by WriteFrequencyResponse (or any CSV with at least
-// f_hz,H_re,H_im and either sample_rate_hz or --rate). Missing coherence/H_std
-// columns default to 1 and |H| * 1e-3 (equal relative weights).
-ident::FrequencyResponse ReadFrequencyResponseCsv(const std::string& path, double sample_rate_hz = 0.0);
+// Reads what WriteFrequencyResponse writes, CSV or HDF5 by the file's content
+// (any CSV with at least f_hz,H_re,H_im will do, and an HDF5 file with those
+// under /frf), with the sample rate from the file or sample_rate_hz > 0 (which
+// wins). Missing coherence/H_std default to 1 and |H| * 1e-3 (equal relative
+// weights). HDF5 is parsed in a child process (io/isolated.h).
+ident::FrequencyResponse ReadFrequencyResponse(const std::string& path, double sample_rate_hz = 0.0);
 
-// True when the file looks like a frequency-response CSV (header starts with f_hz).
+// True for a frequency-response file: a CSV whose header starts with f_hz, or
+// an HDF5 file with a /frf group.
 bool IsFrequencyResponseFile(const std::string& path);
 
 }  // namespace zwidth::io

@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "io/atomic_file.h"
+#include "io/isolated.h"
 #include "model/error.h"
 
 namespace zwidth::io {
@@ -334,29 +335,8 @@ namespace pipe_msg {
 constexpr char kChunk = 1, kDone = 2, kError = 3;
 }
 
-bool WriteAll(int fd, const void* data, size_t n) {
-  const char* p = static_cast<const char*>(data);
-  while (n > 0) {
-    const ssize_t w = ::write(fd, p, n);
-    if (w < 0 && errno == EINTR) continue;
-    if (w <= 0) return false;
-    p += w;
-    n -= static_cast<size_t>(w);
-  }
-  return true;
-}
-
-bool ReadAll(int fd, void* data, size_t n) {
-  char* p = static_cast<char*>(data);
-  while (n > 0) {
-    const ssize_t r = ::read(fd, p, n);
-    if (r < 0 && errno == EINTR) continue;
-    if (r <= 0) return false;
-    p += r;
-    n -= static_cast<size_t>(r);
-  }
-  return true;
-}
+using internal::ReadAll;
+using internal::WriteAll;
 
 LogInfo StreamHdf5(const std::string& path, const LogSelect& sel, const LogSink& sink) {
   int fds[2];

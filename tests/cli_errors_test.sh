@@ -54,6 +54,25 @@ expect unknown-flag "unknown|extra|not expected" "" -- "$ZW" boundary "$M" --bog
 awk -F, 'NR!=200' OFS=, "$T/good.csv" > "$T/gap.csv"
 expect not-uniform "not uniformly sampled" "$T/o18.csv" -- "$ZW" estimate "$T/gap.csv" -o "$T/o18.csv"
 expect fit-bad-delay "delay-samples 'soon'" "$T/o19.json" -- "$ZW" fit "$T/good.h5" --delay-samples soon -o "$T/o19.json"
+# A frequency response saved as HDF5 and read back by fit: damaged copies.
+"$ZW" estimate "$T/good.h5" -o "$T/frf.h5" 2>/dev/null
+head -c 3000 "$T/frf.h5" > "$T/frf_trunc.h5"
+expect frf-h5-truncated "frf_trunc.h5.*(truncated|corrupt|cannot)" "$T/o20.json" -- "$ZW" fit "$T/frf_trunc.h5" -o "$T/o20.json"
+expect frf-h5-wrong-rate "reach 299\.8[0-9]* Hz, the Nyquist frequency of 50 Hz; wrong --rate" "$T/o21.json" -- "$ZW" fit "$T/frf.h5" --rate 100 -o "$T/o21.json"
+if /usr/bin/python3 -c "import h5py" 2>/dev/null; then
+  /usr/bin/python3 - "$T" <<'PY'
+import sys, shutil, h5py, numpy as np
+t = sys.argv[1]
+shutil.copy(f"{t}/frf.h5", f"{t}/frf_noim.h5")
+with h5py.File(f"{t}/frf_noim.h5", "a") as f:
+    del f["/frf/H_im"]
+shutil.copy(f"{t}/frf.h5", f"{t}/frf_nan.h5")
+with h5py.File(f"{t}/frf_nan.h5", "a") as f:
+    f["/frf/H_re"][7] = np.nan
+PY
+  expect frf-h5-missing-dataset "no dataset '/frf/H_im'" "$T/o22.json" -- "$ZW" fit "$T/frf_noim.h5" -o "$T/o22.json"
+  expect frf-h5-nan "/frf/H_re: value 7 is not finite" "$T/o23.json" -- "$ZW" fit "$T/frf_nan.h5" -o "$T/o23.json"
+fi
 # A fit that does not converge: exit 1 (not 2), a message, no model file.
 "$ZW" fit "$T/good.h5" --max-iterations 1 -o "$T/nc.json" >"$T/stdout" 2>"$T/stderr"; rc=$?
 if [ $rc -eq 1 ] && grep -q "did not converge" "$T/stderr" && [ ! -e "$T/nc.json" ]; then
