@@ -402,9 +402,9 @@ RelayResult SimulateRelay(const Plant& plant, const RelayOptions& o) {
     }
   }
   // A -180 deg crossing: g changes sign without a jump of 2 pi (that is a 0 deg
-  // one). Within a bracket |L| changes by under 2x (the scan split it
-  // otherwise), so a bracket whose ends are both over twice the best K found
-  // cannot hold the smallest: those are skipped, the likeliest refined first.
+  // one). The scan split brackets where |L| changed by over 2x, so a bracket
+  // whose ends both lie over twice the best K found is taken not to hold the
+  // smallest and skipped; the likeliest are refined first.
   auto k_at = [](const Point& lo, const Point& hi, double* f) {
     const double t = lo.g == hi.g ? 0.0 : lo.g / (lo.g - hi.g);
     *f = lo.theta + t * (hi.theta - lo.theta);
