@@ -175,7 +175,8 @@ void AddStabilityCommands(CLI::App& app) {
     if (rf->json) {
       std::cout << j.dump() << std::endl;
     } else if (res.diverged) {
-      std::printf("relay: the loop diverges with the relay alone, so no K > 0 is stable here (B past B_max): K_cr = 0\n");
+      std::printf("relay: the loop diverges with the relay alone, so no K > 0 is stable here (B past B_max): "
+                  "K_cr = 0\n");
     } else {
       std::printf("relay, paper's reading (spectral peak, first harmonics): K_cr = %.6g N m/rad at %.5g Hz\n",
                   res.K_cr_peak, res.f_cr_peak_hz);

@@ -64,6 +64,20 @@ void WriteH5(const std::string& tmp, const ident::FrequencyResponse& r) {
   }
 }
 
+std::string Num(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
+}
+
+// A whole count in [0, 2^31) stored as a double; anything else is an InputError.
+int Count(double v, const std::string& path, const char* name) {
+  if (!(v >= 0.0 && v < 2147483648.0) || v != std::floor(v)) {
+    throw InputError(path + ": " + name + " = " + Num(v) + " is not a whole number >= 0");
+  }
+  return static_cast<int>(v);
+}
+
 ident::FrequencyResponse ReadCsv(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path + ": cannot open frequency-response file");
@@ -118,7 +132,9 @@ ident::FrequencyResponse ReadCsv(const std::string& path) {
     }
     if (v.size() < col.size()) throw InputError(path + ": line " + std::to_string(line_no) + " is truncated");
     for (double x : v) {
-      if (std::isnan(x)) throw InputError(path + ": line " + std::to_string(line_no) + " has a NaN");
+      if (!std::isfinite(x)) {
+        throw InputError(path + ": line " + std::to_string(line_no) + " has a value that is not finite");
+      }
     }
     const std::complex<double> h(v[i_re], v[i_im]);
     const double f = v[i_f];
@@ -133,7 +149,7 @@ ident::FrequencyResponse ReadCsv(const std::string& path) {
     r.S_yy.push_back(i_syy >= 0 ? v[i_syy] : 0.0);
     r.S_uy.push_back(0.0);
     if (i_rate >= 0) r.sample_rate_hz = v[i_rate];
-    if (i_navg >= 0) r.num_averages = static_cast<int>(v[i_navg]);
+    if (i_navg >= 0) r.num_averages = Count(v[i_navg], path, "num_averages");
     if (i_neff >= 0) r.effective_averages = v[i_neff];
     if (i_kappa >= 0) r.bin_correlation = v[i_kappa];
   }
@@ -143,6 +159,12 @@ ident::FrequencyResponse ReadCsv(const std::string& path) {
 
 // The rate (--rate wins over the file's) and the checks common to both formats.
 void Finish(ident::FrequencyResponse& r, const std::string& path, double rate) {
+  if (!(std::isfinite(r.effective_averages) && r.effective_averages >= 0.0)) {
+    throw InputError(path + ": effective_averages = " + Num(r.effective_averages) + " must be finite, >= 0");
+  }
+  if (!(std::isfinite(r.bin_correlation) && r.bin_correlation > 0.0)) {
+    throw InputError(path + ": bin_correlation = " + Num(r.bin_correlation) + " must be finite, > 0");
+  }
   if (rate > 0.0) r.sample_rate_hz = rate;
   if (!(r.sample_rate_hz > 0.0) || !std::isfinite(r.sample_rate_hz)) {
     throw InputError(path + ": no sample_rate_hz column or attribute; pass --rate (the log's sample rate)");
@@ -158,6 +180,8 @@ void Finish(ident::FrequencyResponse& r, const std::string& path, double rate) {
 // /frf/{f_hz,H_re,H_im[,coherence,H_std,S_uu,S_yy]} and root attributes, as
 // WriteH5 writes them, read in this process (RunIsolated calls it in a child)
 // and packed as doubles: n, the four scalars, then the seven columns.
+constexpr hsize_t kMaxBins = hsize_t{1} << 24;
+
 std::string ReadH5Packed(const std::string& path) {
   H5::Exception::dontPrint();
   try {
@@ -177,6 +201,13 @@ std::string ReadH5Packed(const std::string& path) {
       if (sp.getSimpleExtentNdims() != 1) throw InputError(path + ":" + full + ": expected a 1-D dataset");
       hsize_t len = 0;
       sp.getSimpleExtentDims(&len);
+      // A response of a Welch window up to 2^25 samples; a corrupt header can
+      // claim 1e12 (the fuzzer found one) and must not become an allocation.
+      if (len > kMaxBins) {
+        throw InputError(path + ":" + full + ": " + std::to_string(len) + " values, more than a response has (" +
+                         std::to_string(kMaxBins) + "): corrupt file?");
+      }
+      if (ds.getTypeClass() != H5T_FLOAT) throw InputError(path + ":" + full + ": not a floating-point dataset");
       if (n == 0) n = len;
       if (len != n || len == 0) throw InputError(path + ":" + full + ": length " + std::to_string(len) +
                                                  ", expected " + std::to_string(n));
@@ -210,7 +241,8 @@ std::string ReadH5Packed(const std::string& path) {
     };
     std::vector<double> packed = {static_cast<double>(n), attr("sample_rate_hz", 0.0), attr("num_averages", 0.0),
                                   attr("effective_averages", 0.0), attr("bin_correlation", 1.0)};
-    for (const std::vector<double>* col : std::initializer_list<const std::vector<double>*>{&f, &re, &im, &coh, &sd, &suu, &syy}) {
+    const std::vector<double>* columns[] = {&f, &re, &im, &coh, &sd, &suu, &syy};
+    for (const std::vector<double>* col : columns) {
       packed.insert(packed.end(), col->begin(), col->end());
     }
     return std::string(reinterpret_cast<const char*>(packed.data()), packed.size() * sizeof(double));
@@ -220,7 +252,10 @@ std::string ReadH5Packed(const std::string& path) {
 }
 
 ident::FrequencyResponse ReadH5(const std::string& path) {
-  const std::string bytes = RunIsolated(path, [&] { return ReadH5Packed(path); });
+  std::string bytes;
+  RunIsolated(
+      path, [&](const FrameSender& send) { const std::string b = ReadH5Packed(path); send(b.data(), b.size()); },
+      [&](std::string_view frame) { bytes = frame; });
   std::vector<double> v(bytes.size() / sizeof(double));
   std::memcpy(v.data(), bytes.data(), v.size() * sizeof(double));
   if (v.size() < 5) throw InputError(path + ": could not read the frequency response");
@@ -228,7 +263,7 @@ ident::FrequencyResponse ReadH5(const std::string& path) {
   if (v.size() != 5 + 7 * n) throw InputError(path + ": could not read the frequency response");
   ident::FrequencyResponse r;
   r.sample_rate_hz = v[1];
-  r.num_averages = static_cast<int>(v[2]);
+  r.num_averages = Count(v[2], path, "num_averages");
   r.effective_averages = v[3];
   r.bin_correlation = v[4];
   const double* c = v.data() + 5;
@@ -252,15 +287,21 @@ void WriteFrequencyResponse(const std::string& path, const ident::FrequencyRespo
 
 bool IsFrequencyResponseFile(const std::string& path) {
   if (DetectLogFormat(path) == LogFormat::kHdf5) {
-    return RunIsolated(path, [&] {
-             H5::Exception::dontPrint();
-             try {
-               return std::string(H5::H5File::isHdf5(path) && H5::H5File(path, H5F_ACC_RDONLY).nameExists("/frf")
-                                      ? "1" : "0");
-             } catch (const H5::Exception&) {
-               return std::string("0");  // not readable as HDF5: the log reader says why
-             }
-           }) == "1";
+    bool frf = false;
+    RunIsolated(
+        path,
+        [&](const FrameSender& send) {
+          H5::Exception::dontPrint();
+          char yes = 0;
+          try {
+            yes = H5::H5File::isHdf5(path) && H5::H5File(path, H5F_ACC_RDONLY).nameExists("/frf");
+          } catch (const H5::Exception&) {
+            // not readable as HDF5: the log reader says why
+          }
+          send(&yes, 1);
+        },
+        [&](std::string_view frame) { frf = frame == std::string_view("\1", 1); });
+    return frf;
   }
   std::ifstream in(path);
   std::string line;

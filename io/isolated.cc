@@ -11,9 +11,9 @@
 #include "model/error.h"
 
 namespace zwidth::io {
+namespace {
 
-namespace internal {
-
+// write()/read() of exactly n bytes, retried on EINTR; false on error or EOF.
 bool WriteAll(int fd, const void* data, size_t n) {
   const char* p = static_cast<const char*>(data);
   while (n > 0) {
@@ -38,57 +38,87 @@ bool ReadAll(int fd, void* data, size_t n) {
   return true;
 }
 
-}  // namespace internal
+// On the pipe: a type byte, a uint64 length, the payload.
+constexpr char kData = 1, kError = 2, kEnd = 3;
+constexpr uint64_t kMaxFrame = uint64_t{1} << 30;
 
-std::string RunIsolated(const std::string& path, const std::function<std::string()>& work) {
-  using internal::ReadAll;
-  using internal::WriteAll;
-  constexpr char kDone = 1, kError = 2;
+bool WriteFrame(int fd, char type, const void* data, uint64_t n) {
+  return WriteAll(fd, &type, 1) && WriteAll(fd, &n, sizeof n) && WriteAll(fd, data, n);
+}
+
+}  // namespace
+
+void RunIsolated(const std::string& path, const std::function<void(const FrameSender&)>& produce,
+                 const std::function<void(std::string_view frame)>& consume) {
+  auto in_process = [&] {
+    produce([&](const void* data, size_t n) { consume(std::string_view(static_cast<const char*>(data), n)); });
+  };
   int fds[2];
-  if (::pipe(fds) != 0) return work();
+  if (::pipe(fds) != 0) return in_process();
   std::fflush(nullptr);
   const pid_t pid = ::fork();
   if (pid < 0) {
     ::close(fds[0]);
     ::close(fds[1]);
-    return work();
+    return in_process();
   }
-  if (pid == 0) {  // child: leave without running destructors
+  if (pid == 0) {  // child: produce, and leave without running destructors
     ::close(fds[0]);
     const int out = fds[1];
-    char type = kDone;
-    std::string bytes;
+    int code = 0;
     try {
-      bytes = work();
+      produce([&](const void* data, size_t n) {
+        if (!WriteFrame(out, kData, data, n)) ::_exit(3);  // the parent is gone
+      });
+      WriteFrame(out, kEnd, nullptr, 0);
     } catch (const std::exception& e) {
-      type = kError;
-      bytes = e.what();
+      const std::string msg = e.what();
+      WriteFrame(out, kError, msg.data(), msg.size());
+      code = 2;
     }
-    const uint64_t len = bytes.size();
-    const bool ok = WriteAll(out, &type, 1) && WriteAll(out, &len, sizeof len) && WriteAll(out, bytes.data(), len);
     ::close(out);
-    ::_exit(ok ? 0 : 3);
+    ::_exit(code);
   }
   ::close(fds[1]);
-  char type = 0;
-  uint64_t len = 0;
-  std::string bytes;
-  bool complete = ReadAll(fds[0], &type, 1) && ReadAll(fds[0], &len, sizeof len) && len < (uint64_t{1} << 32);
-  if (complete) {
-    bytes.resize(len);
-    complete = ReadAll(fds[0], bytes.data(), len);
+  const int in = fds[0];
+  auto reap = [&](bool kill_child) {
+    if (kill_child) ::kill(pid, SIGKILL);
+    int status = 0;
+    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    ::close(in);
+    return status;
+  };
+  std::string frame, error;
+  bool done = false;
+  try {
+    char type = 0;
+    uint64_t n = 0;
+    while (!done && ReadAll(in, &type, 1) && ReadAll(in, &n, sizeof n) && n <= kMaxFrame) {
+      frame.resize(n);
+      if (!ReadAll(in, frame.data(), n)) break;
+      if (type == kData) {
+        consume(frame);
+      } else if (type == kError) {
+        error = frame.empty() ? path + ": unreadable file" : frame;
+        break;
+      } else if (type == kEnd) {
+        done = true;
+      } else {
+        break;
+      }
+    }
+  } catch (...) {
+    reap(true);
+    throw;
   }
-  ::close(fds[0]);
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  if (complete && type == kError) throw InputError(bytes);
+  const int status = reap(false);
+  if (!error.empty()) throw InputError(error);
   if (WIFSIGNALED(status)) {
     throw InputError(path + ": the HDF5 library crashed reading this file (signal " +
                      std::to_string(WTERMSIG(status)) + "): the file is corrupt or truncated");
   }
-  if (!complete || type != kDone) throw InputError(path + ": could not read the file (corrupt or truncated?)");
-  return bytes;
+  if (!done) throw InputError(path + ": could not read the file (corrupt or truncated?)");
 }
 
 }  // namespace zwidth::io

@@ -6,19 +6,21 @@
 #include <cstddef>
 #include <functional>
 #include <string>
+#include <string_view>
 
 namespace zwidth::io {
 
-// Runs work() in a forked child and returns the bytes it returned. An exception
-// thrown by work() comes back as an InputError with its message; a crash of the
-// child as an InputError naming `path`. Where fork() is unavailable, work()
-// runs in this process.
-std::string RunIsolated(const std::string& path, const std::function<std::string()>& work);
+// Sends one frame from the child to the parent (the child exits if the parent
+// is gone).
+using FrameSender = std::function<void(const void* data, size_t size)>;
 
-namespace internal {
-// write()/read() of exactly n bytes, retried on EINTR; false on error or EOF.
-bool WriteAll(int fd, const void* data, size_t n);
-bool ReadAll(int fd, void* data, size_t n);
-}  // namespace internal
+// Runs produce(send) in a forked child; the parent receives each frame, in
+// order, through consume(), while the child still runs (so a long file streams
+// through in bounded memory). An exception thrown by produce() comes back as an
+// InputError with its message; a crash of the child as an InputError naming
+// `path`; an exception thrown by consume() ends the child and propagates.
+// Where pipe() or fork() fail, produce() runs in this process.
+void RunIsolated(const std::string& path, const std::function<void(const FrameSender&)>& produce,
+                 const std::function<void(std::string_view frame)>& consume);
 
 }  // namespace zwidth::io

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -10,10 +11,6 @@
 #include <sstream>
 
 #include <H5Cpp.h>
-#include <cerrno>
-#include <csignal>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include "io/atomic_file.h"
 #include "io/isolated.h"
@@ -327,103 +324,51 @@ LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& sel, const
   }
 }
 
-// libhdf5 (1.10) can read out of bounds, even crash, on a corrupt file (our
-// fuzzing found an H5Aexists crash). The file is therefore read in a child
-// process that streams the chunks through a pipe: a crash in the library
-// becomes an InputError here, and the data is still read once.
-namespace pipe_msg {
-constexpr char kChunk = 1, kDone = 2, kError = 3;
-}
-
-using internal::ReadAll;
-using internal::WriteAll;
-
+// The file is read in a child process (io/isolated.h) that streams the chunks
+// through a pipe: a crash in libhdf5 becomes an InputError here, and the data
+// is still read once, in bounded memory. Frames: 'c' then u[n], y[n] (a chunk);
+// 'i' then the sample count (uint64) and the rate (the end).
 LogInfo StreamHdf5(const std::string& path, const LogSelect& sel, const LogSink& sink) {
-  int fds[2];
-  if (::pipe(fds) != 0) return StreamHdf5InProcess(path, sel, sink);
-  std::fflush(nullptr);
-  const pid_t pid = ::fork();
-  if (pid < 0) {
-    ::close(fds[0]);
-    ::close(fds[1]);
-    return StreamHdf5InProcess(path, sel, sink);
-  }
-  if (pid == 0) {  // child: read, stream, and leave without running destructors
-    ::close(fds[0]);
-    const int out = fds[1];
-    int code = 0;
-    try {
-      const LogInfo info = StreamHdf5InProcess(path, sel, [&](const double* u, const double* y, size_t n) {
-        const uint64_t count = n;
-        if (!WriteAll(out, &pipe_msg::kChunk, 1) || !WriteAll(out, &count, sizeof count) ||
-            !WriteAll(out, u, n * sizeof(double)) || !WriteAll(out, y, n * sizeof(double))) {
-          ::_exit(3);
+  LogInfo info;
+  bool ended = false;
+  std::vector<double> u, y;
+  RunIsolated(
+      path,
+      [&](const FrameSender& send) {
+        std::vector<char> frame;
+        const LogInfo in = StreamHdf5InProcess(path, sel, [&](const double* cu, const double* cy, size_t n) {
+          frame.resize(1 + 2 * n * sizeof(double));
+          frame[0] = 'c';
+          std::memcpy(frame.data() + 1, cu, n * sizeof(double));
+          std::memcpy(frame.data() + 1 + n * sizeof(double), cy, n * sizeof(double));
+          send(frame.data(), frame.size());
+        });
+        const uint64_t count = in.num_samples;
+        char end[1 + sizeof count + sizeof in.sample_rate_hz] = {'i'};
+        std::memcpy(end + 1, &count, sizeof count);
+        std::memcpy(end + 1 + sizeof count, &in.sample_rate_hz, sizeof in.sample_rate_hz);
+        send(end, sizeof end);
+      },
+      [&](std::string_view f) {
+        if (!f.empty() && f[0] == 'c' && (f.size() - 1) % (2 * sizeof(double)) == 0) {
+          const size_t n = (f.size() - 1) / (2 * sizeof(double));
+          u.resize(n);
+          y.resize(n);
+          std::memcpy(u.data(), f.data() + 1, n * sizeof(double));
+          std::memcpy(y.data(), f.data() + 1 + n * sizeof(double), n * sizeof(double));
+          sink(u.data(), y.data(), n);
+        } else if (f.size() == 1 + sizeof(uint64_t) + sizeof(double) && f[0] == 'i') {
+          uint64_t count = 0;
+          std::memcpy(&count, f.data() + 1, sizeof count);
+          std::memcpy(&info.sample_rate_hz, f.data() + 1 + sizeof count, sizeof(double));
+          info.source = path;
+          info.num_samples = count;
+          ended = true;
+        } else {
+          throw InputError(path + ": could not read the HDF5 file (corrupt or truncated?)");
         }
       });
-      const uint64_t count = info.num_samples;
-      WriteAll(out, &pipe_msg::kDone, 1);
-      WriteAll(out, &count, sizeof count);
-      WriteAll(out, &info.sample_rate_hz, sizeof info.sample_rate_hz);
-    } catch (const std::exception& e) {
-      const std::string msg = e.what();
-      const uint64_t len = msg.size();
-      WriteAll(out, &pipe_msg::kError, 1);
-      WriteAll(out, &len, sizeof len);
-      WriteAll(out, msg.data(), msg.size());
-      code = 2;
-    }
-    ::close(out);
-    ::_exit(code);
-  }
-  ::close(fds[1]);
-  const int in = fds[0];
-  auto reap = [&](bool kill_child) {
-    if (kill_child) ::kill(pid, SIGKILL);
-    int status = 0;
-    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-    }
-    ::close(in);
-    return status;
-  };
-  LogInfo info;
-  std::string error;
-  bool done = false;
-  try {
-    std::vector<double> u, y;
-    char type = 0;
-    while (!done && error.empty() && ReadAll(in, &type, 1)) {
-      uint64_t count = 0;
-      if (!ReadAll(in, &count, sizeof count)) break;
-      if (type == pipe_msg::kChunk) {
-        if (count > (1u << 24)) break;
-        u.resize(count);
-        y.resize(count);
-        if (!ReadAll(in, u.data(), count * sizeof(double)) || !ReadAll(in, y.data(), count * sizeof(double))) break;
-        sink(u.data(), y.data(), count);
-      } else if (type == pipe_msg::kDone) {
-        info.source = path;
-        info.num_samples = count;
-        if (!ReadAll(in, &info.sample_rate_hz, sizeof info.sample_rate_hz)) break;
-        done = true;
-      } else if (type == pipe_msg::kError) {
-        if (count > (1u << 20)) break;
-        error.resize(count);
-        if (!ReadAll(in, error.data(), count)) error = path + ": unreadable HDF5 file";
-      } else {
-        break;
-      }
-    }
-  } catch (...) {
-    reap(true);
-    throw;
-  }
-  const int status = reap(false);
-  if (!error.empty()) throw InputError(error);
-  if (WIFSIGNALED(status)) {
-    throw InputError(path + ": the HDF5 library crashed reading this file (signal " +
-                     std::to_string(WTERMSIG(status)) + "): the file is corrupt or truncated");
-  }
-  if (!done) throw InputError(path + ": could not read the HDF5 file (corrupt or truncated?)");
+  if (!ended) throw InputError(path + ": could not read the HDF5 file (corrupt or truncated?)");
   return info;
 }
 

@@ -27,7 +27,8 @@ Plant RandomModel(std::mt19937_64& rng, int nm, double T) {
     const double w = 2 * std::numbers::pi * (5 + 445 * U(rng));
     const double v = w * (0.5 + U(rng));
     const double zc = std::pow(10.0, -3 + 2.7 * U(rng)), zd = std::pow(10.0, -3 + 2.7 * U(rng));
-    p.modes.push_back({w, std::max(0.1, 2 * zc * w), std::min(v, 0.95 * std::numbers::pi / T), std::max(0.1, 2 * zd * v)});
+    p.modes.push_back(
+        {w, std::max(0.1, 2 * zc * w), std::min(v, 0.95 * std::numbers::pi / T), std::max(0.1, 2 * zd * v)});
   }
   return p;
 }
