@@ -241,6 +241,36 @@ void ReadSlab(const H5::DataSet& ds, hsize_t offset, hsize_t count, double* out,
   }
 }
 
+// A logger that preallocates its datasets and stops early leaves parts never
+// written, which read back as fill values: a 70 kB file can declare 1e10
+// samples. Refused here, before streaming: every chunk of a chunked dataset
+// must be allocated, and all of a contiguous one.
+void CheckWritten(const H5::DataSet& ds, const std::string& where) {
+  const H5::DSetCreatPropList plist = ds.getCreatePlist();
+  H5::DataSpace sp = ds.getSpace();
+  const int rank = sp.getSimpleExtentNdims();
+  std::vector<hsize_t> dims(std::max(rank, 1), 1);
+  sp.getSimpleExtentDims(dims.data());
+  hsize_t elements = 1;
+  for (int i = 0; i < rank; ++i) elements *= dims[i];
+  if (plist.getLayout() == H5D_CHUNKED) {
+    std::vector<hsize_t> chunk(std::max(rank, 1), 1);
+    plist.getChunk(rank, chunk.data());
+    hsize_t expected = 1, allocated = 0;
+    for (int i = 0; i < rank; ++i) expected *= (dims[i] + chunk[i] - 1) / std::max<hsize_t>(chunk[i], 1);
+    if (H5Dget_num_chunks(ds.getId(), sp.getId(), &allocated) < 0) return;  // cannot tell: the reads decide
+    if (allocated < expected) {
+      throw InputError(where + ": declares " + std::to_string(elements) + " samples, but only " +
+                       std::to_string(allocated) + " of its " + std::to_string(expected) +
+                       " chunks were ever written (a log preallocated and not filled?)");
+    }
+  } else if (plist.getLayout() == H5D_CONTIGUOUS && plist.getNfilters() == 0) {
+    if (ds.getStorageSize() < elements * ds.getDataType().getSize()) {
+      throw InputError(where + ": declares " + std::to_string(elements) + " samples, but its data were never written");
+    }
+  }
+}
+
 LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& sel, const LogSink& sink) {
   H5::Exception::dontPrint();
   std::unique_ptr<H5::H5File> file;
@@ -259,6 +289,8 @@ LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& sel, const
                        "' have different lengths");
     }
     if (n == 0) throw InputError(path + ": dataset '" + sel.input_dataset + "' is empty");
+    CheckWritten(du, H5Where(path, sel.input_dataset));
+    CheckWritten(dy, H5Where(path, sel.output_dataset));
     double attr_rate = 0.0;
     if (file->attrExists("sample_rate_hz")) {
       H5::Attribute a = file->openAttribute("sample_rate_hz");
@@ -275,6 +307,7 @@ LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& sel, const
       if (Length1D(dt, H5Where(path, sel.time_dataset)) != n) {
         throw InputError(path + ": '" + sel.time_dataset + "' has a different length from the signals");
       }
+      CheckWritten(dt, H5Where(path, sel.time_dataset));
     } else if (attr_rate <= 0.0 && sel.sample_rate_hz <= 0.0) {
       throw InputError(path + ": neither a '" + sel.time_dataset +
                        "' dataset nor a sample_rate_hz attribute; pass --rate");

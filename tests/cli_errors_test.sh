@@ -73,6 +73,29 @@ shutil.copy(f"{t}/frf.h5", f"{t}/frf_nan.h5")
 with h5py.File(f"{t}/frf_nan.h5", "a") as f:
     f["/frf/H_re"][7] = np.nan
 PY
+  /usr/bin/python3 - "$T" <<'PY'
+import sys, h5py, numpy as np
+t = sys.argv[1]
+with h5py.File(f"{t}/prealloc.h5", "w") as f:  # a logger that preallocated 1e10 samples and stopped
+    f.attrs["sample_rate_hz"] = 1000.0
+    for name in ("/input/torque", "/output/position"):
+        f.create_dataset(name, shape=(10**10,), chunks=(4096,), dtype="f8")[:4096] = np.random.randn(4096)
+with h5py.File(f"{t}/unwritten.h5", "w") as f:  # contiguous, never written
+    f.attrs["sample_rate_hz"] = 1000.0
+    f.create_dataset("/input/torque", shape=(10**6,), dtype="f8")
+    f.create_dataset("/output/position", data=np.random.randn(10**6))
+with h5py.File(f"{t}/compressed.h5", "w") as f:  # fully written, gzip: accepted
+    f.attrs["sample_rate_hz"] = 1000.0
+    for name in ("/input/torque", "/output/position"):
+        f.create_dataset(name, data=np.random.randn(20000), chunks=(4096,), compression="gzip")
+PY
+  expect h5-preallocated "declares 10000000000 samples, but only 1 of its 2441407 chunks were ever written" "$T/o25.csv" -- "$ZW" estimate "$T/prealloc.h5" -o "$T/o25.csv"
+  expect h5-unwritten "torque: declares 1000000 samples, but its data were never written" "$T/o26.csv" -- "$ZW" estimate "$T/unwritten.h5" -o "$T/o26.csv"
+  if "$ZW" estimate "$T/compressed.h5" -o "$T/o27.csv" >/dev/null 2>&1 && [ -s "$T/o27.csv" ]; then
+    echo "ok   h5-compressed: a fully written gzip log is read"; pass=$((pass+1))
+  else
+    echo "FAIL h5-compressed: a fully written gzip log was refused"; fail=$((fail+1))
+  fi
   expect frf-h5-missing-dataset "no dataset '/frf/H_im'" "$T/o22.json" -- "$ZW" fit "$T/frf_noim.h5" -o "$T/o22.json"
   expect frf-h5-nan "/frf/H_re: value 7 is not finite" "$T/o23.json" -- "$ZW" fit "$T/frf_nan.h5" -o "$T/o23.json"
 fi
