@@ -177,11 +177,12 @@ void Finish(ident::FrequencyResponse& r, const std::string& path, double rate) {
   }
 }
 
+// The most values a response holds: the bins of a Welch window of 2^25 samples.
+constexpr hsize_t kMaxBins = hsize_t{1} << 24;
+
 // /frf/{f_hz,H_re,H_im[,coherence,H_std,S_uu,S_yy]} and root attributes, as
 // WriteH5 writes them, read in this process (RunIsolated calls it in a child)
 // and packed as doubles: n, the four scalars, then the seven columns.
-constexpr hsize_t kMaxBins = hsize_t{1} << 24;
-
 std::string ReadH5Packed(const std::string& path) {
   H5::Exception::dontPrint();
   try {
@@ -201,8 +202,8 @@ std::string ReadH5Packed(const std::string& path) {
       if (sp.getSimpleExtentNdims() != 1) throw InputError(path + ":" + full + ": expected a 1-D dataset");
       hsize_t len = 0;
       sp.getSimpleExtentDims(&len);
-      // A response of a Welch window up to 2^25 samples; a corrupt header can
-      // claim 1e12 (the fuzzer found one) and must not become an allocation.
+      // A corrupt header can claim 1e12 values (the fuzzer found one): that
+      // must not become an allocation.
       if (len > kMaxBins) {
         throw InputError(path + ":" + full + ": " + std::to_string(len) + " values, more than a response has (" +
                          std::to_string(kMaxBins) + "): corrupt file?");
