@@ -16,6 +16,7 @@ try:
     import h5py
 except ImportError as e:
     print(f"skipped: {e}"); sys.exit(77)
+from reference_model import plant_tf
 
 zw, src = sys.argv[1], sys.argv[2]
 tmp = tempfile.mkdtemp()
@@ -33,11 +34,7 @@ def factored(s):
         g = g * md["omega"]**2 / md["v"]**2 * (s*s + md["d"]*s + md["v"]**2) / (s*s + md["c"]*s + md["omega"]**2)
     return g
 
-num, den = np.array([1.0]), np.array([mj["m"], mj["b"], 0.0])
-for md in mj["modes"]:
-    num = np.polymul(num, md["omega"]**2 / md["v"]**2 * np.array([1, md["d"], md["v"]**2]))
-    den = np.polymul(den, [1, md["c"], md["omega"]**2])
-A, B, C, D = ss.tf2ss(num, den)
+A, B, C, D = ss.tf2ss(*plant_tf(mj))
 Ad, Bd, Cd, Dd, _ = ss.cont2discrete((A, B, C, D), T, method="zoh")
 z = np.exp(1j * w * T)
 ref_d = np.array([(Cd @ np.linalg.solve(zz*np.eye(len(Ad)) - Ad, Bd))[0, 0] for zz in z]) * z**-2

@@ -19,6 +19,7 @@ try:
 except ImportError as e:
     print(f"skipped: {e}")
     sys.exit(77)
+from reference_model import plant_tf
 
 zw, src = sys.argv[1], sys.argv[2]
 model = os.path.join(src, "datasets/phantom/table1.json")
@@ -55,13 +56,7 @@ for ext, rate in (("csv", 1000), ("h5", 2000)):
     print(f"{'ok  ' if ok else 'FAIL'} {ext} {rate} Hz: {len(r)} bins, rel err H {errH:.2e}, coherence {errC:.2e}, S_uu {errS:.2e}")
 
 # Exact sampled response by SciPy's ZOH.
-m = json.load(open(model))
-num, den = np.array([1.0]), np.array([m["m"], m["b"], 0.0])
-for md in m["modes"]:
-    g = md["omega"] ** 2 / md["v"] ** 2
-    num = np.polymul(num, g * np.array([1, md["d"], md["v"] ** 2]))
-    den = np.polymul(den, [1, md["c"], md["omega"] ** 2])
-A, B, Cm, D = ss.tf2ss(num, den)
+A, B, Cm, D = ss.tf2ss(*plant_tf(json.load(open(model))))
 Ad, Bd, Cd, Dd, _ = ss.cont2discrete((A, B, Cm, D), 1e-3, method="zoh")
 log = os.path.join(tmp, "clean.csv")
 run("simulate", "--model", model, "-o", log, "--encoder-step", "0", "--seed", "4")

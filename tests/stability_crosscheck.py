@@ -26,6 +26,7 @@ try:
 except ImportError as e:
     print(f"skipped: {e}")
     sys.exit(77)
+from reference_model import plant_tf
 
 zw, src = sys.argv[1], sys.argv[2]
 model_path = os.path.join(src, "datasets/phantom/table1.json")
@@ -37,17 +38,6 @@ def fail(msg):
     global failures
     failures += 1
     print("FAIL:", msg)
-
-
-def plant_tf(m):
-    """G(s) of eq. (1): 1/(m s^2 + b s) times, per mode, (omega^2/v^2) (s^2 + d s + v^2)/(s^2 + c s + omega^2)
-    (poles omega, c; zeros v, d; unit gain at DC), as in the appendix's G1 and G2."""
-    num, den = np.array([1.0]), np.array([m["m"], m["b"], 0.0])
-    for md in m["modes"]:
-        w, c, v, d = md["omega"], md["c"], md["v"], md["d"]
-        num = np.polymul(num, np.array([1.0, d, v * v]) * (w * w) / (v * v))
-        den = np.polymul(den, [1.0, c, w * w])
-    return num, den
 
 
 model = json.load(open(model_path))
