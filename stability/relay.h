@@ -42,9 +42,10 @@ struct RelayResult {
   // was still settling and a longer run (--seconds) is needed.
   double unsettled = 0.0;
   // From `unsettled` and the slopes of L's phase and magnitude at the
-  // crossing: a rough bound (measured 1.5-4x above the error) on the relative
-  // error of K_cr and f_cr when refined; NaN otherwise. Where the phase is flat
-  // near -180 deg a small error in L moves the crossing far.
+  // crossing: a rough figure for the relative error of K_cr and f_cr when
+  // refined (NaN otherwise). Measured 3-16x above the error where it exceeds
+  // 1e-3; on slow models below that, up to 10x under it. Where the phase is
+  // flat near -180 deg a small error in L moves the crossing far.
   double uncertainty = std::numeric_limits<double>::quiet_NaN();
   // The steered run at the lowest frequency that the record resolves (20
   // cycles in the steady part) was already past -180 deg: the critical
