@@ -6,6 +6,7 @@
 #include <limits>
 #include <numbers>
 #include <optional>
+#include <utility>
 
 #include "model/error.h"
 #include "model/state_space.h"
@@ -36,18 +37,26 @@ constexpr int kMaxScanRuns = 40;       // filtered runs of the scan
 constexpr int kMaxRefineRuns = 10;     // filtered runs per crossing or dip
 constexpr double kDipDeg = 10.0;       // a dip of the phase this close to -180 deg is probed
 
-// Single-frequency DFT of x[0..n) times a window w[0..n): sum w_i x_i e^{-j theta i}.
-// The phasor advances by one complex product per sample and is reset from
-// std::polar every 256 samples (rounding stays near 1e-14).
-std::complex<double> Harmonic(const double* x, const std::vector<double>& w, double theta) {
+// Calls term(i, t, a) for i in [0, n) with a = w_i x_i e^{-j theta t}, t = i -
+// origin. The phasor advances by one complex product per sample and is reset
+// from std::polar every 256 samples (rounding stays near 1e-14).
+template <class Term>
+void WindowedTerms(const double* x, const std::vector<double>& w, double theta, double origin, Term term) {
   const size_t n = w.size();
   const std::complex<double> step = std::polar(1.0, -theta);
-  std::complex<double> acc = 0.0, e = 1.0;
+  std::complex<double> e = 1.0;
   for (size_t i = 0; i < n; ++i) {
-    if ((i & 255u) == 0) e = std::polar(1.0, -theta * static_cast<double>(i));
-    acc += (w[i] * x[i]) * e;
+    const double t = static_cast<double>(i) - origin;
+    if ((i & 255u) == 0) e = std::polar(1.0, -theta * t);
+    term(t, (w[i] * x[i]) * e);
     e *= step;
   }
+}
+
+// Single-frequency DFT of x[0..n) times a window w[0..n): sum w_i x_i e^{-j theta i}.
+std::complex<double> Harmonic(const double* x, const std::vector<double>& w, double theta) {
+  std::complex<double> acc = 0.0;
+  WindowedTerms(x, w, theta, 0.0, [&](double, std::complex<double> a) { acc += a; });
   return acc;
 }
 
@@ -69,19 +78,12 @@ struct PowerDerivatives {
   double d1 = 0.0, d2 = 0.0;
 };
 PowerDerivatives Power(const double* x, const std::vector<double>& w, double theta) {
-  const size_t n = w.size();
-  const double c = 0.5 * static_cast<double>(n);
-  const std::complex<double> step = std::polar(1.0, -theta);
-  std::complex<double> X = 0.0, X1 = 0.0, X2 = 0.0, e = 1.0;
-  for (size_t i = 0; i < n; ++i) {
-    const double t = static_cast<double>(i) - c;
-    if ((i & 255u) == 0) e = std::polar(1.0, -theta * t);
-    const std::complex<double> a = (w[i] * x[i]) * e;
+  std::complex<double> X = 0.0, X1 = 0.0, X2 = 0.0;
+  WindowedTerms(x, w, theta, 0.5 * static_cast<double>(w.size()), [&](double t, std::complex<double> a) {
     X += a;
     X1 += t * a;
     X2 += (t * t) * a;
-    e *= step;
-  }
+  });
   // X' = -j X1, X'' = -X2.
   const std::complex<double> dX(X1.imag(), -X1.real());
   PowerDerivatives p;
@@ -300,8 +302,8 @@ RelayResult SimulateRelay(const Plant& plant, const RelayOptions& o) {
   const int d = o.delay_samples + plant.delay_samples;
   ss.delay_samples = 0;
   WindowCache windows;
-  const Run base = RunOnce(ss, d, o, 0.0, windows);  // the plain relay
-  RelayResult r = base.r;
+  Run base = RunOnce(ss, d, o, 0.0, windows);  // the plain relay
+  RelayResult r = std::move(base.r);
   if (!r.oscillating) {
     if (r.diverged) r.K_cr = r.K_cr_peak = 0.0;  // no K > 0 is stable
     return r;
