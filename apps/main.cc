@@ -7,11 +7,16 @@
 #include <CLI/CLI.hpp>
 
 #include "apps/common.h"
+#include "build_info.h"
 #include "model/error.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"zwidth: haptic device identification and Z-width (stable K, B) analysis"};
   app.require_subcommand(1);
+  namespace bi = zwidth::build_info;
+  app.set_version_flag("--version", std::string("zwidth ") + bi::kVersion + "\nbuilt with Ceres " + bi::kCeres +
+                                        ", Eigen " + bi::kEigen + ", FFTW " + bi::kFftw + ", HDF5 " + bi::kHdf5 +
+                                        ", CLI11 " + bi::kCli11 + ", nlohmann-json " + bi::kNlohmannJson);
   zwidth::app::AddSimulateCommand(app);
   zwidth::app::AddEstimateCommand(app);
   zwidth::app::AddFitCommands(app);

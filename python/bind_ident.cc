@@ -1,0 +1,263 @@
+// Logs, the Welch estimate and frequency-response files: zwidth.read_log,
+// zwidth.simulate, zwidth.estimate, zwidth.FrequencyResponse.
+#include <cmath>
+
+#include "io/frf_file.h"
+#include "io/log.h"
+#include "model/error.h"
+#include "model/simulate.h"
+#include "python/bind_common.h"
+
+namespace zwidth::python {
+namespace {
+
+// A log in memory: torque input u, position output y, uniformly sampled.
+struct PyLog {
+  std::string source;
+  double sample_rate_hz = 0.0;
+  std::vector<double> u, y;
+};
+
+ident::WelchOptions WelchFrom(int window_length, double overlap, const std::string& window,
+                              const std::string& detrend, const std::string& estimator, double fmin,
+                              double fmax) {
+  ident::WelchOptions o;
+  o.window_length = window_length;
+  o.overlap = overlap;
+  o.fmin_hz = fmin;
+  o.fmax_hz = fmax;
+  // The CLI's messages (apps/common.cc), with the keyword names.
+  if (!ident::FromString(window, &o.window)) {
+    throw InputError("window '" + window + "' is not one of hann, hamming, rect");
+  }
+  if (!ident::FromString(detrend, &o.detrend)) {
+    throw InputError("detrend '" + detrend + "' is not one of none, mean, linear");
+  }
+  if (!ident::FromString(estimator, &o.estimator)) {
+    throw InputError("estimator '" + estimator + "' is not one of h1, h2");
+  }
+  std::string why;
+  if (!o.IsValid(&why)) throw InputError(why);
+  return o;
+}
+
+ident::FrequencyResponse Estimate(const std::vector<double>& u, const std::vector<double>& y,
+                                  double sample_rate_hz, const ident::WelchOptions& o) {
+  if (u.size() != y.size()) {
+    throw InputError("u has " + std::to_string(u.size()) + " samples and y " + std::to_string(y.size()) +
+                     ": they must have the same length");
+  }
+  if (!(sample_rate_hz > 0.0 && std::isfinite(sample_rate_hz))) {
+    throw InputError("sample_rate_hz = " + std::to_string(sample_rate_hz) + ": must be finite and > 0");
+  }
+  py::gil_scoped_release release;
+  // Pushed in one call: the estimator's result does not depend on how the
+  // samples are chunked, so this equals the CLI's streaming pass.
+  ident::WelchEstimator est(o);
+  est.Push(u.data(), y.data(), u.size());
+  return est.Finish(sample_rate_hz);
+}
+
+constexpr const char* kWelchDoc = R"doc(
+Welch-averaged frequency response y/u, as `zwidth estimate` computes it:
+window_length samples per segment (>= 16), overlap fraction in [0, 1),
+window 'hann' | 'hamming' | 'rect' (periodic), detrend 'none' | 'mean' |
+'linear' per segment, estimator 'h1' (S_uy/S_uu) | 'h2' (S_yy/S_yu), and the
+band [fmin, fmax] Hz kept (fmax clipped below Nyquist).)doc";
+
+}  // namespace
+
+void BindIdent(py::module_& m) {
+  py::class_<PyLog>(m, "Log", "A device log: torque input u [N m], position output y [rad], uniformly sampled.")
+      .def(py::init([](const DoubleArray& u, const DoubleArray& y, double sample_rate_hz) {
+             PyLog l;
+             l.u = ToVector(u);
+             l.y = ToVector(y);
+             l.sample_rate_hz = sample_rate_hz;
+             if (l.u.size() != l.y.size()) throw InputError("u and y must have the same length");
+             if (!(sample_rate_hz > 0.0 && std::isfinite(sample_rate_hz))) {
+               throw InputError("sample_rate_hz must be finite and > 0");
+             }
+             return l;
+           }),
+           py::arg("u"), py::arg("y"), py::arg("sample_rate_hz"))
+      .def_readonly("source", &PyLog::source, "the file it was read from ('' when made in memory)")
+      .def_readonly("sample_rate_hz", &PyLog::sample_rate_hz, "[Hz]")
+      .def_property_readonly("num_samples", [](const PyLog& l) { return l.u.size(); })
+      .def_property_readonly("t", [](const PyLog& l) {
+        std::vector<double> t(l.u.size());
+        for (size_t k = 0; k < t.size(); ++k) t[k] = static_cast<double>(k) / l.sample_rate_hz;
+        return ToArray(t);
+      }, "sample times k / sample_rate_hz [s] (the readers check that the file's are uniform)")
+      .def_property_readonly("u", [](const PyLog& l) { return ToArray(l.u); }, "input (torque) [N m]")
+      .def_property_readonly("y", [](const PyLog& l) { return ToArray(l.y); }, "output (position) [rad]")
+      .def("save", [](const PyLog& l, const std::string& path) { io::WriteLog(path, l.sample_rate_hz, l.u, l.y); },
+           py::arg("path"), "Writes the log as CSV (t,torque,position) or HDF5 by the extension (atomically).")
+      .def("__repr__", [](const PyLog& l) {
+        return "<zwidth.Log " + std::to_string(l.u.size()) + " samples at " + std::to_string(l.sample_rate_hz) +
+               " Hz>";
+      });
+
+  m.def("read_log",
+        [](const std::string& path, const std::string& input_column, const std::string& output_column,
+           const std::string& time_column, const std::string& input_dataset, const std::string& output_dataset,
+           const std::string& time_dataset, double rate, double max_interval_deviation) {
+          io::LogSelect s;
+          s.input_column = input_column;
+          s.output_column = output_column;
+          s.time_column = time_column;
+          s.input_dataset = input_dataset;
+          s.output_dataset = output_dataset;
+          s.time_dataset = time_dataset;
+          s.sample_rate_hz = rate;
+          s.max_interval_deviation = max_interval_deviation;
+          PyLog l;
+          {
+            py::gil_scoped_release release;
+            io::Log log = io::ReadLog(path, s);
+            l.source = log.info.source;
+            l.sample_rate_hz = log.info.sample_rate_hz;
+            l.u = std::move(log.input);
+            l.y = std::move(log.output);
+          }
+          return l;
+        },
+        py::arg("path"), py::arg("input_column") = "torque", py::arg("output_column") = "position",
+        py::arg("time_column") = "t", py::arg("input_dataset") = "/input/torque",
+        py::arg("output_dataset") = "/output/position", py::arg("time_dataset") = "/time",
+        py::arg("rate") = 0.0, py::arg("max_interval_deviation") = 0.01,
+        R"doc(Reads a log (CSV or HDF5, by extension or signature) as `zwidth estimate`
+does, with the CLI's selectors: CSV columns input_column, output_column,
+time_column; HDF5 datasets input_dataset, output_dataset, time_dataset; rate
+[Hz] > 0 overrides the file's (needed for a CSV without a time column).
+Raises InputError naming the file, row or dataset.)doc");
+
+  py::class_<ident::FrequencyResponse>(m, "FrequencyResponse",
+                                       "An empirical frequency response (output/input) with its coherence and "
+                                       "per-bin standard deviation, as `zwidth estimate` writes it.")
+      .def(py::init([](const DoubleArray& f_hz, const py::array_t<std::complex<double>, py::array::c_style |
+                                                                                       py::array::forcecast>& H,
+                       double sample_rate_hz, std::optional<DoubleArray> coherence,
+                       std::optional<DoubleArray> H_std, int num_averages) {
+             ident::FrequencyResponse r;
+             r.f_hz = ToVector(f_hz);
+             r.H.assign(H.data(), H.data() + H.size());
+             r.sample_rate_hz = sample_rate_hz;
+             r.num_averages = num_averages;
+             r.effective_averages = num_averages;
+             const size_t n = r.f_hz.size();
+             if (r.H.size() != n) throw InputError("H must have as many values as f_hz");
+             if (!(sample_rate_hz > 0.0 && std::isfinite(sample_rate_hz))) {
+               throw InputError("sample_rate_hz must be finite and > 0");
+             }
+             // The defaults of a response file without these columns (io/frf_file.h).
+             r.coherence = coherence ? ToVector(*coherence) : std::vector<double>(n, 1.0);
+             if (H_std) {
+               r.H_std = ToVector(*H_std);
+             } else {
+               for (const auto& h : r.H) r.H_std.push_back(std::abs(h) * 1e-3);
+             }
+             if (r.coherence.size() != n || r.H_std.size() != n) {
+               throw InputError("coherence and H_std must have as many values as f_hz");
+             }
+             for (size_t k = 0; k < n; ++k) {
+               r.S_uu.push_back(std::nan(""));
+               r.S_yy.push_back(std::nan(""));
+               r.S_uy.push_back({std::nan(""), std::nan("")});
+             }
+             return r;
+           }),
+           py::arg("f_hz"), py::arg("H"), py::arg("sample_rate_hz"), py::arg("coherence") = py::none(),
+           py::arg("H_std") = py::none(), py::arg("num_averages") = 1,
+           "A response measured elsewhere: missing coherence is 1 and H_std |H| 1e-3 (equal relative weights), "
+           "as for a response file without those columns.")
+      .def_static("load", [](const std::string& path, double sample_rate_hz) {
+                    py::gil_scoped_release release;
+                    return io::ReadFrequencyResponse(path, sample_rate_hz);
+                  },
+                  py::arg("path"), py::arg("sample_rate_hz") = 0.0,
+                  "Reads a response file of `zwidth estimate` (CSV or HDF5).")
+      .def("save", [](const ident::FrequencyResponse& r, const std::string& path) {
+             io::WriteFrequencyResponse(path, r);
+           },
+           py::arg("path"), "Writes it as `zwidth estimate -o` does (CSV or HDF5 by extension).")
+      .def_readonly("sample_rate_hz", &ident::FrequencyResponse::sample_rate_hz, "[Hz]")
+      .def_readonly("window_length", &ident::FrequencyResponse::window_length, "samples per segment")
+      .def_readonly("num_averages", &ident::FrequencyResponse::num_averages, "Welch segments averaged")
+      .def_readonly("effective_averages", &ident::FrequencyResponse::effective_averages,
+                    "equivalent independent averages (Welch 1967)")
+      .def_readonly("bin_correlation", &ident::FrequencyResponse::bin_correlation)
+      .def_property_readonly("f_hz", [](const ident::FrequencyResponse& r) { return ToArray(r.f_hz); }, "[Hz]")
+      .def_property_readonly("H", [](const ident::FrequencyResponse& r) { return ToArray(r.H); },
+                             "complex output/input, e.g. rad/(N m)")
+      .def_property_readonly("coherence", [](const ident::FrequencyResponse& r) { return ToArray(r.coherence); },
+                             "magnitude-squared, [0, 1]")
+      .def_property_readonly("H_std", [](const ident::FrequencyResponse& r) { return ToArray(r.H_std); },
+                             "per-bin standard deviation of H (Bendat & Piersol)")
+      .def_property_readonly("S_uu", [](const ident::FrequencyResponse& r) { return ToArray(r.S_uu); })
+      .def_property_readonly("S_yy", [](const ident::FrequencyResponse& r) { return ToArray(r.S_yy); })
+      .def_property_readonly("S_uy", [](const ident::FrequencyResponse& r) { return ToArray(r.S_uy); })
+      .def("__len__", [](const ident::FrequencyResponse& r) { return r.f_hz.size(); })
+      .def("__repr__", [](const ident::FrequencyResponse& r) {
+        return "<zwidth.FrequencyResponse " + std::to_string(r.f_hz.size()) + " bins, " +
+               std::to_string(r.num_averages) + " averages>";
+      });
+
+  m.def("estimate",
+        [](const DoubleArray& u, const DoubleArray& y, double sample_rate_hz, int window_length, double overlap,
+           const std::string& window, const std::string& detrend, const std::string& estimator, double fmin,
+           double fmax) {
+          const ident::WelchOptions o = WelchFrom(window_length, overlap, window, detrend, estimator, fmin, fmax);
+          return Estimate(ToVector(u), ToVector(y), sample_rate_hz, o);
+        },
+        py::arg("u"), py::arg("y"), py::arg("sample_rate_hz"), py::arg("window_length") = 4096,
+        py::arg("overlap") = 0.5, py::arg("window") = "hann", py::arg("detrend") = "linear",
+        py::arg("estimator") = "h1", py::arg("fmin") = 0.7, py::arg("fmax") = 300.0, kWelchDoc);
+  m.def("estimate",
+        [](const PyLog& log, int window_length, double overlap, const std::string& window,
+           const std::string& detrend, const std::string& estimator, double fmin, double fmax) {
+          const ident::WelchOptions o = WelchFrom(window_length, overlap, window, detrend, estimator, fmin, fmax);
+          try {
+            return Estimate(log.u, log.y, log.sample_rate_hz, o);
+          } catch (const InputError& e) {  // as the CLI: the file first
+            if (log.source.empty()) throw;
+            throw InputError(log.source + ": " + e.what());
+          }
+        },
+        py::arg("log"), py::arg("window_length") = 4096, py::arg("overlap") = 0.5, py::arg("window") = "hann",
+        py::arg("detrend") = "linear", py::arg("estimator") = "h1", py::arg("fmin") = 0.7,
+        py::arg("fmax") = 300.0, "estimate(log, ...): the same from a Log.");
+
+  m.def("simulate",
+        [](const io::ModelFile& model, double seconds, double sample_rate_hz, double torque_rms,
+           double bandwidth_hz, double encoder_step_rad, double noise_std_rad, int delay_samples, uint64_t seed) {
+          SimulateOptions o;
+          o.seconds = seconds;
+          o.sample_rate_hz = sample_rate_hz;
+          o.torque_rms = torque_rms;
+          o.bandwidth_hz = bandwidth_hz;
+          o.encoder_step_rad = encoder_step_rad;
+          o.noise_std_rad = noise_std_rad;
+          o.delay_samples = delay_samples;
+          o.seed = seed;
+          PyLog l;
+          {
+            py::gil_scoped_release release;
+            SimulatedLog s = SimulateLog(model.plant, o);
+            l.sample_rate_hz = s.sample_rate_hz;
+            l.u = std::move(s.torque);
+            l.y = std::move(s.position);
+          }
+          return l;
+        },
+        py::arg("model"), py::arg("seconds") = 30.0, py::arg("sample_rate_hz") = 1000.0,
+        py::arg("torque_rms") = 0.03, py::arg("bandwidth_hz") = 300.0,
+        py::arg("encoder_step_rad") = SimulateOptions{}.encoder_step_rad, py::arg("noise_std_rad") = 0.0,
+        py::arg("delay_samples") = 0, py::arg("seed") = 1,
+        R"doc(A simulated log as `zwidth simulate` makes it: band-limited white-noise
+torque through the exact sampled plant, encoder quantisation (rad per count,
+0 = none) and Gaussian sensor noise. Seeded: the same arguments give the
+same samples.)doc");
+}
+
+}  // namespace zwidth::python

@@ -1,0 +1,161 @@
+// zwidth.Model: the plant of eq. (1) with its file-level extras (standard
+// errors, sample period, fit metrics), i.e. io::ModelFile.
+#include <cmath>
+#include <numbers>
+
+#include <pybind11/eigen.h>
+
+#include "io/export.h"
+#include "io/reference_models.h"
+#include "model/error.h"
+#include "model/state_space.h"
+#include "python/bind_common.h"
+
+namespace zwidth::python {
+namespace {
+
+using ModeTuple = std::tuple<double, double, double, double>;
+
+std::vector<ModeTuple> ModesOf(const Plant& p) {
+  std::vector<ModeTuple> out;
+  for (const Mode& md : p.modes) out.emplace_back(md.omega, md.c, md.v, md.d);
+  return out;
+}
+
+std::vector<Mode> ModesFrom(const std::vector<ModeTuple>& t) {
+  std::vector<Mode> out;
+  for (const auto& [w, c, v, d] : t) out.push_back({w, c, v, d});
+  return out;
+}
+
+py::object StdOf(const io::ModelFile& mf) {
+  if (!mf.std_errors) return py::none();
+  py::dict d;
+  d["m"] = mf.std_errors->m;
+  d["b"] = mf.std_errors->b;
+  d["modes"] = ModesOf(*mf.std_errors);
+  return d;
+}
+
+py::array_t<std::complex<double>> Response(const io::ModelFile& mf, const DoubleArray& f_hz,
+                                           std::optional<double> period_s) {
+  mf.plant.Validate();
+  py::array_t<std::complex<double>> out = ShapedLike<std::complex<double>>(f_hz);
+  const double* f = f_hz.data();
+  std::complex<double>* h = out.mutable_data();
+  const py::ssize_t n = f_hz.size();
+  constexpr double kTwoPi = 2.0 * std::numbers::pi;
+  if (!period_s) {
+    py::gil_scoped_release release;
+    for (py::ssize_t k = 0; k < n; ++k) h[k] = ContinuousResponse(mf.plant, kTwoPi * f[k]);
+    return out;
+  }
+  const double T = ResolvePeriod(period_s, mf);
+  py::gil_scoped_release release;
+  const DiscreteResponse resp(DiscretizeZoh(mf.plant, T));
+  for (py::ssize_t k = 0; k < n; ++k) h[k] = resp.AtTheta(kTwoPi * f[k] * T);
+  return out;
+}
+
+py::tuple StateSpaceOf(const io::ModelFile& mf, std::optional<double> period_s) {
+  mf.plant.Validate();
+  const StateSpace s = period_s ? WithDelayStates(DiscretizeZoh(mf.plant, ResolvePeriod(period_s, mf)))
+                                : ContinuousStateSpace(mf.plant);
+  Eigen::MatrixXd B = s.B, C = s.C, D = Eigen::MatrixXd::Constant(1, 1, s.D);
+  return py::make_tuple(s.A, B, C, D);
+}
+
+}  // namespace
+
+void BindModel(py::module_& m) {
+  py::class_<io::ModelFile>(m, "Model", R"doc(
+The plant of eq. (1) of Gil et al.: rigid body 1/(m s^2 + b s) times N
+resonance/antiresonance sections w^2 (s^2 + d s + v^2) / (v^2 (s^2 + c s + w^2)),
+with an optional integer input delay of the sampled model. SI units, rad/s.
+
+Model(m, b, modes=[], delay_samples=0, name="", sample_period_s=None)
+  modes: a list of (omega, c, v, d) tuples [rad/s].
+Model.load(path), model.save(path): the model JSON of the CLI.
+Model.table1(): Table I of the paper (PHANToM 1.0, phi axis), built in.)doc")
+      .def(py::init([](double m_, double b, const std::vector<ModeTuple>& modes, int delay_samples,
+                       const std::string& name, std::optional<double> sample_period_s) {
+             io::ModelFile mf;
+             mf.plant.m = m_;
+             mf.plant.b = b;
+             mf.plant.modes = ModesFrom(modes);
+             mf.plant.delay_samples = delay_samples;
+             mf.plant.name = name;
+             mf.plant.Validate();
+             if (sample_period_s) {
+               if (!(*sample_period_s > 0.0 && std::isfinite(*sample_period_s))) {
+                 throw InputError("sample_period_s = " + std::to_string(*sample_period_s) +
+                                  ": must be finite and > 0");
+               }
+               mf.sample_period_s = sample_period_s;
+             }
+             return mf;
+           }),
+           py::arg("m"), py::arg("b"), py::arg("modes") = std::vector<ModeTuple>{}, py::arg("delay_samples") = 0,
+           py::arg("name") = "", py::arg("sample_period_s") = py::none())
+      .def_static("load", &io::ReadModelJson, py::arg("path"),
+                  "Reads a model JSON file (the CLI's format); InputError names the file and the key.")
+      .def_static("from_json", [](const std::string& text) { return io::ParseModelJson(text, "<string>"); },
+                  py::arg("text"), "Parses model JSON text.")
+      .def_static("table1", &io::Table1Model, "Table I of the paper (PHANToM 1.0, phi axis), built into the library.")
+      .def("save", [](const io::ModelFile& mf, const std::string& path) { io::WriteModelJson(path, mf); },
+           py::arg("path"), "Writes the model JSON (atomically; the CLI reads it back).")
+      .def("to_json", [](const io::ModelFile& mf) { return io::ModelToJson(mf).dump(2); },
+           "The model JSON as text.")
+      .def("export", [](const io::ModelFile& mf, const std::string& path, const std::string& format,
+                        std::optional<double> period_s) {
+             io::ExportFormat f;
+             if (!io::FromString(format, &f)) {
+               throw InputError("format '" + format + "' is not one of json, hdf5, matlab, python, statespace");
+             }
+             io::ExportModel(mf, f, period_s ? ResolvePeriod(period_s, mf) : 0.0, path);
+           },
+           py::arg("path"), py::arg("format"), py::arg("period_s") = py::none(),
+           "Exports like `zwidth export` (format json | hdf5 | matlab | python | statespace); "
+           "period_s adds the discrete model.")
+      .def_property("m", [](const io::ModelFile& mf) { return mf.plant.m; },
+                    [](io::ModelFile& mf, double v) { mf.plant.m = v; }, "rigid-body inertia [kg m^2]")
+      .def_property("b", [](const io::ModelFile& mf) { return mf.plant.b; },
+                    [](io::ModelFile& mf, double v) { mf.plant.b = v; }, "rigid-body viscous damping [N m s/rad]")
+      .def_property("modes", [](const io::ModelFile& mf) { return ModesOf(mf.plant); },
+                    [](io::ModelFile& mf, const std::vector<ModeTuple>& t) { mf.plant.modes = ModesFrom(t); },
+                    "list of (omega, c, v, d) per section [rad/s]: pole pair w, its damping c = 2 zeta w, "
+                    "zero pair v, its damping d")
+      .def_property("delay_samples", [](const io::ModelFile& mf) { return mf.plant.delay_samples; },
+                    [](io::ModelFile& mf, int v) { mf.plant.delay_samples = v; },
+                    "input delay of the sampled model [samples]")
+      .def_property("name", [](const io::ModelFile& mf) { return mf.plant.name; },
+                    [](io::ModelFile& mf, const std::string& v) { mf.plant.name = v; }, "free text")
+      .def_property("sample_period_s", [](const io::ModelFile& mf) { return mf.sample_period_s; },
+                    [](io::ModelFile& mf, std::optional<double> v) { mf.sample_period_s = v; },
+                    "sample period the model was fitted at [s], or None")
+      .def_property_readonly("std", &StdOf,
+                             "standard errors {'m', 'b', 'modes': [(omega, c, v, d), ...]} of a fitted model "
+                             "(inf where unknown), else None")
+      .def_property_readonly("fit_info", [](const io::ModelFile& mf) { return JsonToPython(mf.fit); },
+                             "the fit metrics stored with a fitted model (dict), else None")
+      .def_property_readonly("num_states", [](const io::ModelFile& mf) { return mf.plant.num_states(); })
+      .def("validate", [](const io::ModelFile& mf) { mf.plant.Validate(); },
+           "Raises InputError naming the first invalid parameter.")
+      .def("response", &Response, py::arg("f_hz"), py::arg("period_s") = py::none(),
+           R"doc(Frequency response at f_hz (array-like, Hz), complex, same shape.
+period_s=None: G(j 2 pi f) of eq. (1). Else the exact zero-order-hold
+sampled model G_d(e^{j 2 pi f T}) z^-delay_samples at T = period_s.)doc")
+      .def("state_space", &StateSpaceOf, py::arg("period_s") = py::none(),
+           R"doc((A, B, C, D) NumPy matrices. period_s=None: the continuous cascade
+realisation of model/state_space.h. Else its exact ZOH discretisation with
+the input delay realised as extra states.)doc")
+      .def("__repr__", [](const io::ModelFile& mf) {
+        return "<zwidth.Model m=" + std::to_string(mf.plant.m) + " b=" + std::to_string(mf.plant.b) +
+               " modes=" + std::to_string(mf.plant.modes.size()) +
+               " delay_samples=" + std::to_string(mf.plant.delay_samples) + ">";
+      })
+      .def(py::pickle([](const io::ModelFile& mf) { return io::ModelToJson(mf).dump(); },
+                      [](const std::string& s) { return io::ParseModelJson(s, "<pickle>"); }));
+}
+
+}  // namespace zwidth::python

@@ -1,0 +1,331 @@
+// zwidth.ZWidth (stability/zwidth.h), zwidth.relay (stability/relay.h) and
+// zwidth.check (the scene check of `zwidth check`).
+//
+// Waiting on issue 13 (stability/, wip/region): stable K-intervals per B
+// (ZWidth.stable_intervals) go in BindStability beside critical().
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "io/stability_files.h"
+#include "model/error.h"
+#include "python/bind_common.h"
+#include "stability/relay.h"
+#include "stability/zwidth.h"
+
+namespace zwidth::python {
+namespace {
+
+// A ZWidth with the model and period it was built from.
+struct PyZWidth {
+  io::ModelFile model;
+  int delay_samples = 0;
+  std::unique_ptr<stability::ZWidth> z;
+};
+
+void CheckDelay(int d, const char* name) {
+  if (d < 0) throw InputError(std::string(name) + " = " + std::to_string(d) + ": delays must be >= 0 samples");
+}
+
+// Applies f to every B (GIL released); returns arrays shaped like B, or
+// Python scalars when B is a scalar.
+template <typename F>
+void ForEachB(const DoubleArray& B, F&& f) {
+  const double* b = B.data();
+  const py::ssize_t n = B.size();
+  py::gil_scoped_release release;
+  for (py::ssize_t k = 0; k < n; ++k) f(k, b[k]);
+}
+
+bool IsScalar(const py::object& o) { return py::array::ensure(o).ndim() == 0; }
+
+// The CLI's `check` verdict for one object (apps/cmd_stability.cc).
+nlohmann::json CheckObject(const stability::ZWidth& z, const io::SceneObject& o) {
+  const stability::CriticalPoint cp = z.At(o.B);
+  const bool stable = cp.K_cr > 0.0 && o.K < cp.K_cr;
+  const double ratio = cp.K_cr > 0.0 ? o.K / cp.K_cr : std::numeric_limits<double>::infinity();
+  return {{"name", o.name}, {"K", o.K}, {"B", o.B}, {"stable", stable}, {"K_cr", io::NumberOrNull(cp.K_cr)},
+          {"f_cr_hz", io::NumberOrNull(cp.f_cr_hz)}, {"K_over_K_cr", io::NumberOrNull(ratio)},
+          {"unstable_at_any_K", cp.unstable_at_zero_k}};
+}
+
+std::vector<io::SceneObject> SceneFrom(const py::object& scene) {
+  if (py::isinstance<py::str>(scene) || py::hasattr(scene, "__fspath__")) {
+    return io::ReadScene(py::str(py::module_::import("os").attr("fspath")(scene)).cast<std::string>());
+  }
+  // A list of {"name", "K", "B"} dicts or (name, K, B) tuples, checked as ReadScene checks a file.
+  std::vector<io::SceneObject> out;
+  size_t i = 0;
+  for (const py::handle& h : scene) {
+    const std::string where = "objects[" + std::to_string(i) + "]";
+    io::SceneObject so;
+    py::object name, K, B;
+    if (py::isinstance<py::dict>(h)) {
+      py::dict d = py::reinterpret_borrow<py::dict>(h);
+      for (const auto& kv : d) {
+        const std::string k = py::str(kv.first).cast<std::string>();
+        if (k != "name" && k != "K" && k != "B") throw InputError(where + ": unknown key '" + k + "' (allowed: name, K, B)");
+      }
+      name = d.contains("name") ? py::object(d["name"]) : py::none();
+      K = d.contains("K") ? py::object(d["K"]) : py::none();
+      B = d.contains("B") ? py::object(d["B"]) : py::none();
+    } else {
+      py::tuple t = py::tuple(py::reinterpret_borrow<py::object>(h));
+      if (t.size() != 3) throw InputError(where + ": expected {'name', 'K', 'B'} or (name, K, B)");
+      name = t[0]; K = t[1]; B = t[2];
+    }
+    so.name = py::isinstance<py::str>(name) ? name.cast<std::string>() : "object" + std::to_string(i);
+    for (auto [key, val, dst] : {std::tuple{"K", K, &so.K}, std::tuple{"B", B, &so.B}}) {
+      if (val.is_none() || py::isinstance<py::bool_>(val) ||
+          !(py::isinstance<py::float_>(val) || py::isinstance<py::int_>(val))) {
+        throw InputError(where + ": '" + key + "' must be a number");
+      }
+      const double v = val.template cast<double>();
+      if (!std::isfinite(v) || v < 0.0) {
+        throw InputError(where + ": '" + key + "' = " + std::to_string(v) + " must be finite and >= 0");
+      }
+      *dst = v;
+    }
+    out.push_back(so);
+    ++i;
+  }
+  return out;
+}
+
+}  // namespace
+
+void BindStability(py::module_& m) {
+  py::class_<stability::CriticalPoint>(m, "CriticalPoint", "The Z-width boundary at one B (stability/zwidth.h).")
+      .def_readonly("B", &stability::CriticalPoint::B, "virtual damping [N m s/rad]")
+      .def_readonly("K_cr", &stability::CriticalPoint::K_cr,
+                    "smallest K > 0 with a closed-loop pole on the unit circle [N m/rad]; 0 when unstable as K -> 0+, "
+                    "inf when no crossing exists")
+      .def_readonly("f_cr_hz", &stability::CriticalPoint::f_cr_hz, "ultimate frequency [Hz]")
+      .def_readonly("unstable_at_zero_k", &stability::CriticalPoint::unstable_at_zero_k)
+      .def_readonly("verified", &stability::CriticalPoint::verified,
+                    "Schur-Cohn: stable at 0.999999 K_cr, unstable at 1.000001 K_cr")
+      .def_readonly("K_margin", &stability::CriticalPoint::K_margin,
+                    "the paper's eq. (4) reading (MATLAB margin()); not the Z-width past B_max")
+      .def_readonly("f_margin_hz", &stability::CriticalPoint::f_margin_hz)
+      .def_property_readonly("margin_agrees", [](const stability::CriticalPoint& c) { return c.AgreesWithMargin(); })
+      .def("__iter__", [](const stability::CriticalPoint& c) {
+        return py::iter(py::make_tuple(c.K_cr, c.f_cr_hz));
+      }, "K_cr, f_cr_hz = point")
+      .def("__repr__", [](const stability::CriticalPoint& c) {
+        return "<zwidth.CriticalPoint B=" + std::to_string(c.B) + " K_cr=" + std::to_string(c.K_cr) +
+               " f_cr_hz=" + std::to_string(c.f_cr_hz) + ">";
+      });
+
+  py::class_<PyZWidth>(m, "ZWidth", R"doc(
+The Z-width of the sampled loop of eq. (2),
+  1 + z^-d (K + B (1 - z^-1)/T) G_d(z) = 0,
+with G_d the exact ZOH plant (the model's own delay adds to d).
+
+ZWidth(model, period_s=None, delay_samples=2, min_grid_points=2048,
+       grid_points_per_delay=64, theta_tolerance=1e-13, verify=True)
+period_s=None: the model's sample_period_s, else 1 ms (as the CLI).)doc")
+      .def(py::init([](const io::ModelFile& model, std::optional<double> period_s, int delay_samples,
+                       int min_grid_points, int grid_points_per_delay, double theta_tolerance, bool verify) {
+             CheckDelay(delay_samples, "delay_samples");
+             stability::BoundaryOptions o;
+             o.min_grid_points = min_grid_points;
+             o.grid_points_per_delay = grid_points_per_delay;
+             o.theta_tolerance = theta_tolerance;
+             o.verify = verify;
+             std::string why;
+             if (!o.IsValid(&why)) throw InputError(why);
+             const double T = ResolvePeriod(period_s, model);
+             auto p = std::make_unique<PyZWidth>();
+             p->model = model;
+             p->delay_samples = delay_samples;
+             {
+               py::gil_scoped_release release;
+               p->z = std::make_unique<stability::ZWidth>(model.plant, T, delay_samples, o);
+             }
+             return p;
+           }),
+           py::arg("model"), py::arg("period_s") = py::none(), py::arg("delay_samples") = 2,
+           py::arg("min_grid_points") = stability::BoundaryOptions{}.min_grid_points,
+           py::arg("grid_points_per_delay") = stability::BoundaryOptions{}.grid_points_per_delay,
+           py::arg("theta_tolerance") = stability::BoundaryOptions{}.theta_tolerance,
+           py::arg("verify") = stability::BoundaryOptions{}.verify)
+      .def_property_readonly("period_s", [](const PyZWidth& z) { return z.z->period_s(); })
+      .def_property_readonly("delay_samples", [](const PyZWidth& z) { return z.delay_samples; }, "loop delay d")
+      .def_property_readonly("total_delay_samples", [](const PyZWidth& z) { return z.z->total_delay(); },
+                             "d plus the model's own delay")
+      .def_readonly("model", &PyZWidth::model)
+      .def("critical",
+           [](const PyZWidth& z, const py::object& B) -> py::object {
+             const DoubleArray b = B.cast<DoubleArray>();
+             py::array_t<double> K = ShapedLike<double>(b), f = ShapedLike<double>(b);
+             double* k = K.mutable_data();
+             double* fh = f.mutable_data();
+             ForEachB(b, [&](py::ssize_t i, double v) {
+               const stability::CriticalPoint c = z.z->At(v);
+               k[i] = c.K_cr;
+               fh[i] = c.f_cr_hz;
+             });
+             if (IsScalar(B)) return py::make_tuple(k[0], fh[0]);
+             return py::make_tuple(K, f);
+           },
+           py::arg("B"),
+           R"doc((K_cr, f_cr_hz) at B [N m s/rad]: floats for a scalar B, arrays shaped
+like B for an array (the GIL is released over the sweep). K_cr is 0 where
+the loop is unstable as K -> 0+ (B past B_max), inf with no crossing.)doc")
+      .def("point", [](const PyZWidth& z, double B) {
+             py::gil_scoped_release release;
+             return z.z->At(B);
+           },
+           py::arg("B"), "The full CriticalPoint at one B (with the margin() reading and the verification).")
+      .def("boundary",
+           [](const PyZWidth& z, const DoubleArray& B) {
+             const py::ssize_t n = B.size();
+             std::vector<stability::CriticalPoint> pts(static_cast<size_t>(n));
+             ForEachB(B, [&](py::ssize_t i, double v) { pts[i] = z.z->At(v); });
+             py::dict d;
+             auto col = [&](const char* name, auto get) {
+               using T = decltype(get(pts[0]));
+               py::array_t<T> a = ShapedLike<T>(B);
+               T* p = a.mutable_data();
+               for (py::ssize_t i = 0; i < n; ++i) p[i] = get(pts[i]);
+               d[name] = a;
+             };
+             if (n == 0) {
+               for (const char* name : {"B", "K_cr", "f_cr_hz", "K_margin", "f_margin_hz"}) d[name] = ShapedLike<double>(B);
+               for (const char* name : {"unstable_at_zero_k", "margin_agrees", "verified"}) d[name] = ShapedLike<bool>(B);
+               return d;
+             }
+             col("B", [](const stability::CriticalPoint& c) { return c.B; });
+             col("K_cr", [](const stability::CriticalPoint& c) { return c.K_cr; });
+             col("f_cr_hz", [](const stability::CriticalPoint& c) { return c.f_cr_hz; });
+             col("K_margin", [](const stability::CriticalPoint& c) { return c.K_margin; });
+             col("f_margin_hz", [](const stability::CriticalPoint& c) { return c.f_margin_hz; });
+             col("unstable_at_zero_k", [](const stability::CriticalPoint& c) { return c.unstable_at_zero_k; });
+             col("margin_agrees", [](const stability::CriticalPoint& c) { return c.AgreesWithMargin(); });
+             col("verified", [](const stability::CriticalPoint& c) { return c.verified; });
+             return d;
+           },
+           py::arg("B"),
+           "The columns of `zwidth boundary`'s CSV for one delay over an array of B: a dict of arrays "
+           "B, K_cr, f_cr_hz, K_margin, f_margin_hz, unstable_at_zero_k, margin_agrees, verified.")
+      .def("crossings",
+           [](const PyZWidth& z, double B) {
+             std::vector<std::pair<double, double>> out;
+             for (const auto& c : z.z->Crossings(B)) out.emplace_back(c.theta, c.K);
+             return out;
+           },
+           py::arg("B"), "Every (theta [rad/sample], K) at which a closed-loop pole is on the unit circle.")
+      .def("is_stable",
+           [](const PyZWidth& z, const py::object& K, const py::object& B) -> py::object {
+             py::list both = py::module_::import("numpy").attr("broadcast_arrays")(
+                 py::array::ensure(DoubleArray::ensure(K)), py::array::ensure(DoubleArray::ensure(B)));
+             const DoubleArray k = DoubleArray::ensure(both[0]);  // forcecast copies to C order
+             const DoubleArray b = DoubleArray::ensure(both[1]);
+             py::array_t<bool> out = ShapedLike<bool>(k);
+             bool* o = out.mutable_data();
+             const double* kp = k.data();
+             ForEachB(b, [&](py::ssize_t i, double v) { o[i] = z.z->IsStable(kp[i], v); });
+             if (out.ndim() == 0) return py::bool_(o[0]);
+             return out;
+           },
+           py::arg("K"), py::arg("B"),
+           "Schur-Cohn test of the closed loop at (K, B); broadcasts arrays (K = 0 is taken as 0+).")
+      .def("summary",
+           [](const PyZWidth& z) {
+             stability::DelaySummary s;
+             {
+               py::gil_scoped_release release;
+               s = z.z->Summarize();
+             }
+             // One entry of the CLI's summary JSON "delays" list (apps/cmd_stability.cc).
+             nlohmann::json e = io::SummaryToJson(s);
+             e["delay_samples"] = z.delay_samples;
+             e["total_delay_samples"] = s.delay_samples;
+             return JsonToPython(e);
+           },
+           "B_t, K_cr^max, B_max, ... as the CLI's summary JSON (one entry of 'delays'; None for NaN/inf).")
+      .def("characteristic_polynomial",
+           [](const PyZWidth& z, double K, double B) { return ToArray(z.z->CharacteristicPolynomial(K, B)); },
+           py::arg("K"), py::arg("B"), "Closed-loop characteristic polynomial coefficients, z^0 first.")
+      .def("_cpp_seconds_sweep",
+           [](const PyZWidth& z, const DoubleArray& B, int repeats) {
+             // C++ time of the same sweep (median of repeats), for bench/python_overhead.py.
+             const std::vector<double> b = ToVector(B);
+             py::gil_scoped_release release;
+             std::vector<double> t;
+             double sink = 0.0;
+             for (int r = 0; r < repeats; ++r) {
+               const auto a = std::chrono::steady_clock::now();
+               for (double v : b) sink += z.z->At(v).K_cr;
+               t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count());
+             }
+             std::sort(t.begin(), t.end());
+             return std::make_pair(t[t.size() / 2], sink);
+           },
+           py::arg("B"), py::arg("repeats") = 5);
+
+  py::class_<stability::RelayResult>(m, "RelayResult", "The simulated relay experiment (stability/relay.h).")
+      .def_readonly("K_cr", &stability::RelayResult::K_cr, "estimate [N m/rad]")
+      .def_readonly("f_cr_hz", &stability::RelayResult::f_cr_hz)
+      .def_readonly("refined", &stability::RelayResult::refined)
+      .def_readonly("relay_runs", &stability::RelayResult::relay_runs)
+      .def_readonly("unsettled", &stability::RelayResult::unsettled)
+      .def_readonly("uncertainty", &stability::RelayResult::uncertainty)
+      .def_readonly("below_band", &stability::RelayResult::below_band)
+      .def_readonly("band_low_hz", &stability::RelayResult::band_low_hz)
+      .def_readonly("K_cr_peak", &stability::RelayResult::K_cr_peak, "the paper's reading (spectral peak)")
+      .def_readonly("f_cr_peak_hz", &stability::RelayResult::f_cr_peak_hz)
+      .def_readonly("oscillating", &stability::RelayResult::oscillating)
+      .def_readonly("diverged", &stability::RelayResult::diverged)
+      .def_property_readonly("relay_force", [](const stability::RelayResult& r) { return ToArray(r.relay_force); })
+      .def_property_readonly("damping_force", [](const stability::RelayResult& r) { return ToArray(r.damping_force); })
+      .def_property_readonly("command", [](const stability::RelayResult& r) { return ToArray(r.command); })
+      .def_property_readonly("position", [](const stability::RelayResult& r) { return ToArray(r.position); });
+
+  m.def("relay",
+        [](const io::ModelFile& model, int delay_samples, double damping, std::optional<double> period_s,
+           double amplitude, double seconds, double settle_fraction) {
+          CheckDelay(delay_samples, "delay_samples");
+          stability::RelayOptions o;
+          o.period_s = ResolvePeriod(period_s, model);
+          o.delay_samples = delay_samples;
+          o.damping = damping;
+          o.amplitude = amplitude;
+          o.seconds = seconds;
+          o.settle_fraction = settle_fraction;
+          stability::RelayResult r;
+          {
+            py::gil_scoped_release release;
+            r = stability::SimulateRelay(model.plant, o);
+          }
+          if (!r.oscillating && !r.diverged) throw ComputationError("the relay loop did not oscillate");
+          return r;
+        },
+        py::arg("model"), py::arg("delay_samples"), py::arg("damping"), py::arg("period_s") = py::none(),
+        py::arg("amplitude") = stability::RelayOptions{}.amplitude,
+        py::arg("seconds") = stability::RelayOptions{}.seconds,
+        py::arg("settle_fraction") = stability::RelayOptions{}.settle_fraction,
+        R"doc(The relay experiment of section IV, simulated as `zwidth relay` does it.
+Raises ComputationError when the loop neither oscillates nor diverges.)doc");
+
+  m.def("check",
+        [](const py::object& scene, const io::ModelFile& model, int delay_samples, std::optional<double> period_s) {
+          CheckDelay(delay_samples, "delay_samples");
+          const double T = ResolvePeriod(period_s, model);
+          const std::vector<io::SceneObject> objs = SceneFrom(scene);
+          nlohmann::json out = {{"delay_samples", delay_samples}, {"period_s", T},
+                                {"objects", nlohmann::json::array()}};
+          {
+            py::gil_scoped_release release;
+            const stability::ZWidth z(model.plant, T, delay_samples);
+            for (const auto& o : objs) out["objects"].push_back(CheckObject(z, o));
+          }
+          return JsonToPython(out);
+        },
+        py::arg("scene"), py::arg("model"), py::arg("delay_samples"), py::arg("period_s") = py::none(),
+        R"doc(Is each object {name, K, B} of a haptic scene stable on this device?
+scene: a scene JSON path ({"objects": [...]}) or a list of dicts / (name, K, B)
+tuples. Returns the dict `zwidth check --json` prints.)doc");
+}
+
+}  // namespace zwidth::python

@@ -1,0 +1,72 @@
+// The Python module zwidth._zwidth (imported by the package zwidth, see
+// python/zwidth/__init__.py). Errors: InputError -> zwidth.InputError (a
+// ValueError), ComputationError -> zwidth.ComputationError (a RuntimeError),
+// with the library's messages, which are the CLI's.
+#include <cmath>
+
+#include "build_info.h"
+#include "model/error.h"
+#include "python/bind_common.h"
+
+namespace zwidth::python {
+
+py::object JsonToPython(const nlohmann::json& j) {
+  switch (j.type()) {
+    case nlohmann::json::value_t::null: return py::none();
+    case nlohmann::json::value_t::boolean: return py::bool_(j.get<bool>());
+    case nlohmann::json::value_t::number_integer: return py::int_(j.get<long long>());
+    case nlohmann::json::value_t::number_unsigned: return py::int_(j.get<unsigned long long>());
+    case nlohmann::json::value_t::number_float: return py::float_(j.get<double>());
+    case nlohmann::json::value_t::string: return py::str(j.get<std::string>());
+    case nlohmann::json::value_t::array: {
+      py::list l;
+      for (const auto& e : j) l.append(JsonToPython(e));
+      return l;
+    }
+    case nlohmann::json::value_t::object: {
+      py::dict d;
+      for (auto it = j.begin(); it != j.end(); ++it) d[py::str(it.key())] = JsonToPython(it.value());
+      return d;
+    }
+    default: return py::none();
+  }
+}
+
+double ResolvePeriod(const std::optional<double>& period_s, const io::ModelFile& model) {
+  if (!period_s) return model.sample_period_s ? *model.sample_period_s : 0.001;
+  if (!(*period_s > 0.0 && std::isfinite(*period_s))) {
+    throw InputError("period_s = " + std::to_string(*period_s) + " s: must be finite and > 0");
+  }
+  return *period_s;
+}
+
+}  // namespace zwidth::python
+
+PYBIND11_MODULE(_zwidth, m) {
+  namespace py = pybind11;
+  using namespace zwidth::python;
+  m.doc() = "zwidth: haptic device identification and Z-width (compiled core; use the package zwidth)";
+  py::register_exception<zwidth::InputError>(m, "InputError", PyExc_ValueError);
+  py::register_exception<zwidth::ComputationError>(m, "ComputationError", PyExc_RuntimeError);
+  m.attr("InputError").attr("__doc__") =
+      "Bad input (a file, a field, an option): the message says what, where and what to do. "
+      "The CLI exits with 2 for these.";
+  m.attr("ComputationError").attr("__doc__") =
+      "A computation that failed on valid input (e.g. a relay loop that did not oscillate). "
+      "The CLI exits with 1 for these.";
+  m.attr("__version__") = zwidth::build_info::kVersion;
+  py::dict info;
+  info["zwidth"] = zwidth::build_info::kVersion;
+  info["ceres"] = zwidth::build_info::kCeres;
+  info["eigen"] = zwidth::build_info::kEigen;
+  info["fftw"] = zwidth::build_info::kFftw;
+  info["hdf5"] = zwidth::build_info::kHdf5;
+  info["cli11"] = zwidth::build_info::kCli11;
+  info["nlohmann_json"] = zwidth::build_info::kNlohmannJson;
+  info["pybind11"] = zwidth::build_info::kPybind11;
+  m.attr("_build_info") = info;
+  BindModel(m);
+  BindIdent(m);
+  BindFit(m);
+  BindStability(m);
+}

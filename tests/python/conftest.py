@@ -1,0 +1,38 @@
+import json, os, subprocess
+import pytest
+
+
+@pytest.fixture(scope="session")
+def exe():
+    return os.environ["ZWIDTH_EXE"]
+
+
+@pytest.fixture(scope="session")
+def src():
+    return os.environ["ZWIDTH_SOURCE_DIR"]
+
+
+@pytest.fixture(scope="session")
+def cli(exe):
+    """Runs the zwidth CLI; returns the CompletedProcess (text)."""
+    def run(*args, check=True):
+        p = subprocess.run([exe, *map(str, args)], capture_output=True, text=True)
+        if check and p.returncode != 0:
+            raise AssertionError(f"zwidth {' '.join(map(str, args))}: exit {p.returncode}: {p.stderr}")
+        return p
+    return run
+
+
+@pytest.fixture(scope="session")
+def log_h5(src):
+    return os.path.join(src, "datasets/phantom/phantom_30s.h5")
+
+
+@pytest.fixture(scope="session")
+def log_csv(src):
+    return os.path.join(src, "datasets/phantom/phantom_30s.csv")
+
+
+@pytest.fixture(scope="session")
+def table1_json(src):
+    return os.path.join(src, "datasets/phantom/table1.json")
