@@ -32,6 +32,55 @@ std::string Matrix(const Eigen::MatrixXd& M, bool python) {
   return os.str();
 }
 
+// True when every byte is printable ASCII (0x20..0x7e).
+bool PrintableAscii(const std::string& s) {
+  for (unsigned char ch : s) {
+    if (ch < 0x20 || ch > 0x7e) return false;
+  }
+  return true;
+}
+
+// A MATLAB/Octave expression whose value is the text s, so that an exported
+// .m file only defines data whatever the name holds (issue 11): printable
+// ASCII as a single-quoted char literal (quotes doubled; % and \ are plain
+// characters there), anything else as its UTF-8 bytes decoded by
+// native2unicode (NUL, newlines and non-ASCII included).
+std::string MatlabString(const std::string& s) {
+  std::string out;
+  if (PrintableAscii(s)) {
+    out = "'";
+    for (char ch : s) out += ch == '\'' ? std::string("''") : std::string(1, ch);
+    return out + "'";
+  }
+  out = "native2unicode(uint8([";
+  for (size_t i = 0; i < s.size(); ++i) {
+    out += (i ? " " : "") + std::to_string(static_cast<unsigned char>(s[i]));
+  }
+  return out + "]), 'UTF-8')";
+}
+
+// A Python expression whose value is the text s: printable ASCII as a
+// double-quoted literal with \ and " escaped; anything else as its bytes
+// (\xNN escapes) decoded from UTF-8 (surrogateescape keeps invalid bytes).
+std::string PythonString(const std::string& s) {
+  std::string out;
+  const bool plain = PrintableAscii(s);
+  out = plain ? "\"" : "b\"";
+  for (unsigned char ch : s) {
+    if (ch == '\\' || ch == '"') {
+      out += '\\';
+      out += static_cast<char>(ch);
+    } else if (ch >= 0x20 && ch <= 0x7e) {
+      out += static_cast<char>(ch);
+    } else {
+      char b[8];
+      std::snprintf(b, sizeof b, "\\x%02x", ch);
+      out += b;
+    }
+  }
+  return out + (plain ? "\"" : "\".decode(\"utf-8\", \"surrogateescape\")");
+}
+
 nlohmann::json MatrixJson(const Eigen::MatrixXd& M) {
   nlohmann::json j = nlohmann::json::array();
   for (int i = 0; i < M.rows(); ++i) {
@@ -45,19 +94,39 @@ nlohmann::json MatrixJson(const Eigen::MatrixXd& M) {
 std::string Matlab(const ModelFile& mf, double T) {
   const Plant& p = mf.plant;
   std::ostringstream os;
-  os << "% zwidth model export: " << p.name << "\n% G(s) of eq. (1), built from its factored sections as in the paper's appendix.\n"
-     << "m = " << Num(p.m) << ";  % kg m^2\nb = " << Num(p.b) << ";  % N m s/rad\n"
-     << "G = tf(1, [m b 0]);\n";
+  os << "% zwidth model export for MATLAB or GNU Octave (pkg load control).\n"
+     << "% The parameters of eq. (1) as named variables (SI units, rad/s); G(s) built from its\n"
+     << "% factored sections as in the paper's appendix. The model's name is in `name`.\n"
+     << "name = " << MatlabString(p.name) << ";\n"
+     << "m = " << Num(p.m) << ";  % rigid-body inertia [kg m^2]\n"
+     << "b = " << Num(p.b) << ";  % rigid-body viscous damping [N m s/rad]\n";
   for (size_t i = 0; i < p.modes.size(); ++i) {
     const Mode& md = p.modes[i];
-    os << "G = G * tf(" << Num(md.omega * md.omega / (md.v * md.v)) << " * [1 " << Num(md.d) << " " << Num(md.v * md.v)
-       << "], [1 " << Num(md.c) << " " << Num(md.omega * md.omega) << "]);  % section " << i + 1 << "\n";
+    const std::string k = std::to_string(i + 1);
+    os << "w" << k << " = " << Num(md.omega) << "; c" << k << " = " << Num(md.c) << "; v" << k << " = "
+       << Num(md.v) << "; d" << k << " = " << Num(md.d) << ";  % section " << k
+       << ": pole pair w, its damping c, zero pair v, its damping d [rad/s]\n";
+  }
+  os << "delay_samples = " << p.delay_samples << ";  % input delay of the sampled model [samples]\n"
+     << "G = tf(1, [m b 0]);\n";
+  for (size_t i = 0; i < p.modes.size(); ++i) {
+    const std::string k = std::to_string(i + 1);
+    os << "G = G * tf(w" << k << "^2 / v" << k << "^2 * [1 d" << k << " v" << k << "^2], [1 c" << k << " w" << k
+       << "^2]);\n";
   }
   if (T > 0) {
-    os << "T = " << Num(T) << ";  % s\nGz = c2d(G, T, 'zoh');\n";
-    if (p.delay_samples > 0) {
-      os << "Gz = Gz * tf(1, [1 zeros(1, " << p.delay_samples << ")], T);  % input delay of " << p.delay_samples << " samples\n";
-    }
+    os << "T = " << Num(T) << ";  % sample period [s]\n"
+       << "Gz = c2d(G, T, 'zoh');\n"
+       << "if delay_samples > 0\n  Gz = Gz * tf(1, [1 zeros(1, delay_samples)], T);  % z^-delay_samples\nend\n"
+       << "% The loop of the paper's eq. (4) for virtual damping B [N m s/rad] and loop delay d\n"
+       << "% [samples]: T / ((T z^d) / Gz + B (z - 1) / z), i.e. Gz / (z^d + B (1 - z^-1)/T Gz)\n"
+       << "% (the appendix's parenthesis corrected). [K_cr, ~, w_cr] = margin(zwidth_loop(B, d))\n"
+       << "% gives the paper's K_CR and f_CR = w_cr / (2 pi).\n"
+       << "% WARNING: a gain margin is a stability limit only while the loop with K = 0 is stable.\n"
+       << "% Past B_max that loop is unstable and margin() still reports a positive K although no\n"
+       << "% K is stable: eq. (4)'s margin is not the Z-width there (`zwidth boundary` gives both).\n"
+       << "zwidth_z = tf('z', T);\n"
+       << "zwidth_loop = @(B, d) T / ((T * zwidth_z^d) / Gz + B * (zwidth_z - 1) / zwidth_z);\n";
   }
   return os.str();
 }
@@ -66,10 +135,13 @@ std::string Python(const ModelFile& mf, double T) {
   const Plant& p = mf.plant;
   const StateSpace c = ContinuousStateSpace(p);
   std::ostringstream os;
-  os << "\"\"\"zwidth model export: " << p.name << ". Needs NumPy and SciPy only.\n\n"
+  os << "\"\"\"zwidth model export. Needs NumPy and SciPy; python-control objects too when it is installed.\n\n"
+     << "name: the model's name. m, b, modes, delay_samples: the parameters of eq. (1).\n"
      << "G: continuous scipy.signal.StateSpace of eq. (1) (a well-conditioned cascade realisation).\n";
   if (T > 0) os << "Gz: its exact ZOH discretisation with dt = T, the input delay realised as states.\n";
-  os << "\"\"\"\nimport numpy as np\nfrom scipy import signal\n\n"
+  os << "G_control" << (T > 0 ? ", Gz_control" : "") << ": the same as python-control StateSpace objects, or None.\n"
+     << "\"\"\"\nimport numpy as np\nfrom scipy import signal\n\n"
+     << "name = " << PythonString(p.name) << "\n"
      << "m = " << Num(p.m) << "  # kg m^2\nb = " << Num(p.b) << "  # N m s/rad\nmodes = [  # (omega, c, v, d) rad/s\n";
   for (const Mode& md : p.modes) os << "    (" << Num(md.omega) << ", " << Num(md.c) << ", " << Num(md.v) << ", " << Num(md.d) << "),\n";
   os << "]\ndelay_samples = " << p.delay_samples << "\n\n"
@@ -81,6 +153,9 @@ std::string Python(const ModelFile& mf, double T) {
        << "Gz = signal.StateSpace(np.array(" << Matrix(d.A, true) << "),\n    np.array(" << Matrix(d.B, true)
        << "),\n    np.array(" << Matrix(d.C, true) << "),\n    np.array([[" << Num(d.D) << "]]), dt=T)\n";
   }
+  os << "\ntry:\n    import control\nexcept ImportError:\n    control = None\n"
+     << "G_control = control.ss(G.A, G.B, G.C, G.D) if control is not None else None\n";
+  if (T > 0) os << "Gz_control = control.ss(Gz.A, Gz.B, Gz.C, Gz.D, T) if control is not None else None\n";
   return os.str();
 }
 
@@ -100,11 +175,19 @@ void WriteH5(const std::string& tmp, const ModelFile& mf, double T) {
   H5::Exception::dontPrint();
   try {
     H5::H5File f(tmp, H5F_ACC_TRUNC);
-    auto vec = [&](H5::Group& g, const std::string& name, const std::vector<double>& v) {
+    auto units = [](H5::H5Object& o, const std::string& u) {
+      H5::StrType st(H5::PredType::C_S1, u.size());
+      o.createAttribute("units", st, H5::DataSpace(H5S_SCALAR)).write(st, u);
+    };
+    auto vec = [&](H5::Group& g, const std::string& name, const std::vector<double>& v, const std::string& u) {
       const hsize_t n = v.size();
       H5::DataSpace sp(1, &n);
       H5::DataSet ds = g.createDataSet(name, H5::PredType::IEEE_F64LE, sp);
       if (n) ds.write(v.data(), H5::PredType::NATIVE_DOUBLE);
+      units(ds, u);
+    };
+    auto int_attr = [](H5::H5Object& o, const char* name, int v) {
+      o.createAttribute(name, H5::PredType::STD_I32LE, H5::DataSpace(H5S_SCALAR)).write(H5::PredType::NATIVE_INT, &v);
     };
     auto mat = [&](H5::Group& g, const std::string& name, const Eigen::MatrixXd& M) {
       const hsize_t dims[2] = {static_cast<hsize_t>(M.rows()), static_cast<hsize_t>(M.cols())};
@@ -115,11 +198,11 @@ void WriteH5(const std::string& tmp, const ModelFile& mf, double T) {
     };
     auto params = [&](const std::string& gname, const Plant& p) {
       H5::Group g = f.createGroup(gname);
-      vec(g, "m", {p.m});
-      vec(g, "b", {p.b});
+      vec(g, "m", {p.m}, "kg m^2");
+      vec(g, "b", {p.b}, "N m s/rad");
       std::vector<double> w, c, v, d;
       for (const Mode& md : p.modes) { w.push_back(md.omega); c.push_back(md.c); v.push_back(md.v); d.push_back(md.d); }
-      vec(g, "omega", w); vec(g, "c", c); vec(g, "v", v); vec(g, "d", d);
+      vec(g, "omega", w, "rad/s"); vec(g, "c", c, "rad/s"); vec(g, "v", v, "rad/s"); vec(g, "d", d, "rad/s");
     };
     params("/parameters", mf.plant);
     if (mf.std_errors) params("/std", *mf.std_errors);
@@ -131,12 +214,13 @@ void WriteH5(const std::string& tmp, const ModelFile& mf, double T) {
       H5::Attribute a = g.createAttribute(name, H5::PredType::IEEE_F64LE, H5::DataSpace(H5S_SCALAR));
       a.write(H5::PredType::NATIVE_DOUBLE, &v);
     };
-    attr(root, "delay_samples", mf.plant.delay_samples);
+    int_attr(root, "delay_samples", mf.plant.delay_samples);
     if (T > 0) {
       const StateSpace d = WithDelayStates(DiscretizeZoh(mf.plant, T));
       H5::Group gd = f.createGroup("/discrete");
       mat(gd, "A", d.A); mat(gd, "B", d.B); mat(gd, "C", d.C); mat(gd, "D", Eigen::MatrixXd::Constant(1, 1, d.D));
       attr(gd, "period_s", T);
+      int_attr(gd, "delay_samples_realised_as_states", mf.plant.delay_samples);
     }
   } catch (const H5::Exception& e) {
     throw InputError("cannot write HDF5 '" + tmp + "': " + e.getDetailMsg());
