@@ -6,6 +6,7 @@
 // new function of fit/ or stability/ is a few lines in one file.
 #pragma once
 
+#include <chrono>
 #include <complex>
 #include <optional>
 #include <string>
@@ -47,6 +48,19 @@ template <typename T>
 py::array_t<T> ShapedLike(const py::array& like) {
   std::vector<py::ssize_t> shape(like.shape(), like.shape() + like.ndim());
   return py::array_t<T>(shape);
+}
+
+// Seconds spent in the library by this thread's last timed call (fit, ZWidth.critical),
+// measured inside the call around the library work alone, so that
+// bench/python_overhead.py can pair it with the Python-side time of that call.
+inline thread_local double g_last_cpp_seconds = 0.0;  // per thread: calls run without the GIL
+
+// Times f() into g_last_cpp_seconds.
+template <typename F>
+void TimedCpp(F&& f) {
+  const auto a = std::chrono::steady_clock::now();
+  f();
+  g_last_cpp_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
 }
 
 py::object JsonToPython(const nlohmann::json& j);

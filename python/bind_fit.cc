@@ -3,8 +3,6 @@
 // Waiting on issue 14 (fit/, wip/fit): modes="auto" and the fit quality
 // verdict; on issue 13: the covariance matrix. Each is a keyword or a
 // property to add here.
-#include <chrono>
-
 #include "fit/fit.h"
 #include "model/error.h"
 #include "python/bind_common.h"
@@ -21,7 +19,7 @@ PyFitResult RunFit(const ident::FrequencyResponse& frf, const fit::FitOptions& o
   PyFitResult out;
   {
     py::gil_scoped_release release;
-    out.result = fit::FitModel(frf, o);
+    TimedCpp([&] { out.result = fit::FitModel(frf, o); });
   }
   const fit::FitResult& r = out.result;
   // The model as `zwidth fit` stores it (apps/fit_support.cc), named by the caller.
@@ -133,25 +131,6 @@ std). delay_samples: an integer >= 0 or 'auto' (0..max_auto_delay, best
 kept). init: a Model tried first. A fit that does not converge is returned
 with its status (check .converged); bad options raise InputError.)doc");
 
-  // For bench/python_overhead.py: the C++ time of the same call, measured in
-  // C++ (median of `repeats` runs) so that the Python overhead can be read off.
-  m.def("_cpp_seconds_fit",
-        [](const ident::FrequencyResponse& frf, int modes, int delay_samples, int repeats) {
-          fit::FitOptions o;
-          o.num_modes = modes;
-          o.delay_samples = delay_samples;
-          py::gil_scoped_release release;
-          std::vector<double> t;
-          for (int i = 0; i < repeats; ++i) {
-            const auto a = std::chrono::steady_clock::now();
-            const fit::FitResult r = fit::FitModel(frf, o);
-            t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count());
-            if (r.status != fit::FitStatus::kConverged) throw ComputationError(r.message);
-          }
-          std::sort(t.begin(), t.end());
-          return t[t.size() / 2];
-        },
-        py::arg("frf"), py::arg("modes") = 2, py::arg("delay_samples") = 0, py::arg("repeats") = 5);
 }
 
 }  // namespace zwidth::python

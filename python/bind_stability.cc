@@ -160,10 +160,12 @@ period_s=None: the model's sample_period_s, else 1 ms (as the CLI).)doc")
              py::array_t<double> K = ShapedLike<double>(b), f = ShapedLike<double>(b);
              double* k = K.mutable_data();
              double* fh = f.mutable_data();
-             ForEachB(b, [&](py::ssize_t i, double v) {
-               const stability::CriticalPoint c = z.z->At(v);
-               k[i] = c.K_cr;
-               fh[i] = c.f_cr_hz;
+             TimedCpp([&] {
+               ForEachB(b, [&](py::ssize_t i, double v) {
+                 const stability::CriticalPoint c = z.z->At(v);
+                 k[i] = c.K_cr;
+                 fh[i] = c.f_cr_hz;
+               });
              });
              if (IsScalar(B)) return py::make_tuple(k[0], fh[0]);
              return py::make_tuple(K, f);
@@ -246,23 +248,7 @@ the loop is unstable as K -> 0+ (B past B_max), inf with no crossing.)doc")
            "B_t, K_cr^max, B_max, ... as the CLI's summary JSON (one entry of 'delays'; None for NaN/inf).")
       .def("characteristic_polynomial",
            [](const PyZWidth& z, double K, double B) { return ToArray(z.z->CharacteristicPolynomial(K, B)); },
-           py::arg("K"), py::arg("B"), "Closed-loop characteristic polynomial coefficients, z^0 first.")
-      .def("_cpp_seconds_sweep",
-           [](const PyZWidth& z, const DoubleArray& B, int repeats) {
-             // C++ time of the same sweep (median of repeats), for bench/python_overhead.py.
-             const std::vector<double> b = ToVector(B);
-             py::gil_scoped_release release;
-             std::vector<double> t;
-             double sink = 0.0;
-             for (int r = 0; r < repeats; ++r) {
-               const auto a = std::chrono::steady_clock::now();
-               for (double v : b) sink += z.z->At(v).K_cr;
-               t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count());
-             }
-             std::sort(t.begin(), t.end());
-             return std::make_pair(t[t.size() / 2], sink);
-           },
-           py::arg("B"), py::arg("repeats") = 5);
+           py::arg("K"), py::arg("B"), "Closed-loop characteristic polynomial coefficients, z^0 first.");
 
   py::class_<stability::RelayResult>(m, "RelayResult", "The simulated relay experiment (stability/relay.h).")
       .def_readonly("K_cr", &stability::RelayResult::K_cr, "estimate [N m/rad]")

@@ -48,6 +48,8 @@ PYBIND11_MODULE(_zwidth, m) {
   m.doc() = "zwidth: haptic device identification and Z-width (compiled core; use the package zwidth)";
   py::register_exception<zwidth::InputError>(m, "InputError", PyExc_ValueError);
   py::register_exception<zwidth::ComputationError>(m, "ComputationError", PyExc_RuntimeError);
+  m.attr("InputError").attr("__module__") = "zwidth";
+  m.attr("ComputationError").attr("__module__") = "zwidth";
   m.attr("InputError").attr("__doc__") =
       "Bad input (a file, a field, an option): the message says what, where and what to do. "
       "The CLI exits with 2 for these.";
@@ -65,6 +67,8 @@ PYBIND11_MODULE(_zwidth, m) {
   info["nlohmann_json"] = zwidth::build_info::kNlohmannJson;
   info["pybind11"] = zwidth::build_info::kPybind11;
   m.attr("_build_info") = info;
+  m.def("_last_cpp_seconds", [] { return zwidth::python::g_last_cpp_seconds; },
+        "Seconds the last fit() or ZWidth.critical() spent in the C++ library (for bench/python_overhead.py).");
   BindModel(m);
   BindIdent(m);
   BindFit(m);
