@@ -342,6 +342,20 @@ def test_long_calls_release_the_gil():
     assert elapsed > 0.05 and len(ticks) > 5, (elapsed, len(ticks))
 
 
+def test_threads_give_the_serial_results(log_h5):
+    """Calls run without the GIL: several threads at once must give what one thread gives."""
+    from concurrent.futures import ThreadPoolExecutor
+    z = zwidth.ZWidth(zwidth.Model.table1(), T, 2)
+    log = zwidth.read_log(log_h5)
+    B = np.linspace(0, 0.1, 500)
+    K_ref, _ = z.critical(B)
+    H_ref = zwidth.estimate(log).H
+    with ThreadPoolExecutor(4) as pool:
+        Ks = list(pool.map(lambda _: z.critical(B)[0], range(4)))
+        Hs = list(pool.map(lambda _: zwidth.estimate(log).H, range(4)))
+    assert all(np.array_equal(k, K_ref) for k in Ks) and all(np.array_equal(h, H_ref) for h in Hs)
+
+
 # ---------------------------------------------------------------- errors
 
 def cli_message(cli, *args):
