@@ -139,7 +139,8 @@ std::string Python(const ModelFile& mf, double T) {
      << "name: the model's name. m, b, modes, delay_samples: the parameters of eq. (1).\n"
      << "G: continuous scipy.signal.StateSpace of eq. (1) (a well-conditioned cascade realisation).\n";
   if (T > 0) os << "Gz: its exact ZOH discretisation with dt = T, the input delay realised as states.\n";
-  os << "G_control" << (T > 0 ? ", Gz_control" : "") << ": the same as python-control StateSpace objects, or None.\n"
+  os << (T > 0 ? "G_control, Gz_control: the same systems" : "G_control: the same system")
+     << " as python-control StateSpace (when `control` is importable), else None.\n"
      << "\"\"\"\nimport numpy as np\nfrom scipy import signal\n\n"
      << "name = " << PythonString(p.name) << "\n"
      << "m = " << Num(p.m) << "  # kg m^2\nb = " << Num(p.b) << "  # N m s/rad\nmodes = [  # (omega, c, v, d) rad/s\n";
