@@ -14,6 +14,7 @@ pkg = os.path.join(build, "python")
 if not os.path.isfile(os.path.join(pkg, "zwidth", "__init__.py")):
     print(f"skipped: the Python module was not built in {pkg} (needs python3-dev and pybind11-dev)")
     sys.exit(77)
+sys.dont_write_bytecode = True  # nothing written into the source tree
 os.environ["ZWIDTH_EXE"] = exe
 os.environ["ZWIDTH_SOURCE_DIR"] = src
 sys.path.insert(0, pkg)

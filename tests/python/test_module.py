@@ -222,6 +222,15 @@ def test_model_round_trips(tmp_path, fitted, cli):
         assert zwidth.Model.load(str(tmp_path / "again.json")).modes == m.modes
 
 
+@pytest.mark.parametrize("fmt", ["json", "matlab", "python", "statespace"])
+def test_export_equals_cli_byte_for_byte(cli, tmp_path, fmt):
+    m = zwidth.Model(2e-3, 0.01, [(300.0, 20.0, 250.0, 15.0)], delay_samples=1, name="it's \"x\"\n%")
+    m.save(str(tmp_path / "m.json"))
+    cli("export", tmp_path / "m.json", "--format", fmt, "--period", "0.0005", "-o", tmp_path / "cli.out")
+    m.export(str(tmp_path / "py.out"), fmt, period_s=5e-4)
+    assert (tmp_path / "py.out").read_bytes() == (tmp_path / "cli.out").read_bytes()
+
+
 def test_table1_is_the_papers():
     m = zwidth.Model.table1()
     assert 1 / m.m == pytest.approx(856, rel=1e-3) and m.b / m.m == pytest.approx(5, rel=1e-9)
