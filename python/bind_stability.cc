@@ -76,8 +76,9 @@ std::vector<io::SceneObject> SceneFrom(const py::object& scene) {
     }
     so.name = py::isinstance<py::str>(name) ? name.cast<std::string>() : "object" + std::to_string(i);
     for (auto [key, val, dst] : {std::tuple{"K", K, &so.K}, std::tuple{"B", B, &so.B}}) {
-      if (val.is_none() || py::isinstance<py::bool_>(val) ||
-          !(py::isinstance<py::float_>(val) || py::isinstance<py::int_>(val))) {
+      // Numbers, NumPy scalars included; not bools or strings (a JSON scene's rule).
+      if (val.is_none() || py::isinstance<py::bool_>(val) || py::isinstance<py::str>(val) ||
+          py::isinstance(val, py::module_::import("numpy").attr("bool_")) || !py::hasattr(val, "__float__")) {
         throw InputError(where + ": '" + key + "' must be a number");
       }
       const double v = val.template cast<double>();

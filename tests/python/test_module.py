@@ -316,6 +316,9 @@ def test_check_equals_cli(cli, table1_json, tmp_path):
     model = zwidth.Model.load(table1_json)
     assert zwidth.check(str(p), model, 2) == ref
     assert zwidth.check(scene["objects"], model, 2) == ref
+    tuples = [(o.get("name", f"object{i}"), np.float64(o["K"]), np.float32(o["B"]) if i == 0 else o["B"])
+              for i, o in enumerate(scene["objects"])]
+    assert zwidth.check(tuples, model, 2) == ref
 
 
 def test_relay_equals_cli(cli, table1_json):
@@ -403,6 +406,9 @@ def test_bad_input_raises_input_error_with_the_cli_message(cli, tmp_path, table1
     lambda: zwidth.ZWidth(zwidth.Model.table1(), T, -1),
     lambda: zwidth.check([("x", -1.0, 0.0)], zwidth.Model.table1(), 2),
     lambda: zwidth.check([{"name": "x", "K": 1.0, "B": 0.0, "C": 2}], zwidth.Model.table1(), 2),
+    lambda: zwidth.check([("x", True, 0.0)], zwidth.Model.table1(), 2),
+    lambda: zwidth.check([("x", "1", 0.0)], zwidth.Model.table1(), 2),
+    lambda: zwidth.check([("x", float("nan"), 0.0)], zwidth.Model.table1(), 2),
     lambda: zwidth.relay(zwidth.Model.table1(), 2, 0.0, amplitude=-1),
     lambda: zwidth.Model.table1().response([1.0], period_s=0.0),
     lambda: zwidth.Model.table1().export("/tmp/never-written.x", "excel"),
@@ -422,8 +428,14 @@ def test_version_matches_cli(cli):
     out = cli("--version").stdout
     info = zwidth.build_info()
     assert out.splitlines()[0] == "zwidth " + zwidth.__version__
-    for key in ("ceres", "eigen", "fftw", "hdf5", "cli11", "nlohmann_json"):
+    debian = {"ceres": "libceres-dev", "eigen": "libeigen3-dev", "fftw": "libfftw3-dev", "hdf5": "libhdf5-dev",
+              "cli11": "libcli11-dev", "nlohmann_json": "nlohmann-json3-dev"}
+    for key, pkg in debian.items():
         assert info[key] and info[key] in out, key
+        # Independently: the version of the Debian package it was built against.
+        q = subprocess.run(["dpkg-query", "-W", "-f=${Version}", pkg], capture_output=True, text=True)
+        if q.returncode == 0:
+            assert q.stdout.split(":")[-1].startswith(info[key]), (key, info[key], q.stdout)
 
 
 # ---------------------------------------------------------------- docs
