@@ -9,7 +9,7 @@ ZW=$1; E=$2/../shared/real-data/EMPS
 [ -f "$E/EMPS_train.csv" ] || { echo "skipped: $E not found"; exit 77; }
 T=$(mktemp -d); trap 'rm -rf "$T"' EXIT
 "$ZW" fit "$E/EMPS_train.csv" --input-column input --output-column output --fmin 2 --fmax 20 \
-  --modes 0 -o "$T/emps.json" > "$T/out" 2>&1 || { cat "$T/out"; echo "0 passed, 1 failed"; exit 1; }
+  --modes 0 --units linear -o "$T/emps.json" > "$T/out" 2>&1 || { cat "$T/out"; echo "0 passed, 1 failed"; exit 1; }
 python3 - "$T/emps.json" <<'PY'
 import json, sys
 m = json.load(open(sys.argv[1]))
