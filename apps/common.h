@@ -68,5 +68,6 @@ void AddFitCommands(CLI::App& app);        // fit, compare
 void AddStabilityCommands(CLI::App& app);  // boundary, relay, check
 void AddExportCommand(CLI::App& app);
 void AddRunCommand(CLI::App& app);
+void AddExciteCommand(CLI::App& app);
 
 }  // namespace zwidth::app
