@@ -59,6 +59,9 @@ void AddRunCommand(CLI::App& app) {
     const std::string source = JoinPaths(f->logs);
     for (int d : f->delays) if (d < 0) throw InputError("--delays must be >= 0");
     if (!(f->b_step > 0)) throw InputError("--b-step must be > 0");
+    bool table1 = false;
+    const bool have_ref = !f->reference.empty();
+    const io::ModelFile ref = have_ref ? ReadReference(f->reference, &table1) : io::ModelFile{};
     const fs::path out(f->outdir);
     if (!fs::is_directory(out)) {
       io::CheckOutputFolder(f->outdir);  // its parent must exist
@@ -66,9 +69,6 @@ void AddRunCommand(CLI::App& app) {
       fs::create_directory(out, ec);
       if (ec) throw InputError("cannot create output folder '" + f->outdir + "': " + ec.message());
     }
-    bool table1 = false;
-    const bool have_ref = !f->reference.empty();
-    const io::ModelFile ref = have_ref ? ReadReference(f->reference, &table1) : io::ModelFile{};
     std::fprintf(stderr, "zwidth run %s -> %s\n", source.c_str(), f->outdir.c_str());
     StageTimer timer;
     const LogsEstimate est = EstimateFromLogs(f->logs, f->est);
