@@ -38,12 +38,17 @@ class TimeChecker {
   TimeChecker(std::string source, double tolerance, bool uniform = true)
       : source_(std::move(source)), tol_(tolerance), uniform_(uniform) {}
   void Add(double t, const std::string& where) {
+    AddLazy(t, [&] { return where; });
+  }
+  // where() is called only to word an error.
+  template <class Where>
+  void AddLazy(double t, const Where& where) {
     if (n_ > 0) {
       const double dt = t - last_;
       if (!(dt > 0.0)) {
         std::ostringstream os;
         os.precision(12);
-        os << source_ << ": time is not strictly increasing at " << where << " (t = " << t
+        os << source_ << ": time is not strictly increasing at " << where() << " (t = " << t
            << " after " << last_ << ")";
         throw InputError(os.str());
       }
@@ -54,7 +59,7 @@ class TimeChecker {
         if (std::abs(dt - mean) > tol_ * mean) {
           std::ostringstream os;
           os.precision(6);
-          os << source_ << ": not uniformly sampled at " << where << ": interval " << dt
+          os << source_ << ": not uniformly sampled at " << where() << ": interval " << dt
              << " s differs from the mean interval " << mean << " s by "
              << 100.0 * std::abs(dt - mean) / mean
              << "% (missing or repeated samples?); resample the log first";
@@ -417,16 +422,16 @@ LogInfo StreamCsv(const std::string& path, const LogSelect& sel, const LogSink& 
     }
     auto parse = [&](int col) {
       double v = 0.0;
-      const std::string where = "line " + std::to_string(line_no) + ", " + col_name(col);
+      auto where = [&] { return "line " + std::to_string(line_no) + ", " + col_name(col); };
       if (first) v = first_values[col];
       else if (!ParseNumber(fields[col], &v)) {
-        throw InputError(path + ": " + where + ": " + Shown(fields[col]) + " is not a number");
+        throw InputError(path + ": " + where() + ": " + Shown(fields[col]) + " is not a number");
       }
-      CheckFinite(v, path, where);
+      if (!std::isfinite(v)) CheckFinite(v, path, where());
       return v;
     };
     const double uv = parse(ci), yv = parse(co);
-    if (ct >= 0) times.Add(parse(ct) * time_scale, "line " + std::to_string(line_no));
+    if (ct >= 0) times.AddLazy(parse(ct) * time_scale, [&] { return "line " + std::to_string(line_no); });
     u.push_back(uv * sel.input_scale);
     y.push_back(yv * sel.output_scale);
     ++rows;
