@@ -50,6 +50,7 @@ void AddEstimateFlags(CLI::App* cmd, EstimateFlags* f) {
   cmd->add_option("--reference-column", f->reference_column, "closed loop: column/variable of the logged excitation r (H = S_ry/S_ru)");
   cmd->add_option("--reference-dataset", f->reference_dataset, "closed loop: HDF5 dataset of the logged excitation r");
   cmd->add_flag("--whole-record", f->whole_record, "each log one rectangular segment; std from the scatter between logs");
+  cmd->add_option("--period-samples", f->period_samples, "with --whole-record: one segment per period of this many samples (periodic excitation)");
 }
 
 void AddUnitsFlag(CLI::App* cmd, std::string* units) {
@@ -95,7 +96,11 @@ LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const Estim
   ident::WelchOptions options = flags.Resolve();
   const bool closed = !flags.reference_column.empty() || !flags.reference_dataset.empty();
   if (flags.whole_record && flags.welch.window_length != ident::WelchOptions{}.window_length) {
-    throw InputError("--whole-record takes each log as one segment: drop --window-length");
+    throw InputError("--whole-record takes each log (or --period-samples) as one segment: drop --window-length");
+  }
+  if (flags.period_samples != 0 && (!flags.whole_record || flags.period_samples < 16)) {
+    throw InputError("--period-samples " + std::to_string(flags.period_samples) +
+                     ": needs --whole-record and a period of at least 16 samples");
   }
   LogsEstimate out;
   std::vector<ident::RunSpectra> runs;
@@ -135,6 +140,28 @@ LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const Estim
           r = std::move(ex.input);
         }
         ident::WelchOptions o = options;
+        if (flags.whole_record && flags.period_samples > 0) {
+          // Each whole period one run of its own: the std is the scatter between periods.
+          const size_t P = static_cast<size_t>(flags.period_samples);
+          const size_t periods = log.input.size() / P;
+          if (periods == 0) {
+            throw InputError("the log has " + std::to_string(log.input.size()) + " samples, fewer than one period of " +
+                             std::to_string(P) + " (--period-samples)");
+          }
+          o.window_length = static_cast<int>(P);
+          o.overlap = 0.0;
+          o.window = ident::Window::kRect;
+          WarnDropped(path, info.num_samples, o);
+          for (size_t q = 0; q < periods; ++q) {
+            auto cut = [&](const std::vector<double>& v) {
+              return v.empty() ? v : std::vector<double>(v.begin() + q * P, v.begin() + (q + 1) * P);
+            };
+            runs.push_back(ident::EstimateRun(cut(log.input), cut(log.output), cut(r), info.sample_rate_hz, o));
+          }
+          out.total_samples += info.num_samples;
+          out.infos.push_back(info);
+          continue;
+        }
         if (flags.whole_record) {
           if (log.input.size() > (1u << 24)) throw InputError("a whole record is limited to 2^24 samples");
           o.window_length = static_cast<int>(log.input.size());
@@ -156,8 +183,8 @@ LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const Estim
   out.response = ident::CombineRuns(runs, options.estimator,
                                     flags.whole_record ? ident::StdSource::kRunScatter : ident::StdSource::kCoherence);
   if (flags.whole_record && runs.size() < 2) {
-    std::fprintf(stderr, "warning: --whole-record with one log: no scatter between runs, the per-bin std is "
-                         "infinite (pass several runs of the same excitation)\n");
+    std::fprintf(stderr, "warning: --whole-record with one segment: no scatter between runs, the per-bin std is "
+                         "infinite (pass several runs of the same excitation, or --period-samples)\n");
   }
   const auto& r = out.response;
   std::fprintf(stderr, "%s from %d run%s, %d segments", ident::ToString(r.method).c_str(), r.num_runs,

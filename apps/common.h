@@ -25,6 +25,9 @@ struct EstimateFlags {
   std::string reference_column, reference_dataset;
   // Each run one rectangular segment; per-bin std from the scatter between runs.
   bool whole_record = false;
+  // With whole_record: one segment per period of this many samples (a
+  // periodic excitation's period) instead of one per log; 0 = the whole log.
+  int period_samples = 0;
   // Parses the enum names; throws InputError naming the flag.
   ident::WelchOptions Resolve() const;
 };

@@ -121,6 +121,7 @@ expect dataset-on-text "--reference-column" "$T/e5.csv" -- "$ZW" estimate "$T/go
 expect column-on-hdf5 "--reference-dataset" "$T/e6.csv" -- "$ZW" estimate "$T/good.h5" --reference-column r -o "$T/e6.csv"
 expect bad-delimiter "--delimiter '5'" "$T/e7.csv" -- "$ZW" estimate "$T/good.csv" --delimiter 5 -o "$T/e7.csv"
 expect runs-differ "same rate and segment length" "$T/e8.csv" -- "$ZW" estimate "$T/good.csv" "$T/ms.csv" --time-unit ms --whole-record -o "$T/e8.csv"
+expect period-without-whole "--period-samples 500: needs --whole-record" "$T/e10.csv" -- "$ZW" estimate "$T/good.csv" --period-samples 500 -o "$T/e10.csv"
 expect excite-kind "--kind 'pink'" "$T/e9.txt" -- "$ZW" excite --kind pink -o "$T/e9.txt"
 expect run-bad-reference "cannot open|does it exist|not found" "$T/r9" -- "$ZW" run "$T/good.csv" -o "$T/r9" --reference "$T/absent.json"
 
