@@ -11,13 +11,14 @@ namespace zwidth::app {
 
 void AddFitCommands(CLI::App& app) {
   struct FitFlags {
-    std::string input, out, init, delay = "0";
+    std::vector<std::string> inputs;
+    std::string out, init, delay = "0", units = "rotary";
     EstimateFlags est;
     fit::FitOptions o;
   };
   auto f = std::make_shared<FitFlags>();
   CLI::App* cmd = app.add_subcommand("fit", "fit the parameters of eq. (1) to a log or a saved frequency response");
-  cmd->add_option("input", f->input, "log (.h5/.csv) or frequency response (.csv/.h5) from `zwidth estimate`")->required();
+  cmd->add_option("input", f->inputs, "logs (text, .mat, .h5; several runs averaged) or one frequency response from `zwidth estimate`")->required();
   cmd->add_option("-o,--output", f->out, "model JSON to write")->required();
   cmd->add_option("--modes", f->o.num_modes, "resonance/antiresonance sections (0: rigid body)")->capture_default_str();
   cmd->add_option("--delay-samples", f->delay, "input delay [samples] or 'auto'")->capture_default_str();
@@ -25,18 +26,22 @@ void AddFitCommands(CLI::App& app) {
   cmd->add_option("--starts", f->o.max_starts, "automatic starts tried")->capture_default_str();
   cmd->add_option("--max-iterations", f->o.max_iterations, "solver iterations per start")->capture_default_str();
   AddEstimateFlags(cmd, &f->est);
+  AddUnitsFlag(cmd, &f->units);
   cmd->callback([f] {
     io::CheckOutputFolder(f->out);
     ResolveDelayFlag(f->delay, &f->o);
+    const bool linear = LinearUnits(f->units);
+    const std::string source = JoinPaths(f->inputs);
     if (!f->init.empty()) f->o.init = io::ReadModelJson(f->init).plant;
     StageTimer timer(false);
-    const ident::FrequencyResponse frf = io::IsFrequencyResponseFile(f->input)
-        ? io::ReadFrequencyResponse(f->input, f->est.select.sample_rate_hz)
-        : EstimateFromLog(f->input, f->est);
+    const bool frf_file = f->inputs.size() == 1 && io::IsFrequencyResponseFile(f->inputs[0]);
+    const ident::FrequencyResponse frf = frf_file
+        ? io::ReadFrequencyResponse(f->inputs[0], f->est.select.sample_rate_hz)
+        : EstimateFromLogs(f->inputs, f->est).response.frf;
     fit::FitResult r;
-    const io::ModelFile mf = FitToModelFile(frf, f->o, f->input, &r);
+    const io::ModelFile mf = FitToModelFile(frf, f->o, source, &r);
     io::WriteModelJson(f->out, mf);
-    std::printf("%s", ParameterTable(mf).c_str());
+    std::printf("%s", ParameterTable(mf, linear).c_str());
     std::printf("%s (%.1f ms)\n", r.BriefReport().c_str(), timer.Lap("fit"));
     std::printf("order: pole pairs sorted by omega, zero pairs by v (G is unchanged)\n");
   });
@@ -48,15 +53,18 @@ void AddFitCommands(CLI::App& app) {
     bool json = false;
   };
   auto c = std::make_shared<CompareFlags>();
-  CLI::App* cc = app.add_subcommand("compare", "compare a fitted model with a reference (default: Table I)");
+  CLI::App* cc = app.add_subcommand("compare", "compare a fitted model with a reference (--reference table1 or a model JSON)");
   cc->add_option("model", c->model, "model JSON")->required();
-  cc->add_option("--reference", c->reference, "reference model JSON (default datasets/phantom/table1.json)");
+  cc->add_option("--reference", c->reference, "table1 (the paper's PHANToM model, built in) or a reference model JSON");
   cc->add_option("--delays", c->delays, "delays for the stability comparison")->delimiter(',')->capture_default_str();
   cc->add_option("--period", c->period, "sample period [s] (default: the model's, else 0.001)");
   cc->add_flag("--json", c->json, "print JSON on standard output");
   cc->callback([c] {
     const io::ModelFile m = io::ReadModelJson(c->model);
-    const io::ModelFile r = io::ReadModelJson(c->reference.empty() ? DefaultReferencePath() : c->reference);
+    if (c->reference.empty()) {
+      throw InputError("compare needs a reference: --reference table1 (Table I, the paper's PHANToM) or --reference MODEL.json");
+    }
+    const io::ModelFile r = ReadReference(c->reference);
     for (int d : c->delays) if (d < 0) throw InputError("--delays must be >= 0");
     const double T = ResolvePeriod(c->period, m);
     std::string text;

@@ -13,6 +13,7 @@
 #include "apps/fit_support.h"
 #include "io/atomic_file.h"
 #include "io/frf_file.h"
+#include "io/reference_models.h"
 #include "io/stability_files.h"
 #include "model/error.h"
 #include "model/state_space.h"
@@ -21,21 +22,6 @@
 namespace zwidth::app {
 namespace fs = std::filesystem;
 namespace {
-
-// Table II of the paper (datasets/phantom/table2.csv), used for Fig. 10.
-std::vector<std::array<double, 4>> ReadTable2(const std::string& path) {
-  std::vector<std::array<double, 4>> rows;
-  std::ifstream in(path);
-  std::string line;
-  std::getline(in, line);
-  while (std::getline(in, line)) {
-    std::array<double, 4> r{};
-    // Rows with a note are the two misprinted ones (see the CSV): not plotted.
-    const bool flagged = line.find_first_not_of(", \r", line.find(',', line.find(',', line.find(',', line.find(',') + 1) + 1) + 1) + 1) != std::string::npos;
-    if (!flagged && std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf", &r[0], &r[1], &r[2], &r[3]) == 4) rows.push_back(r);
-  }
-  return rows;
-}
 
 std::string Html(const std::string& s) {
   std::string o;
@@ -49,7 +35,8 @@ std::string Html(const std::string& s) {
 
 void AddRunCommand(CLI::App& app) {
   struct RunFlags {
-    std::string log, outdir, reference, delay = "0";
+    std::vector<std::string> logs;
+    std::string outdir, reference, delay = "0", units = "rotary";
     std::vector<int> delays = {2, 4, 8};
     EstimateFlags est;
     fit::FitOptions o;
@@ -57,18 +44,24 @@ void AddRunCommand(CLI::App& app) {
   };
   auto f = std::make_shared<RunFlags>();
   CLI::App* cmd = app.add_subcommand("run", "estimate, fit, compare, Z-width boundary and an HTML report");
-  cmd->add_option("log", f->log, "log file (.h5 or .csv)")->required();
+  cmd->add_option("logs", f->logs, "log files (text, .mat, .h5): runs of one device, spectra averaged")->required();
   cmd->add_option("-o,--output", f->outdir, "output folder (created if its parent exists)")->required();
-  cmd->add_option("--reference", f->reference, "reference model (default datasets/phantom/table1.json)");
+  cmd->add_option("--reference", f->reference, "compare with: table1 (the paper's PHANToM, built in) or a model JSON (default: no comparison)");
   cmd->add_option("--delays", f->delays, "loop delays [samples]")->delimiter(',')->capture_default_str();
   cmd->add_option("--modes", f->o.num_modes, "resonance/antiresonance sections")->capture_default_str();
   cmd->add_option("--delay-samples", f->delay, "model input delay [samples] or 'auto'")->capture_default_str();
   cmd->add_option("--b-step", f->b_step, "B step of the boundary [N m s/rad]")->capture_default_str();
   AddEstimateFlags(cmd, &f->est);
+  AddUnitsFlag(cmd, &f->units);
   cmd->callback([f] {
     ResolveDelayFlag(f->delay, &f->o);
+    const bool linear = LinearUnits(f->units);
+    const std::string source = JoinPaths(f->logs);
     for (int d : f->delays) if (d < 0) throw InputError("--delays must be >= 0");
     if (!(f->b_step > 0)) throw InputError("--b-step must be > 0");
+    bool table1 = false;
+    const bool have_ref = !f->reference.empty();
+    const io::ModelFile ref = have_ref ? ReadReference(f->reference, &table1) : io::ModelFile{};
     const fs::path out(f->outdir);
     if (!fs::is_directory(out)) {
       io::CheckOutputFolder(f->outdir);  // its parent must exist
@@ -76,15 +69,13 @@ void AddRunCommand(CLI::App& app) {
       fs::create_directory(out, ec);
       if (ec) throw InputError("cannot create output folder '" + f->outdir + "': " + ec.message());
     }
-    const std::string ref_path = f->reference.empty() ? DefaultReferencePath() : f->reference;
-    const io::ModelFile ref = io::ReadModelJson(ref_path);
-    std::fprintf(stderr, "zwidth run %s -> %s\n", f->log.c_str(), f->outdir.c_str());
+    std::fprintf(stderr, "zwidth run %s -> %s\n", source.c_str(), f->outdir.c_str());
     StageTimer timer;
-    io::LogInfo info;
-    const ident::FrequencyResponse frf = EstimateFromLog(f->log, f->est, &info);
+    const LogsEstimate est = EstimateFromLogs(f->logs, f->est);
+    const ident::FrequencyResponse& frf = est.response.frf;
     double t_total = timer.Lap("estimate (read + Welch)");
     fit::FitResult fr;
-    const io::ModelFile model = FitToModelFile(frf, f->o, f->log, &fr);
+    const io::ModelFile model = FitToModelFile(frf, f->o, source, &fr);
     t_total += timer.Lap("fit");
     const double T = 1.0 / frf.sample_rate_hz;
     // The model's Z-width per delay, computed once for the summary, the
@@ -115,19 +106,24 @@ void AddRunCommand(CLI::App& app) {
     summary["margin_disagreements"] = disagree;
     t_total += timer.Lap("boundary");
     std::string cmp_text;
-    summary["comparison"] = CompareModels(model, ref, f->delays, T, &cmp_text, &sums);
-    t_total += timer.Lap("compare (reference Z-width)");
+    if (have_ref) {
+      summary["comparison"] = CompareModels(model, ref, f->delays, T, &cmp_text, &sums, linear);
+      t_total += timer.Lap("compare (reference Z-width)");
+    }
     Plant rigid = model.plant;
     rigid.modes.clear();
     // Write the outputs.
     io::WriteModelJson((out / "model.json").string(), model);
     io::WriteFrequencyResponse((out / "frf.csv").string(), frf);
     io::WriteBoundaryCsv((out / "boundary.csv").string(), rows);
-    summary["log"] = f->log;
+    summary["log"] = source;
+    summary["logs"] = f->logs;
+    summary["estimate"] = ident::ToString(est.response.method);
+    summary["whole_record"] = f->est.whole_record;
     summary["sample_rate_hz"] = frf.sample_rate_hz;
-    summary["num_samples"] = info.num_samples;
+    summary["num_samples"] = est.total_samples;
     summary["fit"] = model.fit;
-    summary["reference"] = ref_path;
+    summary["reference"] = have_ref ? (table1 ? "table1 (built in)" : f->reference) : "none";
     io::WriteTextAtomically((out / "summary.json").string(), summary.dump(2) + "\n");
     t_total += timer.Lap("write outputs");
     std::fprintf(stderr, "  %-28s %9.3f ms\n", "total (figures excluded)", t_total);
@@ -158,6 +154,7 @@ void AddRunCommand(CLI::App& app) {
       // Curves: the model's are the boundary rows; reference and rigid-only
       // are computed here, for the figures alone.
       for (int which = 0; which < 3; ++which) {
+        if (which == 1 && !have_ref) continue;
         std::ostringstream o;
         o.precision(10);
         for (size_t i = 0; i < f->delays.size(); ++i) {
@@ -172,14 +169,14 @@ void AddRunCommand(CLI::App& app) {
         }
         io::WriteTextAtomically((fig / (which == 0 ? "kcr_model.dat" : which == 1 ? "kcr_reference.dat" : "kcr_rigid.dat")).string(), o.str());
       }
-      std::ostringstream t2;
-      const bool table1 = fs::equivalent(ref_path, DefaultReferencePath());
+      // Table II (the paper's relay points), drawn only beside Table I.
       if (table1) {
-        for (const auto& r : ReadTable2(std::string(ZWIDTH_SOURCE_DIR) + "/datasets/phantom/table2.csv")) {
-          t2 << r[0] << " " << r[1] << " " << r[2] << " " << r[3] << "\n";
+        std::ostringstream t2;
+        for (const io::Table2Point& p : io::Table2Points()) {
+          t2 << p.delay_samples << " " << p.B << " " << p.K_cr << " " << p.f_cr_hz << "\n";
         }
+        io::WriteTextAtomically((fig / "table2.dat").string(), t2.str());
       }
-      io::WriteTextAtomically((fig / "table2.dat").string(), t2.str());
       std::ostringstream gp;
       gp << "set datafile missing 'nan'\nset grid\nset key outside right\n"
          << "set linetype 1 lc rgb '#1f77b4' lw 2\nset linetype 2 lc rgb '#d62728' lw 2\n"
@@ -191,23 +188,23 @@ void AddRunCommand(CLI::App& app) {
       for (const char* term : {"svg size 900,640 font 'sans,12'", "pngcairo size 900,640 font 'sans,10'"}) {
         const std::string ext = std::string(term).rfind("svg", 0) == 0 ? "svg" : "png";
         gp << "set terminal " << term << "\n";
-        gp << "set output 'bode." << ext << "'\nset multiplot layout 2,1 title 'Bode diagram: measured (Welch H1) and fitted model (exact ZOH) - Fig. 3'\n"
-           << "set logscale x\nset logscale y\nset format y '10^{%L}'\nset ylabel 'magnitude [rad/(N m)]'\nunset xlabel\n"
+        gp << "set output 'bode." << ext << "'\nset multiplot layout 2,1 title 'Bode diagram: measured (" << ident::ToString(est.response.method) << ") and fitted model (exact ZOH) - Fig. 3'\n"
+           << "set logscale x\nset logscale y\nset format y '10^{%L}'\nset ylabel 'magnitude [" << (linear ? "m/N" : "rad/(N m)") << "]'\nunset xlabel\n"
            << "plot 'bode.dat' u 1:2 w l lc rgb '#1f77b4' t 'measured', '' u 1:4 w l lw 2 lc rgb 'black' t 'fitted model'\n"
            << "unset logscale y\nset format y '%g'\nset ylabel 'phase [deg]'\nset xlabel 'frequency [Hz]'\n"
            << "plot 'bode.dat' u 1:3 w l lc rgb '#1f77b4' t 'measured', '' u 1:5 w l lw 2 lc rgb 'black' t 'fitted model'\nunset multiplot\n";
         gp << "set output 'coherence." << ext << "'\nset title 'Magnitude-squared coherence'\nset xlabel 'frequency [Hz]'\nset ylabel 'coherence [-]'\nset yrange [0:1.05]\n"
            << "plot 'bode.dat' u 1:6 w l lc rgb '#1f77b4' t 'coherence'\nset yrange [*:*]\nunset logscale x\nunset title\n";
         gp << "set output 'kcr." << ext << "'\nset multiplot layout 2,1 title 'Critical stiffness and ultimate frequency vs damping - Fig. 6 / Fig. 10'\n"
-           << "set xlabel 'B [N m s/rad]'\nset ylabel 'K_{CR} [N m/rad]'\n"
-           << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:2 w l lt i t 'model, d='.word(delays,i), "
-           << "for [i=1:words(delays)] 'kcr_reference.dat' index i-1 u 1:2 w l lt i dt 2 lw 1 t 'reference, d='.word(delays,i)"
+           << "set xlabel 'B [" << (linear ? "N s/m" : "N m s/rad") << "]'\nset ylabel 'K_{CR} [" << (linear ? "N/m" : "N m/rad") << "]'\n"
+           << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:2 w l lt i t 'model, d='.word(delays,i)"
+           << (have_ref ? ", for [i=1:words(delays)] 'kcr_reference.dat' index i-1 u 1:2 w l lt i dt 2 lw 1 t 'reference, d='.word(delays,i)" : "")
            << (table1 ? ", 'table2.dat' u 2:3 w p pt 7 ps 0.8 lc rgb 'red' t 'Table II (relay)'" : "") << "\n"
            << "set logscale y\nset ylabel 'f_{CR} [Hz]'\n"
            << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:3 w l lt i t 'model, d='.word(delays,i)"
            << (table1 ? ", 'table2.dat' u 2:4 w p pt 7 ps 0.8 lc rgb 'red' t 'Table II (relay)'" : "") << "\nunset logscale y\nunset multiplot\n";
         gp << "set output 'rigid." << ext << "'\nset title 'With the vibration modes and without (rigid body only) - Fig. 7'\n"
-           << "set xlabel 'B [N m s/rad]'\nset ylabel 'K_{CR} [N m/rad]'\n"
+           << "set xlabel 'B [" << (linear ? "N s/m" : "N m s/rad") << "]'\nset ylabel 'K_{CR} [" << (linear ? "N/m" : "N m/rad") << "]'\n"
            << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:2 w l lt i t 'with modes, d='.word(delays,i), "
            << "for [i=1:words(delays)] 'kcr_rigid.dat' index i-1 u 1:2 w l lt i dt 2 t 'rigid only, d='.word(delays,i)\nunset title\n";
       }
@@ -225,14 +222,19 @@ void AddRunCommand(CLI::App& app) {
     h << "<!DOCTYPE html><html><head><meta charset='utf-8'><title>zwidth report</title>"
       << "<style>body{font-family:sans-serif;max-width:1000px;margin:auto}pre{background:#f4f4f4;padding:8px}"
       << "img{max-width:100%}</style></head><body>\n<h1>zwidth report</h1>\n"
-      << "<p>Log <code>" << Html(f->log) << "</code>: " << info.num_samples << " samples at "
+      << "<p>Log <code>" << Html(source) << "</code>: " << est.total_samples << " samples at "
       << frf.sample_rate_hz << " Hz; Welch " << frf.num_averages << " averages of " << frf.window_length
-      << " samples; " << frf.f_hz.size() << " bins from " << frf.f_hz.front() << " to " << frf.f_hz.back()
-      << " Hz.</p>\n<h2>Fitted model (eq. 1)</h2>\n<pre>" << Html(ParameterTable(model)) << "</pre>\n<p>"
+      << " samples; " << Html(ident::ToString(est.response.method)) << "; " << frf.f_hz.size() << " bins from " << frf.f_hz.front() << " to " << frf.f_hz.back()
+      << " Hz.</p>\n<h2>Fitted model (eq. 1)</h2>\n<pre>" << Html(ParameterTable(model, linear)) << "</pre>\n<p>"
       << Html(fr.BriefReport()) << ". Residual: exact ZOH response weighted by the Welch per-bin std. "
       << "Sections in canonical order (pole pairs by omega, zero pairs by v).</p>\n";
     for (const auto& w : fr.warnings) h << "<p><b>Warning:</b> " << Html(w) << "</p>\n";
-    h << "<h2>Comparison with the reference (" << Html(ref_path) << ")</h2>\n<pre>" << Html(cmp_text) << "</pre>\n";
+    if (have_ref) {
+      h << "<h2>Comparison with the reference (" << Html(table1 ? "Table I, built in" : f->reference) << ")</h2>\n<pre>"
+        << Html(cmp_text) << "</pre>\n";
+    } else {
+      h << "<p>No reference comparison (pass <code>--reference table1</code> or a model JSON to compare).</p>\n";
+    }
     h << "<p>The paper's gain-margin reading of eq. (4) differs from the exact K_CR in " << disagree << " of "
       << rows.size() << " boundary rows: mostly past B_max, where margin() stays positive although no K is stable "
       << "(see boundary.csv, column margin_agrees).</p>\n";
@@ -246,7 +248,7 @@ void AddRunCommand(CLI::App& app) {
     }
     h << "</body></html>\n";
     io::WriteTextAtomically((out / "report.html").string(), h.str());
-    std::printf("%s\n%s", ParameterTable(model).c_str(), cmp_text.c_str());
+    std::printf("%s\n%s", ParameterTable(model, linear).c_str(), cmp_text.c_str());
     std::printf("\nboundary: %s (%d of %zu rows where margin() and the exact K_CR disagree)\nreport: %s\n",
                 (out / "boundary.csv").c_str(), disagree, rows.size(), (out / "report.html").c_str());
   });

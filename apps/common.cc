@@ -1,5 +1,7 @@
 #include "apps/common.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "model/error.h"
@@ -23,13 +25,17 @@ ident::WelchOptions EstimateFlags::Resolve() const {
 }
 
 void AddLogFlags(CLI::App* cmd, io::LogSelect* s) {
-  cmd->add_option("--input-column", s->input_column, "CSV column of the torque input")->capture_default_str();
-  cmd->add_option("--output-column", s->output_column, "CSV column of the position output")->capture_default_str();
-  cmd->add_option("--time-column", s->time_column, "CSV column of the time stamps [s]")->capture_default_str();
+  cmd->add_option("--input-column", s->input_column, "input column: header name or 1-based position (text), variable (.mat)")->capture_default_str();
+  cmd->add_option("--output-column", s->output_column, "output column: name or position (text), variable (.mat)")->capture_default_str();
+  cmd->add_option("--time-column", s->time_column, "time column: name or position (text), variable (.mat); 'none' with --rate")->capture_default_str();
+  cmd->add_option("--delimiter", s->delimiter, "text field separator: , ; tab space (default: detected)");
+  cmd->add_option("--input-scale", s->input_scale, "factor applied to the input (e.g. volts -> N m)")->capture_default_str();
+  cmd->add_option("--output-scale", s->output_scale, "factor applied to the output (e.g. counts -> rad)")->capture_default_str();
+  cmd->add_option("--time-unit", s->time_unit, "unit of the text time column: s | ms | us (default s)");
   cmd->add_option("--input-dataset", s->input_dataset, "HDF5 dataset of the input")->capture_default_str();
   cmd->add_option("--output-dataset", s->output_dataset, "HDF5 dataset of the output")->capture_default_str();
   cmd->add_option("--time-dataset", s->time_dataset, "HDF5 dataset of the time stamps")->capture_default_str();
-  cmd->add_option("--rate", s->sample_rate_hz, "sample rate [Hz], overrides the log's");
+  cmd->add_option("--rate", s->sample_rate_hz, "sample rate [Hz], overrides the log's (time column then only checked to increase)");
 }
 
 void AddEstimateFlags(CLI::App* cmd, EstimateFlags* f) {
@@ -41,20 +47,158 @@ void AddEstimateFlags(CLI::App* cmd, EstimateFlags* f) {
   cmd->add_option("--estimator", f->estimator, "h1 | h2")->capture_default_str();
   cmd->add_option("--fmin", f->welch.fmin_hz, "lowest frequency kept [Hz]")->capture_default_str();
   cmd->add_option("--fmax", f->welch.fmax_hz, "highest frequency kept [Hz], clipped below Nyquist")->capture_default_str();
+  cmd->add_option("--reference-column", f->reference_column, "closed loop: column/variable of the logged excitation r (H = S_ry/S_ru)");
+  cmd->add_option("--reference-dataset", f->reference_dataset, "closed loop: HDF5 dataset of the logged excitation r");
+  cmd->add_flag("--whole-record", f->whole_record, "each log one rectangular segment; std from the scatter between logs");
+  cmd->add_option("--period-samples", f->period_samples, "with --whole-record: one segment per period of this many samples (periodic excitation)");
 }
 
-ident::FrequencyResponse EstimateFromLog(const std::string& path, const EstimateFlags& flags,
-                                         io::LogInfo* info_out) {
-  const ident::WelchOptions options = flags.Resolve();
-  ident::WelchEstimator est(options);
-  const io::LogInfo info = io::StreamLog(path, flags.select,
-      [&](const double* u, const double* y, size_t n) { est.Push(u, y, n); });
-  if (info_out) *info_out = info;
-  try {
-    return est.Finish(info.sample_rate_hz);
-  } catch (const InputError& e) {
-    throw InputError(path + ": " + e.what());
+void AddUnitsFlag(CLI::App* cmd, std::string* units) {
+  cmd->add_option("--units", *units, "labels: rotary (kg m^2, N m s/rad) | linear (kg, N s/m)")->capture_default_str();
+}
+
+bool LinearUnits(const std::string& units) {
+  if (units == "rotary") return false;
+  if (units == "linear") return true;
+  throw InputError("--units '" + units.substr(0, 20) + "' is not one of rotary, linear");
+}
+
+std::string JoinPaths(const std::vector<std::string>& paths) {
+  std::string s;
+  for (const auto& p : paths) s += (s.empty() ? "" : " + ") + p;
+  return s;
+}
+
+namespace {
+
+void PrintRead(const io::LogInfo& info) {
+  std::fprintf(stderr, "%s: %zu samples at %g Hz; %s\n", info.source.c_str(), info.num_samples,
+               info.sample_rate_hz, info.layout.c_str());
+  for (const auto& w : info.warnings) std::fprintf(stderr, "warning: %s: %s\n", info.source.c_str(), w.c_str());
+}
+
+// Samples after the last whole segment are not used: say so.
+void WarnDropped(const std::string& path, size_t n_samples, const ident::WelchOptions& o) {
+  const size_t n = o.window_length, step = n - o.overlap_samples();
+  if (n_samples < n) return;  // Welch refuses it with a message
+  const size_t segments = (n_samples - n) / step + 1;
+  const size_t dropped = n_samples - ((segments - 1) * step + n);
+  if (dropped == 0) return;
+  std::fprintf(stderr,
+               "warning: %s: the last %zu samples (%.1f %% of the log) do not fill a %zu-sample segment and are "
+               "not used; a --window-length that fits, or --whole-record for a sweep or periodic excitation, uses them\n",
+               path.c_str(), dropped, 100.0 * dropped / n_samples, n);
+}
+
+}  // namespace
+
+LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const EstimateFlags& flags) {
+  ident::WelchOptions options = flags.Resolve();
+  const bool closed = !flags.reference_column.empty() || !flags.reference_dataset.empty();
+  if (flags.whole_record && flags.welch.window_length != ident::WelchOptions{}.window_length) {
+    throw InputError("--whole-record takes each log (or --period-samples) as one segment: drop --window-length");
   }
+  if (flags.period_samples != 0 && (!flags.whole_record || flags.period_samples < 16)) {
+    throw InputError("--period-samples " + std::to_string(flags.period_samples) +
+                     ": needs --whole-record and a period of at least 16 samples");
+  }
+  LogsEstimate out;
+  std::vector<ident::RunSpectra> runs;
+  for (const std::string& path : paths) {
+    io::LogSelect rsel = flags.select;  // the excitation read as the "input"
+    if (closed) {
+      const bool h5 = io::DetectLogFormat(path) == io::LogFormat::kHdf5;
+      if (h5 && flags.reference_dataset.empty()) {
+        throw InputError(path + ": an HDF5 log: name the excitation with --reference-dataset (not --reference-column)");
+      }
+      if (!h5 && flags.reference_column.empty()) {
+        throw InputError(path + ": not an HDF5 log: name the excitation with --reference-column (not --reference-dataset)");
+      }
+      if (h5) rsel.input_dataset = flags.reference_dataset;
+      else rsel.input_column = flags.reference_column;
+    }
+    io::LogInfo info;
+    ident::RunSpectra spectra;
+    try {
+      if (!closed && !flags.whole_record) {  // one streaming pass
+        ident::WelchEstimator est(options);
+        info = io::StreamLog(path, flags.select, [&](const double* u, const double* y, size_t n) { est.Push(u, y, n); });
+        PrintRead(info);
+        WarnDropped(path, info.num_samples, options);
+        spectra.uy = est.Finish(info.sample_rate_hz);
+      } else {
+        io::Log log = io::ReadLog(path, flags.select);
+        info = log.info;
+        PrintRead(info);
+        std::vector<double> r;
+        if (closed) {
+          io::Log ex = io::ReadLog(path, rsel);
+          if (ex.input.size() != log.input.size()) {
+            throw InputError("the excitation has " + std::to_string(ex.input.size()) + " samples, the input " +
+                             std::to_string(log.input.size()));
+          }
+          r = std::move(ex.input);
+        }
+        ident::WelchOptions o = options;
+        if (flags.whole_record && flags.period_samples > 0) {
+          // Each whole period one run of its own: the std is the scatter between periods.
+          const size_t P = static_cast<size_t>(flags.period_samples);
+          const size_t periods = log.input.size() / P;
+          if (periods == 0) {
+            throw InputError("the log has " + std::to_string(log.input.size()) + " samples, fewer than one period of " +
+                             std::to_string(P) + " (--period-samples)");
+          }
+          o.window_length = static_cast<int>(P);
+          o.overlap = 0.0;
+          o.window = ident::Window::kRect;
+          WarnDropped(path, info.num_samples, o);
+          for (size_t q = 0; q < periods; ++q) {
+            auto cut = [&](const std::vector<double>& v) {
+              return v.empty() ? v : std::vector<double>(v.begin() + q * P, v.begin() + (q + 1) * P);
+            };
+            runs.push_back(ident::EstimateRun(cut(log.input), cut(log.output), cut(r), info.sample_rate_hz, o));
+          }
+          out.total_samples += info.num_samples;
+          out.infos.push_back(info);
+          continue;
+        }
+        if (flags.whole_record) {
+          if (log.input.size() > (1u << 24)) throw InputError("a whole record is limited to 2^24 samples");
+          o.window_length = static_cast<int>(log.input.size());
+          o.overlap = 0.0;
+          o.window = ident::Window::kRect;
+        } else {
+          WarnDropped(path, info.num_samples, o);
+        }
+        spectra = ident::EstimateRun(log.input, log.output, r, info.sample_rate_hz, o);
+      }
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      throw InputError(what.rfind(path, 0) == 0 ? what : path + ": " + what);
+    }
+    out.total_samples += info.num_samples;
+    out.infos.push_back(info);
+    runs.push_back(std::move(spectra));
+  }
+  out.response = ident::CombineRuns(runs, options.estimator,
+                                    flags.whole_record ? ident::StdSource::kRunScatter : ident::StdSource::kCoherence);
+  if (flags.whole_record && runs.size() < 2) {
+    std::fprintf(stderr, "warning: --whole-record with one segment: no scatter between runs, the per-bin std is "
+                         "infinite (pass several runs of the same excitation, or --period-samples)\n");
+  }
+  const auto& r = out.response;
+  std::fprintf(stderr, "%s from %d run%s, %d segments", ident::ToString(r.method).c_str(), r.num_runs,
+               r.num_runs > 1 ? "s" : "", r.frf.num_averages);
+  if (r.method == ident::CombinedMethod::kJoint) {
+    auto median = [](std::vector<double> v) {
+      std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+      return v[v.size() / 2];
+    };
+    std::fprintf(stderr, "; median coherence r->u %.3f, r->y %.3f (the coherence column holds r->y)",
+                 median(r.coherence_ru), median(r.coherence_ry));
+  }
+  std::fprintf(stderr, "\n");
+  return out;
 }
 
 double StageTimer::Lap(const std::string& stage) {

@@ -7,6 +7,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "ident/joint.h"
 #include "ident/welch.h"
 #include "io/log.h"
 #include "io/model_json.h"
@@ -19,6 +20,14 @@ struct EstimateFlags {
   io::LogSelect select;
   ident::WelchOptions welch;
   std::string window = "hann", detrend = "linear", estimator = "h1";
+  // Closed loop: the logged excitation (text/.mat column, HDF5 dataset); when
+  // given, H = S_ry / S_ru (ident/joint.h).
+  std::string reference_column, reference_dataset;
+  // Each run one rectangular segment; per-bin std from the scatter between runs.
+  bool whole_record = false;
+  // With whole_record: one segment per period of this many samples (a
+  // periodic excitation's period) instead of one per log; 0 = the whole log.
+  int period_samples = 0;
   // Parses the enum names; throws InputError naming the flag.
   ident::WelchOptions Resolve() const;
 };
@@ -26,9 +35,19 @@ struct EstimateFlags {
 void AddLogFlags(CLI::App* cmd, io::LogSelect* select);
 void AddEstimateFlags(CLI::App* cmd, EstimateFlags* flags);
 
-// Reads a log and runs Welch in one streaming pass.
-ident::FrequencyResponse EstimateFromLog(const std::string& path, const EstimateFlags& flags,
-                                         io::LogInfo* info = nullptr);
+struct LogsEstimate {
+  ident::CombinedResponse response;
+  std::vector<io::LogInfo> infos;  // one per log
+  size_t total_samples = 0;
+};
+// Reads the logs (runs of one device) and combines their spectra. Prints how
+// each log was read, its warnings and samples left out of the segments.
+LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const EstimateFlags& flags);
+std::string JoinPaths(const std::vector<std::string>& paths);
+
+// --units rotary|linear: parameter labels (kg m^2, N m s/rad | kg, N s/m).
+void AddUnitsFlag(CLI::App* cmd, std::string* units);
+bool LinearUnits(const std::string& units);  // throws InputError for another word
 
 // Prints "stage: 1.23 ms" to stderr.
 class StageTimer {
@@ -52,5 +71,6 @@ void AddFitCommands(CLI::App& app);        // fit, compare
 void AddStabilityCommands(CLI::App& app);  // boundary, relay, check
 void AddExportCommand(CLI::App& app);
 void AddRunCommand(CLI::App& app);
+void AddExciteCommand(CLI::App& app);
 
 }  // namespace zwidth::app

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "io/reference_models.h"
 #include "io/stability_files.h"
 #include "model/error.h"
 #include "stability/zwidth.h"
@@ -14,9 +15,10 @@ namespace {
 
 struct Row { std::string name, unit; double value, std; };
 
-std::vector<Row> Rows(const Plant& p, const Plant* s) {
+std::vector<Row> Rows(const Plant& p, const Plant* s, bool linear = false) {
   const double inf = std::numeric_limits<double>::infinity();
-  std::vector<Row> r = {{"m", "kg m^2", p.m, s ? s->m : inf}, {"b", "N m s/rad", p.b, s ? s->b : inf}};
+  std::vector<Row> r = {{"m", linear ? "kg" : "kg m^2", p.m, s ? s->m : inf},
+                        {"b", linear ? "N s/m" : "N m s/rad", p.b, s ? s->b : inf}};
   for (size_t i = 0; i < p.modes.size(); ++i) {
     const std::string k = std::to_string(i + 1);
     const Mode* e = s ? &s->modes[i] : nullptr;
@@ -30,11 +32,10 @@ std::vector<Row> Rows(const Plant& p, const Plant* s) {
 
 }  // namespace
 
-std::string DefaultReferencePath() {
-  namespace fs = std::filesystem;
-  const fs::path src = fs::path(ZWIDTH_SOURCE_DIR) / "datasets/phantom/table1.json";
-  if (fs::exists(src)) return src.string();
-  return "datasets/phantom/table1.json";
+io::ModelFile ReadReference(const std::string& flag, bool* is_table1) {
+  const bool t1 = flag == "table1";
+  if (is_table1) *is_table1 = t1;
+  return t1 ? io::Table1Model() : io::ReadModelJson(flag);
 }
 
 void ResolveDelayFlag(const std::string& flag, fit::FitOptions* o) {
@@ -82,12 +83,12 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
   return mf;
 }
 
-std::string ParameterTable(const io::ModelFile& mf) {
+std::string ParameterTable(const io::ModelFile& mf, bool linear) {
   std::ostringstream os;
   char line[160];
   std::snprintf(line, sizeof line, "%-8s %14s %12s  %s\n", "param", "value", "std", "unit");
   os << line;
-  for (const Row& r : Rows(mf.plant, mf.std_errors ? &*mf.std_errors : nullptr)) {
+  for (const Row& r : Rows(mf.plant, mf.std_errors ? &*mf.std_errors : nullptr, linear)) {
     std::snprintf(line, sizeof line, "%-8s %14.6g %12.3g  %s\n", r.name.c_str(), r.value, r.std, r.unit.c_str());
     os << line;
   }
@@ -98,14 +99,14 @@ std::string ParameterTable(const io::ModelFile& mf) {
 
 nlohmann::json CompareModels(const io::ModelFile& model, const io::ModelFile& ref,
                              const std::vector<int>& delays, double T, std::string* text,
-                             const std::vector<stability::DelaySummary>* model_summaries) {
+                             const std::vector<stability::DelaySummary>* model_summaries, bool linear) {
   std::ostringstream os;
   nlohmann::json j;
   j["parameters"] = nlohmann::json::array();
   const bool same_shape = model.plant.modes.size() == ref.plant.modes.size();
   char line[200];
   if (same_shape) {
-    const auto a = Rows(model.plant, model.std_errors ? &*model.std_errors : nullptr);
+    const auto a = Rows(model.plant, model.std_errors ? &*model.std_errors : nullptr, linear);
     const auto b = Rows(ref.plant, nullptr);
     std::snprintf(line, sizeof line, "%-8s %24s %12s %9s %9s  %s\n", "param", "fitted +- std", "reference",
                   "diff %", "diff/std", "unit");

@@ -20,17 +20,19 @@ void ResolveDelayFlag(const std::string& flag, fit::FitOptions* o);
 io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::FitOptions& o,
                              const std::string& source, fit::FitResult* result = nullptr);
 
-// "parameter value std unit" table.
-std::string ParameterTable(const io::ModelFile& mf);
+// "parameter value std unit" table; linear: kg and N s/m labels.
+std::string ParameterTable(const io::ModelFile& mf, bool linear = false);
 
 // Per-parameter comparison and the stability figures of both models at the
 // given delays. Returns JSON; *text gets the printable version. Summaries
 // already computed by the caller (one per delay, in order) are reused.
 nlohmann::json CompareModels(const io::ModelFile& model, const io::ModelFile& reference,
                              const std::vector<int>& delays, double period_s, std::string* text,
-                             const std::vector<stability::DelaySummary>* model_summaries = nullptr);
+                             const std::vector<stability::DelaySummary>* model_summaries = nullptr,
+                             bool linear = false);
 
-// The default reference: datasets/phantom/table1.json of the source tree.
-std::string DefaultReferencePath();
+// --reference: "table1" (Table I of the paper, built in) or a model JSON path.
+// *is_table1 tells which.
+io::ModelFile ReadReference(const std::string& flag, bool* is_table1 = nullptr);
 
 }  // namespace zwidth::app

@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   zwidth::app::AddStabilityCommands(app);
   zwidth::app::AddExportCommand(app);
   zwidth::app::AddRunCommand(app);
+  zwidth::app::AddExciteCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,6 +1,11 @@
 // Device logs: a torque input and an encoder position output, uniformly
-// sampled. Two formats:
-//   CSV  - header naming the columns (default t,torque,position; s, N m, rad);
+// sampled. Three formats, told apart by content (not by extension):
+//   text - delimited columns as labs write them: comma, semicolon, tab or
+//          whitespace (detected from the first data line, or given); '#'
+//          comment lines skipped; the header is the last line before the data
+//          and may carry the comment mark (numpy genfromtxt names=True); UTF-8
+//          BOM; LF, CRLF or CR line ends. Columns by name or 1-based position
+//          (default t,torque,position; s, N m, rad);
 //   HDF5 - datasets /time, /input/torque, /output/position and a root attribute
 //          sample_rate_hz (units as attributes).
 // Readers validate as they go and throw InputError naming the file, the row or
@@ -16,14 +21,27 @@
 namespace zwidth::io {
 
 struct LogSelect {
-  std::string time_column = "t";           // CSV
-  std::string input_column = "torque";     // CSV
-  std::string output_column = "position";  // CSV
+  // Text columns: a header name (exact, else case-insensitive) or a 1-based
+  // position; time_column "none" means no time column (then --rate).
+  std::string time_column = "t";           // text
+  std::string input_column = "torque";     // text
+  std::string output_column = "position";  // text
+  // Field separator of a text log: "" detects it (';', tab, ',', then runs of
+  // whitespace, the first that splits the first data line into >= 2 numbers);
+  // else one of ",", ";", "tab", "space" (runs of blanks), or one character.
+  std::string delimiter;
+  // Multiplies the input / output samples (e.g. counts -> rad); finite, != 0.
+  double input_scale = 1.0;
+  double output_scale = 1.0;
+  // Unit of the text time column: "s", "ms" or "us"; "" = s, and then an
+  // implied rate outside [10 Hz, 1 MHz] is refused with a suggestion.
+  std::string time_unit;
   std::string time_dataset = "/time";                 // HDF5
   std::string input_dataset = "/input/torque";        // HDF5
   std::string output_dataset = "/output/position";    // HDF5
-  // Overrides the rate found in the file when > 0 [Hz]; needed for a CSV
-  // without a time column.
+  // Overrides the rate found in the file when > 0 [Hz]; needed for a text log
+  // without a time column. With a time column, the column is then only checked
+  // to increase, and its jitter against 1/rate is reported as a warning.
   double sample_rate_hz = 0.0;
   // Allowed deviation of one sampling interval from the mean interval so far
   // (relative). Real loggers jitter by ~1e-5; a dropped sample deviates by 1.
@@ -34,10 +52,15 @@ struct LogInfo {
   std::string source;
   size_t num_samples = 0;
   double sample_rate_hz = 0.0;
+  // How the file was read, e.g. "text, ';'-separated, header at line 3
+  // (comment): t, torque, position; columns 1, 2, 3".
+  std::string layout;
+  std::vector<std::string> warnings;  // e.g. the time column's jitter under --rate
 };
 
-enum class LogFormat { kCsv, kHdf5 };
-// By extension (.csv/.txt, .h5/.hdf5/.he5), else by the HDF5 signature.
+enum class LogFormat { kCsv, kHdf5, kMat };
+// By content: the HDF5 signature (also MATLAB v7.3, whose 512-byte user block
+// precedes it), the 128-byte MATLAB v5 header, else text.
 LogFormat DetectLogFormat(const std::string& path);
 
 using LogSink = std::function<void(const double* input, const double* output, size_t n)>;

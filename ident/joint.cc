@@ -1,0 +1,155 @@
+#include "ident/joint.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "model/error.h"
+
+namespace zwidth::ident {
+
+std::string ToString(CombinedMethod m) {
+  switch (m) {
+    case CombinedMethod::kH1: return "H1 = S_uy/S_uu";
+    case CombinedMethod::kH2: return "H2 = S_yy/S_yu";
+    case CombinedMethod::kJoint: return "joint G = S_ry/S_ru";
+  }
+  return "?";
+}
+
+RunSpectra EstimateRun(const std::vector<double>& u, const std::vector<double>& y, const std::vector<double>& r,
+                       double fs, const WelchOptions& options) {
+  RunSpectra s;
+  s.uy = EstimateFrequencyResponse(u, y, fs, options);
+  if (!r.empty()) {
+    if (r.size() != u.size()) throw InputError("the excitation and the input have different lengths");
+    s.ru = EstimateFrequencyResponse(r, u, fs, options);
+    s.ry = EstimateFrequencyResponse(r, y, fs, options);
+  }
+  return s;
+}
+
+namespace {
+
+// Per-bin estimate and its coherence-based sd from (averaged) spectra.
+struct Bin {
+  std::complex<double> h;
+  double sd = 0, coh = 0, coh_ru = 0, coh_ry = 0;
+};
+
+Bin Evaluate(double suu, double syy, std::complex<double> suy, double srr, std::complex<double> sru,
+             std::complex<double> sry, double nd, CombinedMethod m) {
+  Bin b;
+  const double inf = std::numeric_limits<double>::infinity();
+  b.coh = (suu > 0 && syy > 0) ? std::norm(suy) / (suu * syy) : 0.0;
+  if (m == CombinedMethod::kJoint) {
+    b.h = sru != 0.0 ? sry / sru : std::complex<double>(0.0);
+    b.coh_ru = (srr > 0 && suu > 0) ? std::norm(sru) / (srr * suu) : 0.0;
+    b.coh_ry = (srr > 0 && syy > 0) ? std::norm(sry) / (srr * syy) : 0.0;
+    const double see = std::max(0.0, syy - 2.0 * std::real(b.h * std::conj(suy)) + std::norm(b.h) * suu);
+    b.sd = std::norm(sru) > 0 ? std::sqrt(srr * see / (2.0 * nd * std::norm(sru))) : inf;
+    return b;
+  }
+  b.h = m == CombinedMethod::kH1 ? suy / suu : syy / std::conj(suy);
+  const double c = std::min(b.coh, 1.0);
+  b.sd = c > 0.0 ? std::abs(b.h) * std::sqrt((1.0 - c) / (2.0 * nd * c)) : inf;
+  return b;
+}
+
+}  // namespace
+
+CombinedResponse CombineRuns(const std::vector<RunSpectra>& runs, Estimator estimator, StdSource std_source) {
+  if (runs.empty()) throw InputError("no run to estimate from");
+  const FrequencyResponse& first = runs.front().uy;
+  const bool joint = runs.front().ru.has_value();
+  for (size_t i = 0; i < runs.size(); ++i) {
+    const FrequencyResponse& f = runs[i].uy;
+    if (f.sample_rate_hz != first.sample_rate_hz || f.window_length != first.window_length ||
+        f.f_hz.size() != first.f_hz.size()) {
+      throw InputError("run " + std::to_string(i + 1) + " has " + std::to_string(f.sample_rate_hz) + " Hz and " +
+                       std::to_string(f.window_length) + "-sample segments, run 1 " +
+                       std::to_string(first.sample_rate_hz) + " Hz and " + std::to_string(first.window_length) +
+                       ": runs of one estimate need the same rate and segment length (whole records: the same length)");
+    }
+    if (runs[i].ru.has_value() != joint || runs[i].ry.has_value() != joint) {
+      throw InputError("run " + std::to_string(i + 1) + (joint ? " lacks" : " has") +
+                       " an excitation where run 1 " + (joint ? "has one" : "does not"));
+    }
+  }
+  CombinedResponse out;
+  out.method = joint ? CombinedMethod::kJoint
+                     : (estimator == Estimator::kH1 ? CombinedMethod::kH1 : CombinedMethod::kH2);
+  out.num_runs = static_cast<int>(runs.size());
+  FrequencyResponse& r = out.frf;
+  r.sample_rate_hz = first.sample_rate_hz;
+  r.window_length = first.window_length;
+  r.bin_correlation = first.bin_correlation;
+  r.f_hz = first.f_hz;
+  double segments = 0.0;
+  for (const RunSpectra& s : runs) {
+    r.num_averages += s.uy.num_averages;
+    r.effective_averages += s.uy.effective_averages;
+    segments += s.uy.num_averages;
+  }
+  const size_t nb = r.f_hz.size();
+  r.S_uu.assign(nb, 0.0);
+  r.S_yy.assign(nb, 0.0);
+  r.S_uy.assign(nb, 0.0);
+  std::vector<double> srr(nb, 0.0);
+  std::vector<std::complex<double>> sru(nb, 0.0), sry(nb, 0.0);
+  for (const RunSpectra& s : runs) {
+    const double w = s.uy.num_averages / segments;  // spectra are means over segments
+    for (size_t k = 0; k < nb; ++k) {
+      r.S_uu[k] += w * s.uy.S_uu[k];
+      r.S_yy[k] += w * s.uy.S_yy[k];
+      r.S_uy[k] += w * s.uy.S_uy[k];
+      if (joint) {
+        srr[k] += w * s.ru->S_uu[k];
+        sru[k] += w * s.ru->S_uy[k];
+        sry[k] += w * s.ry->S_uy[k];
+      }
+    }
+  }
+  const double nd = r.effective_averages;
+  r.H.resize(nb);
+  r.H_std.resize(nb);
+  r.coherence.resize(nb);
+  if (joint) {
+    out.coherence_ru.resize(nb);
+    out.coherence_ry.resize(nb);
+  }
+  bool any_power = false;
+  for (size_t k = 0; k < nb; ++k) {
+    if (r.S_uu[k] > 0) any_power = true;
+    const Bin b = Evaluate(r.S_uu[k], r.S_yy[k], r.S_uy[k], srr[k], sru[k], sry[k], nd, out.method);
+    r.H[k] = b.h;
+    r.H_std[k] = b.sd;
+    r.coherence[k] = joint ? b.coh_ry : b.coh;
+    if (joint) {
+      out.coherence_ru[k] = b.coh_ru;
+      out.coherence_ry[k] = b.coh_ry;
+    }
+  }
+  if (!any_power) throw InputError("the input has no power in the band: constant input?");
+  if (std_source == StdSource::kRunScatter) {
+    const double m = static_cast<double>(runs.size());
+    for (size_t k = 0; k < nb; ++k) {
+      if (runs.size() < 2) {
+        r.H_std[k] = std::numeric_limits<double>::infinity();
+        continue;
+      }
+      double ss = 0.0;
+      for (const RunSpectra& s : runs) {
+        const Bin b = Evaluate(s.uy.S_uu[k], s.uy.S_yy[k], s.uy.S_uy[k], joint ? s.ru->S_uu[k] : 0.0,
+                               joint ? s.ru->S_uy[k] : 0.0, joint ? s.ry->S_uy[k] : 0.0, 1.0, out.method);
+        ss += std::norm(b.h - r.H[k]);
+      }
+      r.H_std[k] = std::sqrt(ss / (2.0 * m * (m - 1.0)));
+    }
+    // One segment per run: the estimate's averages are the runs.
+    r.effective_averages = m;
+  }
+  return out;
+}
+
+}  // namespace zwidth::ident
