@@ -373,7 +373,8 @@ def test_threads_give_the_serial_results(log_h5):
 def cli_message(cli, *args):
     p = cli(*args, check=False)
     assert p.returncode == 2
-    return p.stderr.strip().removeprefix("zwidth: error: ")
+    # The error is the last line (the log readers print what they found before it).
+    return p.stderr.strip().splitlines()[-1].removeprefix("zwidth: error: ")
 
 
 def test_bad_input_raises_input_error_with_the_cli_message(cli, tmp_path, table1_json):
