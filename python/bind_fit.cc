@@ -130,7 +130,6 @@ does (Ceres; residual against the exact ZOH response weighted by the per-bin
 std). delay_samples: an integer >= 0 or 'auto' (0..max_auto_delay, best
 kept). init: a Model tried first. A fit that does not converge is returned
 with its status (check .converged); bad options raise InputError.)doc");
-
 }
 
 }  // namespace zwidth::python

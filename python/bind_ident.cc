@@ -204,6 +204,39 @@ Raises InputError naming the file, row or dataset.)doc");
       });
 
   m.def("estimate",
+        [](const std::string& path, int window_length, double overlap, const std::string& window,
+           const std::string& detrend, const std::string& estimator, double fmin, double fmax,
+           const std::string& input_column, const std::string& output_column, const std::string& time_column,
+           const std::string& input_dataset, const std::string& output_dataset, const std::string& time_dataset,
+           double rate) {
+          const ident::WelchOptions o = WelchFrom(window_length, overlap, window, detrend, estimator, fmin, fmax);
+          io::LogSelect s;
+          s.input_column = input_column;
+          s.output_column = output_column;
+          s.time_column = time_column;
+          s.input_dataset = input_dataset;
+          s.output_dataset = output_dataset;
+          s.time_dataset = time_dataset;
+          s.sample_rate_hz = rate;
+          py::gil_scoped_release release;
+          // The CLI's streaming pass (apps/common.cc EstimateFromLog): memory for a few windows.
+          ident::WelchEstimator est(o);
+          const io::LogInfo info =
+              io::StreamLog(path, s, [&](const double* u, const double* y, size_t n) { est.Push(u, y, n); });
+          try {
+            return est.Finish(info.sample_rate_hz);
+          } catch (const InputError& e) {
+            throw InputError(path + ": " + e.what());
+          }
+        },
+        py::arg("path"), py::arg("window_length") = 4096, py::arg("overlap") = 0.5, py::arg("window") = "hann",
+        py::arg("detrend") = "linear", py::arg("estimator") = "h1", py::arg("fmin") = 0.7,
+        py::arg("fmax") = 300.0, py::arg("input_column") = "torque", py::arg("output_column") = "position",
+        py::arg("time_column") = "t", py::arg("input_dataset") = "/input/torque",
+        py::arg("output_dataset") = "/output/position", py::arg("time_dataset") = "/time", py::arg("rate") = 0.0,
+        "estimate(path, ...): streamed from a log file as `zwidth estimate` does (a few windows in memory, "
+        "whatever the log's length), with read_log's selectors.");
+  m.def("estimate",
         [](const DoubleArray& u, const DoubleArray& y, double sample_rate_hz, int window_length, double overlap,
            const std::string& window, const std::string& detrend, const std::string& estimator, double fmin,
            double fmax) {

@@ -3,7 +3,6 @@
 //
 // Waiting on issue 13 (stability/, wip/region): stable K-intervals per B
 // (ZWidth.stable_intervals) go in BindStability beside critical().
-#include <chrono>
 #include <cmath>
 #include <limits>
 

@@ -67,10 +67,10 @@ def test_estimate_equals_cli_bit_for_bit(cli, log_h5, tmp_path, opts, flags):
     out = tmp_path / "frf.h5"
     cli("estimate", log_h5, "-o", out, *flags)
     ref = zwidth.FrequencyResponse.load(str(out))
-    got = zwidth.estimate(zwidth.read_log(log_h5), **opts)
-    for name in ("f_hz", "H", "coherence", "H_std", "S_uu", "S_yy"):
-        assert np.array_equal(getattr(got, name), getattr(ref, name)), name
-    assert got.num_averages == ref.num_averages
+    for got in (zwidth.estimate(zwidth.read_log(log_h5), **opts), zwidth.estimate(log_h5, **opts)):
+        for name in ("f_hz", "H", "coherence", "H_std", "S_uu", "S_yy"):
+            assert np.array_equal(getattr(got, name), getattr(ref, name)), name
+        assert got.num_averages == ref.num_averages
 
 
 def test_estimate_equals_scipy_welch(log_h5):
@@ -392,6 +392,9 @@ def test_bad_input_raises_input_error_with_the_cli_message(cli, tmp_path, table1
     zwidth.simulate(zwidth.Model.table1(), seconds=1).save(str(short))
     with pytest.raises(ValueError) as e:
         zwidth.estimate(zwidth.read_log(str(short)))
+    assert str(e.value) == cli_message(cli, "estimate", short, "-o", tmp_path / "z.csv")
+    with pytest.raises(ValueError) as e:
+        zwidth.estimate(str(short))
     assert str(e.value) == cli_message(cli, "estimate", short, "-o", tmp_path / "z.csv")
 
 
