@@ -55,6 +55,7 @@ cd "$W"
 "$P/bin/zwidth" simulate --model "$P/share/zwidth/phantom/table1.json" --seconds 20 -o log.h5 2>/dev/null
 "$P/bin/zwidth" fit log.h5 -o model.json >/dev/null
 "$P/bin/zwidth" boundary model.json --delays 2 --b-step 0.01 -o b.csv --summary s.json >/dev/null
+"$P/bin/zwidth" compare model.json --reference table1 >/dev/null || { echo "FAIL: compare with the built-in Table I"; exit 1; }
 echo "CLI: simulate -> fit -> boundary ran from the prefix"
 if [ "$WITH_PYTHON" = 0 ]; then echo "skip: no Python module in this build"; exit 77; fi
 if ! /usr/bin/python3 -c "import numpy" 2>/dev/null; then echo "skip: no python3 with NumPy"; exit 77; fi
