@@ -59,6 +59,7 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
   mf.plant = r.plant;
   mf.plant.name = "fitted from " + source;
   mf.std_errors = r.std_errors;
+  mf.log_covariance = r.log_covariance;
   mf.sample_period_s = 1.0 / frf.sample_rate_hz;
   mf.fit = {{"status", fit::ToString(r.status)},
             {"source", source},
