@@ -184,7 +184,10 @@ ZWidth::ZWidth(const Plant& plant, double period_s, int delay_samples,
   breaks.push_back(th.back());
   for (size_t i = 0; i + 1 < breaks.size(); ++i) {
     if (!(breaks[i + 1] > breaks[i])) continue;
-    segments_.push_back({breaks[i], breaks[i + 1], Bof(breaks[i]), Bof(breaks[i + 1])});
+    Segment sg{breaks[i], breaks[i + 1], Bof(breaks[i]), Bof(breaks[i + 1]), 0, -1};
+    sg.ia = static_cast<int>(std::upper_bound(th.begin(), th.end(), sg.ta) - th.begin());
+    sg.ib = static_cast<int>(std::lower_bound(th.begin(), th.end(), sg.tb) - th.begin()) - 1;
+    segments_.push_back(sg);
   }
   const std::complex<double> gpi = response_.AtZ(-1.0);
   const double sgn = (total_delay_ % 2 == 0) ? 1.0 : -1.0;  // z^d at z = -1
@@ -198,10 +201,17 @@ std::complex<double> ZWidth::Gd(std::complex<double> z) const {
 }
 
 void ZWidth::Point(double theta, double* B, double* K) const {
-  const std::complex<double> z = std::polar(1.0, theta);
-  const std::complex<double> W = -std::polar(1.0, theta * total_delay_) / Gd(z);
-  *B = period_s_ * W.imag() / std::sin(theta);
-  *K = W.real() - W.imag() * std::tan(0.5 * theta);
+  const double c = std::cos(theta), s = std::sin(theta);
+  const std::complex<double> z(c, s);
+  // z^d by repeated squaring (one sincos instead of two; error ~ d eps).
+  std::complex<double> zd = 1.0, zp = z;
+  for (int e = total_delay_; e > 0; e >>= 1) {
+    if (e & 1) zd *= zp;
+    zp *= zp;
+  }
+  const std::complex<double> W = -zd / Gd(z);
+  *B = period_s_ * W.imag() / s;
+  *K = W.real() - W.imag() * (s / (1.0 + c));  // tan(theta / 2)
 }
 
 double ZWidth::HzOf(double theta) const { return theta / (2.0 * std::numbers::pi * period_s_); }
@@ -212,7 +222,22 @@ std::vector<Crossing> ZWidth::Crossings(double B) const {
     const double lo = std::min(s.Ba, s.Bb), hi = std::max(s.Ba, s.Bb);
     if (B < lo || B > hi) continue;
     auto g = [&](double t) { double b, k; Point(t, &b, &k); return b - B; };
-    const double t = BrentRoot(g, s.ta, s.tb, s.Ba - B, s.Bb - B, options_.theta_tolerance);
+    // Narrow the bracket to one cell of the tabulated grid (B is monotone on
+    // the piece), so that Brent starts close to the root.
+    double ta = s.ta, tb = s.tb, fa = s.Ba - B, fb = s.Bb - B;
+    if (s.ib >= s.ia) {
+      const bool inc = s.Bb > s.Ba;
+      int lo = s.ia, hi = s.ib + 1;  // first grid index past B
+      while (lo < hi) {
+        const int mid = (lo + hi) / 2;
+        if (inc ? grid_B_[mid] >= B : grid_B_[mid] <= B) hi = mid; else lo = mid + 1;
+      }
+      double ca = ta, cb = tb, ga = fa, gb = fb;
+      if (lo <= s.ib) { cb = grid_theta_[lo]; gb = grid_B_[lo] - B; }
+      if (lo > s.ia) { ca = grid_theta_[lo - 1]; ga = grid_B_[lo - 1] - B; }
+      if (!(ga * gb > 0.0)) { ta = ca; tb = cb; fa = ga; fb = gb; }
+    }
+    const double t = BrentRoot(g, ta, tb, fa, fb, options_.theta_tolerance);
     double b, k;
     Point(t, &b, &k);
     // Reject a spurious "root" at a singularity of B(theta) (a zero of G_d).

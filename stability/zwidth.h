@@ -159,7 +159,8 @@ class ZWidth {
   std::vector<double> CharacteristicPolynomial(double K, double B) const;
 
  private:
-  struct Segment { double ta, tb, Ba, Bb; };
+  // A monotone piece of B(theta); grid points ia..ib lie strictly inside it.
+  struct Segment { double ta, tb, Ba, Bb; int ia, ib; };
   void Point(double theta, double* B, double* K) const;
   // Bisection for the B where f_CR jumps between f_lo (at b_lo) and f_hi.
   double FindTransition(double b_lo, double b_hi, double f_lo, double f_hi) const;
