@@ -60,5 +60,22 @@ for e in json.load(open(os.path.join(tmp, "mc.json")))["delays"]:
         if not (1 / 1.5 < r < 1.5):
             failures += 1
             print("FAIL: outside a factor 1.5")
+# 3. The stored covariance is the one behind the fit's std: std_x = x sqrt(C_xx)
+# for every parameter (log space), in the order of "parameters".
+fm = json.load(open(os.path.join(tmp, "f.json1")))
+cov = fm["covariance"]
+C = np.array(cov["matrix"])
+worst = 0.0
+for i, name in enumerate(cov["parameters"]):
+    if name in ("m", "b"):
+        x, s = fm[name], fm["std"][name]
+    else:
+        j, k = int(name[6]), name.split(".")[1]
+        x, s = fm["modes"][j][k], fm["std"]["modes"][j][k]
+    worst = max(worst, abs(x * np.sqrt(C[i, i]) / s - 1))
+print(f"covariance diagonal against the std: worst relative difference {worst:.1e}")
+if not (worst < 1e-6 and np.allclose(C, C.T) and np.linalg.eigvalsh(C).min() > -1e-12 * abs(C).max()):
+    failures += 1
+    print("FAIL: the stored covariance does not reproduce the std")
 shutil.rmtree(tmp, ignore_errors=True)
 sys.exit(1 if failures else 0)
