@@ -216,7 +216,7 @@ void AddStabilityCommands(CLI::App& app) {
     if (rf->json) {
       std::cout << j.dump() << std::endl;
     } else if (res.diverged) {
-      std::printf("relay: the loop diverges with the relay alone, so no K > 0 is stable here (B past B_max): "
+      std::printf("relay: the loop diverges with the relay alone, so K -> 0+ is unstable here (B past B_max_from_zero): "
                   "K_cr = 0\n");
     } else {
       std::printf("relay, paper's reading (spectral peak, first harmonics): K_cr = %.6g N m/rad at %.5g Hz\n",
