@@ -99,8 +99,9 @@ struct DelaySummary {
   // Found on a scan of B up to a proven bound (every stable region is bounded
   // above by a crossing with K > 0, and no crossing with K > 0 exists past the
   // largest B of the D-decomposition curve with K > 0); a band narrower than
-  // the scan spacing (about 1/2000 of that bound, denser near the curve's
-  // folds and K = 0 points) can be missed.
+  // the scan spacing (1/1000 of that bound, plus 1000 geometric points from
+  // 1e-6 of it and both sides of every fold and K = 0 point of the curve) can
+  // be missed.
   double B_max = std::numeric_limits<double>::infinity();
   std::vector<ReopenedBand> reopened_bands;
 };
