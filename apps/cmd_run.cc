@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <filesystem>
 #include <memory>
 #include <fstream>
@@ -17,6 +18,7 @@
 #include "io/stability_files.h"
 #include "model/error.h"
 #include "model/state_space.h"
+#include "stability/uncertainty.h"
 #include "stability/zwidth.h"
 
 namespace zwidth::app {
@@ -40,7 +42,7 @@ void AddRunCommand(CLI::App& app) {
     std::vector<int> delays = {2, 4, 8};
     EstimateFlags est;
     fit::FitOptions o;
-    double b_step = 0.0005;
+    stability::BGridOptions grid;
   };
   auto f = std::make_shared<RunFlags>();
   CLI::App* cmd = app.add_subcommand("run", "estimate, fit, compare, Z-width boundary and an HTML report");
@@ -50,7 +52,9 @@ void AddRunCommand(CLI::App& app) {
   cmd->add_option("--delays", f->delays, "loop delays [samples]")->delimiter(',')->capture_default_str();
   cmd->add_option("--modes", f->o.num_modes, "resonance/antiresonance sections")->capture_default_str();
   cmd->add_option("--delay-samples", f->delay, "model input delay [samples] or 'auto'")->capture_default_str();
-  cmd->add_option("--b-step", f->b_step, "B step of the boundary [N m s/rad]")->capture_default_str();
+  cmd->add_option("--b-step", f->grid.b_step, "B step of the boundary [N m s/rad] (wins over --b-points)");
+  cmd->add_option("--b-points", f->grid.b_points, "B values of the boundary, 0 to 1.05 x the largest stable B")
+      ->capture_default_str();
   AddEstimateFlags(cmd, &f->est);
   AddUnitsFlag(cmd, &f->units);
   cmd->callback([f] {
@@ -58,10 +62,13 @@ void AddRunCommand(CLI::App& app) {
     const bool linear = LinearUnits(f->units);
     const std::string source = JoinPaths(f->logs);
     for (int d : f->delays) if (d < 0) throw InputError("--delays must be >= 0");
-    if (!(f->b_step > 0)) throw InputError("--b-step must be > 0");
     bool table1 = false;
     const bool have_ref = !f->reference.empty();
     const io::ModelFile ref = have_ref ? ReadReference(f->reference, &table1) : io::ModelFile{};
+    {
+      std::string why;
+      if (!f->grid.IsValid(&why)) throw InputError(why);
+    }
     const fs::path out(f->outdir);
     if (!fs::is_directory(out)) {
       io::CheckOutputFolder(f->outdir);  // its parent must exist
@@ -85,24 +92,38 @@ void AddRunCommand(CLI::App& app) {
     nlohmann::json summary;
     summary["boundary"] = nlohmann::json::array();
     double b_max = 0.0;
-    for (int d : f->delays) {
+    const bool has_cov = !model.log_covariance.empty();
+    std::vector<stability::SummaryStd> stds(f->delays.size());
+    for (size_t i = 0; i < f->delays.size(); ++i) {
+      const int d = f->delays[i];
       zs.emplace_back(model.plant, T, d);
       sums.push_back(zs.back().Summarize());
       if (std::isfinite(sums.back().B_max)) b_max = std::max(b_max, sums.back().B_max);
-      nlohmann::json e = io::SummaryToJson(sums.back());
+      if (has_cov) stds[i] = stability::SummaryStdDelta(model.plant, model.log_covariance, T, d, sums.back());
+      nlohmann::json e = io::SummaryToJson(sums.back(), has_cov ? &stds[i] : nullptr);
       e["delay_samples"] = d;
       summary["boundary"].push_back(e);
     }
-    if (b_max <= 0) b_max = 0.4;
-    const int nB = static_cast<int>(std::floor(1.02 * b_max / f->b_step)) + 1;
+    const std::vector<double> bgrid =
+        stability::MakeBGrid(f->grid, b_max, model.plant.m / T, static_cast<int>(f->delays.size()));
+    const int nB = static_cast<int>(bgrid.size());
     std::vector<io::BoundaryRow> rows;
+    rows.reserve(zs.size() * bgrid.size());
     int disagree = 0;
     for (size_t i = 0; i < zs.size(); ++i) {
-      for (int k = 0; k < nB; ++k) {
-        rows.push_back({f->delays[i], zs[i].At(k * f->b_step)});
+      std::vector<stability::CriticalPoint> pts;
+      for (double B : bgrid) {
+        rows.push_back({f->delays[i], zs[i].At(B), zs[i].StableIntervals(B)});
+        pts.push_back(rows.back().point);
         if (!rows.back().point.AgreesWithMargin()) ++disagree;
       }
+      if (has_cov) {
+        const std::vector<double> sd = stability::KcrStd(model.plant, model.log_covariance, T, f->delays[i], pts);
+        for (int k = 0; k < nB; ++k) rows[i * nB + k].K_cr_std = sd[k];
+      }
     }
+    summary["B_max_meaning"] = "B_max: the largest B at which some K > 0 is stable (reopened bands included); "
+                               "B_max_from_zero: the B where the interval from K = 0+ closes (the paper's B_max)";
     summary["margin_disagreements"] = disagree;
     t_total += timer.Lap("boundary");
     std::string cmp_text;
@@ -162,12 +183,37 @@ void AddRunCommand(CLI::App& app) {
           std::unique_ptr<stability::ZWidth> z;
           if (which != 0) z = std::make_unique<stability::ZWidth>(p, T, f->delays[i]);
           for (int k = 0; k < nB; ++k) {
-            const auto c = which == 0 ? rows[i * nB + k].point : z->At(k * f->b_step);
-            o << k * f->b_step << " " << c.K_cr << " " << c.f_cr_hz << "\n";
+            const auto c = which == 0 ? rows[i * nB + k].point : z->At(bgrid[k]);
+            o << bgrid[k] << " " << c.K_cr << " " << c.f_cr_hz << " "
+              << (which == 0 ? rows[i * nB + k].K_cr_std : std::numeric_limits<double>::quiet_NaN()) << "\n";
           }
           o << "\n\n";
         }
         io::WriteTextAtomically((fig / (which == 0 ? "kcr_model.dat" : which == 1 ? "kcr_reference.dat" : "kcr_rigid.dat")).string(), o.str());
+      }
+      // The stable set: one vertical segment per (B, interval), +inf drawn at
+      // 1.2 x the largest finite K of the table.
+      double k_clip = 0.0;
+      for (const auto& r : rows) {
+        for (const auto& iv : r.intervals) k_clip = std::max(k_clip, std::isfinite(iv.K_hi) ? iv.K_hi : iv.K_lo);
+      }
+      k_clip = k_clip > 0.0 ? 1.2 * k_clip : 1.0;
+      {
+        std::ostringstream o;
+        o.precision(10);
+        for (size_t i = 0; i < f->delays.size(); ++i) {
+          o << "# delay " << f->delays[i] << ": B K_lo K_hi (K_hi = +inf drawn at " << k_clip << ")\n";
+          bool any = false;
+          for (int k = 0; k < nB; ++k) {
+            for (const auto& iv : rows[i * nB + k].intervals) {
+              o << bgrid[k] << " " << iv.K_lo << " " << std::min(iv.K_hi, k_clip) << "\n";
+              any = true;
+            }
+          }
+          if (!any) o << "nan nan nan\n";
+          o << "\n\n";
+        }
+        io::WriteTextAtomically((fig / "region_model.dat").string(), o.str());
       }
       // Table II (the paper's relay points), drawn only beside Table I.
       if (table1) {
@@ -203,6 +249,15 @@ void AddRunCommand(CLI::App& app) {
            << "set logscale y\nset ylabel 'f_{CR} [Hz]'\n"
            << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:3 w l lt i t 'model, d='.word(delays,i)"
            << (table1 ? ", 'table2.dat' u 2:4 w p pt 7 ps 0.8 lc rgb 'red' t 'Table II (relay)'" : "") << "\nunset logscale y\nunset multiplot\n";
+        gp << "set output 'region." << ext << "'\nset multiplot layout " << f->delays.size()
+           << ",1 title 'Z-width: stable (B, K) region per delay (shaded), K_{CR}(B) and its +-2 sigma band'\n"
+           << "set xlabel 'B [N m s/rad]'\nset ylabel 'K [N m/rad]'\nset yrange [0:" << k_clip << "]\n"
+           << "do for [i=1:words(delays)] {\n"
+           << "  set title 'loop delay '.word(delays,i).' samples'\n"
+           << "  plot 'region_model.dat' index i-1 u 1:2:(0):($3-$2) w vectors nohead lc rgb '#9ecae1' t 'stable', "
+           << "'kcr_model.dat' index i-1 u 1:($2-2*$4):($2+2*$4) w filledcurves fs transparent solid 0.35 "
+           << "lc rgb '#d62728' t 'K_{CR} +- 2 sigma', '' index i-1 u 1:2 w l lw 2 lc rgb '#08306b' t 'K_{CR}(B)'\n"
+           << "}\nunset multiplot\nset yrange [*:*]\nunset title\n";
         gp << "set output 'rigid." << ext << "'\nset title 'With the vibration modes and without (rigid body only) - Fig. 7'\n"
            << "set xlabel 'B [" << (linear ? "N s/m" : "N m s/rad") << "]'\nset ylabel 'K_{CR} [" << (linear ? "N/m" : "N m/rad") << "]'\n"
            << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:2 w l lt i t 'with modes, d='.word(delays,i), "
@@ -236,10 +291,40 @@ void AddRunCommand(CLI::App& app) {
       h << "<p>No reference comparison (pass <code>--reference table1</code> or a model JSON to compare).</p>\n";
     }
     h << "<p>The paper's gain-margin reading of eq. (4) differs from the exact K_CR in " << disagree << " of "
-      << rows.size() << " boundary rows: mostly past B_max, where margin() stays positive although no K is stable "
+      << rows.size() << " B values: mostly past B_max_from_zero, where margin() stays positive although K -> 0+ is unstable "
       << "(see boundary.csv, column margin_agrees).</p>\n";
+    {
+      std::ostringstream z;
+      char line[256];
+      std::snprintf(line, sizeof line, "%-6s %18s %18s %18s %12s %18s\n", "delay", "K_cr(B=0)", "B_t", "K_cr^max",
+                    "B_max_0", "B_max");
+      z << line;
+      auto pm = [&](double v, double sd) {
+        char b[64];
+        if (std::isfinite(sd)) std::snprintf(b, sizeof b, "%.5g +- %.2g", v, sd);
+        else std::snprintf(b, sizeof b, "%.5g", v);
+        return std::string(b);
+      };
+      for (size_t i = 0; i < sums.size(); ++i) {
+        const auto& s = sums[i];
+        std::snprintf(line, sizeof line, "%-6d %18s %18s %18s %12.5g %18s\n", f->delays[i],
+                      pm(s.K_cr_at_zero_B, stds[i].K_cr_at_zero_B).c_str(), pm(s.B_t, stds[i].B_t).c_str(),
+                      pm(s.K_cr_max, stds[i].K_cr_max).c_str(), s.B_max_from_zero, pm(s.B_max, stds[i].B_max).c_str());
+        z << line;
+        for (const auto& band : s.reopened_bands) {
+          std::snprintf(line, sizeof line, "       reopened band: B in (%.5g, %.5g), largest stable K %.5g\n",
+                        band.B_lo, band.B_hi, band.K_max);
+          z << line;
+        }
+      }
+      h << "<h2>Z-width (eq. 2)</h2>\n<pre>" << Html(z.str()) << "</pre>\n<p>B_max_0: where the stable interval "
+        << "from K = 0+ closes (the paper's B_max); B_max: the largest B at which some K &gt; 0 is stable. "
+        << "+- one std by the delta method from the fit's parameter covariance"
+        << (has_cov ? "" : " (not available: the fit has no covariance)") << ". boundary.csv lists every stable "
+        << "K interval per B.</p>\n";
+    }
     if (have_figures) {
-      for (const char* name : {"bode", "coherence", "kcr", "rigid"}) {
+      for (const char* name : {"bode", "coherence", "kcr", "region", "rigid"}) {
         h << "<p><img src='figures/" << name << ".svg' alt='" << name << "'></p>\n";
       }
     } else {

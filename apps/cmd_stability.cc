@@ -1,4 +1,7 @@
 #include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <limits>
 #include <cstdio>
 #include <iostream>
 
@@ -8,6 +11,7 @@
 #include "io/stability_files.h"
 #include "model/error.h"
 #include "stability/relay.h"
+#include "stability/uncertainty.h"
 #include "stability/zwidth.h"
 
 namespace zwidth::app {
@@ -37,18 +41,25 @@ void AddStabilityCommands(CLI::App& app) {
   struct BoundaryFlags {
     std::string model, out, summary;
     std::vector<int> delays = {2, 4, 8};
-    double period = kNotGiven, b_min = 0.0, b_max = -1.0, b_step = 0.0005;
+    double period = kNotGiven;
+    stability::BGridOptions grid;
+    int monte_carlo = 0;
+    std::uint64_t seed = 1;
   };
   auto bf = std::make_shared<BoundaryFlags>();
-  CLI::App* b = app.add_subcommand("boundary", "exact Z-width K_CR(B) and the paper's margin reading, per delay");
+  CLI::App* b = app.add_subcommand("boundary", "exact Z-width: stable K intervals per B, K_CR(B), summary, per delay");
   b->add_option("model", bf->model, "model JSON")->required();
   b->add_option("--delays", bf->delays, "loop delays in samples, e.g. 2,4,8")->delimiter(',')->capture_default_str();
   b->add_option("--period", bf->period, "sample period T [s] (default: the model's, else 0.001)");
-  b->add_option("--b-min", bf->b_min, "first B [N m s/rad]")->capture_default_str();
-  b->add_option("--b-max", bf->b_max, "last B [N m s/rad] (default: just past the largest B_max)");
-  b->add_option("--b-step", bf->b_step, "B step [N m s/rad]")->capture_default_str();
+  b->add_option("--b-min", bf->grid.b_min, "first B [N m s/rad]")->capture_default_str();
+  b->add_option("--b-max", bf->grid.b_max, "last B [N m s/rad] (default: 1.05 x the largest stable B)");
+  b->add_option("--b-step", bf->grid.b_step, "B step [N m s/rad] (wins over --b-points)");
+  b->add_option("--b-points", bf->grid.b_points, "number of B values when --b-step is not given")->capture_default_str();
   b->add_option("-o,--output", bf->out, "boundary CSV")->required();
-  b->add_option("--summary", bf->summary, "summary JSON (B_t, K_CR^max, B_max, ... per delay)");
+  b->add_option("--summary", bf->summary, "summary JSON (B_t, K_CR^max, B_max, bands, std ... per delay)");
+  b->add_option("--monte-carlo", bf->monte_carlo, "also sample the parameter covariance N times and report the "
+                "sample std beside the delta method's (0 = off)")->capture_default_str();
+  b->add_option("--seed", bf->seed, "seed of --monte-carlo")->capture_default_str();
   b->callback([bf] {
     io::CheckOutputFolder(bf->out);
     if (!bf->summary.empty()) io::CheckOutputFolder(bf->summary);
@@ -56,57 +67,87 @@ void AddStabilityCommands(CLI::App& app) {
     const double T = ResolvePeriod(bf->period, mf);
     if (bf->delays.empty()) throw InputError("--delays is empty");
     for (int d : bf->delays) CheckDelay(d, "--delays");
-    if (!(bf->b_step > 0.0 && std::isfinite(bf->b_step))) throw InputError("--b-step must be > 0");
-    if (!(bf->b_min >= 0.0 && std::isfinite(bf->b_min))) throw InputError("--b-min must be >= 0");
+    std::string why;
+    if (!bf->grid.IsValid(&why)) throw InputError(why);
+    if (bf->monte_carlo < 0) throw InputError("--monte-carlo must be >= 0");
+    if (bf->monte_carlo > 0 && mf.log_covariance.empty()) {
+      throw InputError("--monte-carlo needs a model with a \"covariance\" (a model written by zwidth fit)");
+    }
     std::vector<stability::ZWidth> zs;
     std::vector<stability::DelaySummary> sums;
+    double largest = 0.0;
     for (int d : bf->delays) {
       zs.emplace_back(mf.plant, T, d);
       sums.push_back(zs.back().Summarize());
+      if (std::isfinite(sums.back().B_max)) largest = std::max(largest, sums.back().B_max);
     }
-    double b_max = bf->b_max;
-    if (b_max < 0.0) {
-      double largest = 0.0;
-      for (const auto& s : sums) if (std::isfinite(s.B_max)) largest = std::max(largest, s.B_max);
-      b_max = largest > 0.0 ? 1.02 * largest : 0.4;
-    }
-    if (!(b_max >= bf->b_min)) throw InputError("--b-max must be >= --b-min");
-    const long count = static_cast<long>(std::floor((b_max - bf->b_min) / bf->b_step + 1e-9)) + 1;
-    if (count > 10000000 / static_cast<long>(bf->delays.size())) throw InputError("too many B values; raise --b-step");
+    const std::vector<double> grid = stability::MakeBGrid(bf->grid, largest, mf.plant.m / T,
+                                                          static_cast<int>(bf->delays.size()));
+    const bool has_cov = !mf.log_covariance.empty();
     std::vector<io::BoundaryRow> rows;
+    rows.reserve(grid.size() * zs.size());
     int disagree = 0;
+    std::vector<stability::SummaryStd> stds(zs.size());
     for (size_t i = 0; i < zs.size(); ++i) {
-      for (long k = 0; k < count; ++k) {
-        const double B = bf->b_min + k * bf->b_step;
-        io::BoundaryRow r{bf->delays[i], zs[i].At(B)};
+      std::vector<stability::CriticalPoint> pts;
+      for (double B : grid) {
+        io::BoundaryRow r{bf->delays[i], zs[i].At(B), zs[i].StableIntervals(B)};
         if (!r.point.AgreesWithMargin()) ++disagree;
-        rows.push_back(r);
+        pts.push_back(r.point);
+        rows.push_back(std::move(r));
+      }
+      if (has_cov) {
+        const std::vector<double> sd = stability::KcrStd(mf.plant, mf.log_covariance, T, bf->delays[i], pts);
+        for (size_t k = 0; k < grid.size(); ++k) rows[i * grid.size() + k].K_cr_std = sd[k];
+        stds[i] = stability::SummaryStdDelta(mf.plant, mf.log_covariance, T, bf->delays[i], sums[i]);
       }
     }
     io::WriteBoundaryCsv(bf->out, rows);
     nlohmann::json js;
     js["period_s"] = T;
     js["model"] = mf.plant.name;
+    js["B_max_meaning"] = "B_max: the largest B at which some K > 0 is stable (reopened bands included); "
+                          "B_max_from_zero: the B where the interval from K = 0+ closes (the paper's B_max)";
     js["delays"] = nlohmann::json::array();
     for (size_t i = 0; i < sums.size(); ++i) {
-      nlohmann::json e = io::SummaryToJson(sums[i]);
+      nlohmann::json e = io::SummaryToJson(sums[i], has_cov ? &stds[i] : nullptr);
       e["delay_samples"] = bf->delays[i];
       e["total_delay_samples"] = sums[i].delay_samples;
+      if (bf->monte_carlo > 0) {
+        std::fprintf(stderr, "Monte Carlo, d = %d: %d samples...\n", bf->delays[i], bf->monte_carlo);
+        const stability::MonteCarloResult mc = stability::SummaryMonteCarlo(
+            mf.plant, mf.log_covariance, T, bf->delays[i], bf->monte_carlo, bf->seed);
+        e["monte_carlo"] = {{"samples", mc.samples}, {"seed", bf->seed},
+                            {"std", io::SummaryToJson(stability::DelaySummary{}, &mc.std)["std"]},
+                            {"mean", io::SummaryToJson(stability::DelaySummary{}, &mc.mean)["std"]}};
+        std::printf("d = %d  std by delta method / Monte Carlo (%d samples): K_cr(0) %.4g / %.4g, B_t %.4g / %.4g, "
+                    "K_cr^max %.4g / %.4g, B_max %.4g / %.4g\n",
+                    bf->delays[i], mc.samples, stds[i].K_cr_at_zero_B, mc.std.K_cr_at_zero_B, stds[i].B_t,
+                    mc.std.B_t, stds[i].K_cr_max, mc.std.K_cr_max, stds[i].B_max, mc.std.B_max);
+      }
       js["delays"].push_back(e);
     }
     js["margin_disagreements"] = disagree;
     if (!bf->summary.empty()) io::WriteTextAtomically(bf->summary, js.dump(2) + "\n");
-    std::printf("%-6s %12s %10s %10s %12s %10s %10s %10s\n", "delay", "K_cr(B=0)", "f(B=0)", "B_t",
-                "K_cr^max", "f_before", "f_after", "B_max");
+    std::printf("%-6s %12s %10s %10s %12s %10s %10s %12s %12s\n", "delay", "K_cr(B=0)", "f(B=0)", "B_t",
+                "K_cr^max", "f_before", "f_after", "B_max_0", "B_max");
     for (size_t i = 0; i < sums.size(); ++i) {
       const auto& s = sums[i];
-      std::printf("%-6d %12.6g %10.5g %10.6g %12.6g %10.5g %10.5g %10.6g\n", bf->delays[i],
+      std::printf("%-6d %12.6g %10.5g %10.6g %12.6g %10.5g %10.5g %12.6g %12.6g\n", bf->delays[i],
                   s.K_cr_at_zero_B, s.f_at_zero_B_hz, s.B_t, s.K_cr_max, s.f_before_hz, s.f_after_hz,
-                  s.B_max);
+                  s.B_max_from_zero, s.B_max);
+      if (has_cov) {
+        std::printf("  std   %12.3g %10s %10.3g %12.3g %10s %10s %12s %12.3g\n", stds[i].K_cr_at_zero_B, "",
+                    stds[i].B_t, stds[i].K_cr_max, "", "", "", stds[i].B_max);
+      }
+      for (const auto& band : s.reopened_bands) {
+        std::printf("  reopened band: B in (%.6g, %.6g), largest stable K %.6g\n", band.B_lo, band.B_hi, band.K_max);
+      }
     }
-    std::printf("%d of %zu rows: the margin() reading of eq. (4) differs from the exact K_CR "
-                "(mostly B past B_max, where margin() stays positive but no K is stable)\n",
-                disagree, rows.size());
+    std::printf("B_max_0: where the interval from K = 0+ closes; B_max: the largest B with some stable K > 0\n");
+    std::printf("%d of %zu B values: the margin() reading of eq. (4) differs from the exact K_CR "
+                "(mostly B past B_max_0, where margin() stays positive but K -> 0+ is unstable)\n",
+                disagree, grid.size() * zs.size());
   });
 
   // ---- relay
@@ -175,7 +216,7 @@ void AddStabilityCommands(CLI::App& app) {
     if (rf->json) {
       std::cout << j.dump() << std::endl;
     } else if (res.diverged) {
-      std::printf("relay: the loop diverges with the relay alone, so no K > 0 is stable here (B past B_max): "
+      std::printf("relay: the loop diverges with the relay alone, so K -> 0+ is unstable here (B past B_max_from_zero): "
                   "K_cr = 0\n");
     } else {
       std::printf("relay, paper's reading (spectral peak, first harmonics): K_cr = %.6g N m/rad at %.5g Hz\n",
@@ -210,21 +251,53 @@ void AddStabilityCommands(CLI::App& app) {
     const std::vector<io::SceneObject> objs = io::ReadScene(cf->scene);
     const stability::ZWidth z(mf.plant, T, cf->delay);
     nlohmann::json out = {{"delay_samples", cf->delay}, {"period_s", T}, {"objects", nlohmann::json::array()}};
+    int unstable = 0;
     for (const auto& o : objs) {
       const stability::CriticalPoint cp = z.At(o.B);
-      const bool stable = cp.K_cr > 0.0 && o.K < cp.K_cr;
+      const std::vector<stability::KInterval> iv = z.StableIntervals(o.B);
+      // Stable exactly when K lies inside one of the stable intervals at this B
+      // (K = 0 counts as 0+).
+      int inside = -1, nearest = -1;
+      double best = std::numeric_limits<double>::infinity();
+      for (size_t i = 0; i < iv.size(); ++i) {
+        const bool in = (o.K > iv[i].K_lo || (o.K == 0.0 && iv[i].K_lo == 0.0)) && o.K < iv[i].K_hi;
+        if (in) inside = static_cast<int>(i);
+        const double dist = o.K <= iv[i].K_lo ? iv[i].K_lo - o.K : o.K - iv[i].K_hi;
+        if (dist < best) { best = dist; nearest = static_cast<int>(i); }
+      }
+      const bool stable = inside >= 0;
+      if (!stable) ++unstable;
       const double ratio = cp.K_cr > 0.0 ? o.K / cp.K_cr : std::numeric_limits<double>::infinity();
-      out["objects"].push_back({{"name", o.name}, {"K", o.K}, {"B", o.B}, {"stable", stable},
-                                {"K_cr", io::NumberOrNull(cp.K_cr)},
-                                {"f_cr_hz", io::NumberOrNull(cp.f_cr_hz)},
-                                {"K_over_K_cr", io::NumberOrNull(ratio)},
-                                {"unstable_at_any_K", cp.unstable_at_zero_k}});
+      nlohmann::json e = {{"name", o.name}, {"K", o.K}, {"B", o.B}, {"stable", stable},
+                          {"K_cr", io::NumberOrNull(cp.K_cr)},
+                          {"f_cr_hz", io::NumberOrNull(cp.f_cr_hz)},
+                          {"K_over_K_cr", io::NumberOrNull(ratio)},
+                          {"unstable_at_any_K", iv.empty()},
+                          {"intervals", io::IntervalsToJson(iv)},
+                          {"interval", stable ? nlohmann::json(inside) : nlohmann::json(nullptr)},
+                          {"nearest_interval", nearest >= 0 ? nlohmann::json(nearest) : nlohmann::json(nullptr)}};
+      out["objects"].push_back(e);
       if (!cf->json) {
-        std::printf("%-20s K = %-10g B = %-8g %s  K_cr = %-10.5g K/K_cr = %.3g\n", o.name.c_str(), o.K,
-                    o.B, stable ? "stable  " : "UNSTABLE", cp.K_cr, ratio);
+        std::string where;
+        char buf[160];
+        const int k = stable ? inside : nearest;
+        if (k >= 0) {
+          std::snprintf(buf, sizeof buf, "%s (%.6g, %.6g)", stable ? "in" : "nearest stable K", iv[k].K_lo, iv[k].K_hi);
+          where = buf;
+        } else {
+          where = "no K > 0 is stable at this B";
+        }
+        std::printf("%-20s K = %-10g B = %-8g %s  %s  K_cr = %-10.5g\n", o.name.c_str(), o.K, o.B,
+                    stable ? "stable  " : "UNSTABLE", where.c_str(), cp.K_cr);
       }
     }
     if (cf->json) std::cout << out.dump() << std::endl;
+    if (unstable > 0) {
+      if (!cf->json) std::printf("%d of %zu objects unstable (exit status 3)\n", unstable, objs.size());
+      std::cout.flush();
+      std::fflush(stdout);
+      std::exit(3);  // documented: some object is unstable (1 and 2 are errors)
+    }
   });
 }
 

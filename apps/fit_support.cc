@@ -8,6 +8,7 @@
 #include "io/reference_models.h"
 #include "io/stability_files.h"
 #include "model/error.h"
+#include "stability/uncertainty.h"
 #include "stability/zwidth.h"
 
 namespace zwidth::app {
@@ -60,6 +61,7 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
   mf.plant = r.plant;
   mf.plant.name = "fitted from " + source;
   mf.std_errors = r.std_errors;
+  mf.log_covariance = r.log_covariance;
   mf.sample_period_s = 1.0 / frf.sample_rate_hz;
   mf.fit = {{"status", fit::ToString(r.status)},
             {"source", source},
@@ -133,15 +135,36 @@ nlohmann::json CompareModels(const io::ModelFile& model, const io::ModelFile& re
   for (size_t i = 0; i < delays.size(); ++i) {
     const int d = delays[i];
     nlohmann::json e = {{"delay_samples", d}};
+    stability::DelaySummary both[2];
+    stability::SummaryStd sd;  // of the model's quantities, from its covariance (issue 13)
     for (int which = 0; which < 2; ++which) {
       const Plant& p = which == 0 ? model.plant : ref.plant;
       const stability::DelaySummary s = (which == 0 && model_summaries && model_summaries->size() == delays.size())
                                             ? (*model_summaries)[i]
                                             : stability::ZWidth(p, T, d).Summarize();
-      e[which == 0 ? "model" : "reference"] = io::SummaryToJson(s);
+      both[which] = s;
+      if (which == 0 && !model.log_covariance.empty()) {
+        sd = stability::SummaryStdDelta(model.plant, model.log_covariance, T, d, s);
+      }
+      e[which == 0 ? "model" : "reference"] = io::SummaryToJson(s, which == 0 && !model.log_covariance.empty() ? &sd : nullptr);
       std::snprintf(line, sizeof line, "%-6d %-10s %12.5g %10.5g %12.5g %10.5g\n", d,
                     which == 0 ? "model" : "reference", s.K_cr_at_zero_B, s.B_t, s.K_cr_max, s.B_max);
       os << line;
+    }
+    // What the parameter differences do to the Z-width: model - reference, and
+    // that in units of the model's std.
+    const double dq[4] = {both[0].K_cr_at_zero_B - both[1].K_cr_at_zero_B, both[0].B_t - both[1].B_t,
+                          both[0].K_cr_max - both[1].K_cr_max, both[0].B_max - both[1].B_max};
+    const double sq[4] = {sd.K_cr_at_zero_B, sd.B_t, sd.K_cr_max, sd.B_max};
+    double zq[4];
+    for (int q = 0; q < 4; ++q) zq[q] = sq[q] > 0.0 ? dq[q] / sq[q] : std::numeric_limits<double>::quiet_NaN();
+    std::snprintf(line, sizeof line, "%-6s %-10s %12.5g %10.5g %12.5g %10.5g\n%-6s %-10s %12.3g %10.3g %12.3g %10.3g\n",
+                  "", "difference", dq[0], dq[1], dq[2], dq[3], "", "diff/std", zq[0], zq[1], zq[2], zq[3]);
+    os << line;
+    const char* keys[4] = {"K_cr_at_zero_B", "B_t", "K_cr_max", "B_max"};
+    for (int q = 0; q < 4; ++q) {
+      e["difference"][keys[q]] = io::NumberOrNull(dq[q]);
+      e["difference_in_std"][keys[q]] = io::NumberOrNull(zq[q]);
     }
     j["stability"].push_back(e);
   }

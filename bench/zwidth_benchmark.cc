@@ -2,6 +2,7 @@
 // log at 1 kHz, seed 1). Each benchmark reports its error as a counter and
 // sweeps the knob that trades one for the other.
 #include <cmath>
+#include <random>
 #include <numbers>
 
 #include <benchmark/benchmark.h>
@@ -12,6 +13,7 @@
 #include "model/simulate.h"
 #include "model/state_space.h"
 #include "stability/relay.h"
+#include "stability/uncertainty.h"
 #include "stability/zwidth.h"
 
 namespace zwidth {
@@ -126,6 +128,78 @@ void BM_BoundaryMap(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_BoundaryMap)->Unit(benchmark::kMillisecond);
+
+// Stable K intervals on a 1000-point B grid at one delay (construction
+// included): Table I at d = 2 (arg 0) and the reopened-band device at
+// d = 4 (arg 1), B from 0 to 1.05 B_max. Error: the largest relative
+// difference of any interval end from a reference with a 16x finer theta grid.
+Plant BandDevice() {
+  Plant p;
+  p.m = 2e-3;
+  p.b = 0.008;
+  p.delay_samples = 1;
+  p.modes = {{439.82, 70.4, 389.56, 46.7}, {942.48, 150.8, 848.23, 101.8}, {1633.63, 261.4, 1507.96, 181.0}};
+  return p;
+}
+void BM_StableIntervals(benchmark::State& state) {
+  const Plant p = state.range(0) == 0 ? PhantomTable1() : BandDevice();
+  const int d = state.range(0) == 0 ? 2 : 4;
+  const double b_max = stability::ZWidth(p, 1e-3, d).Summarize().B_max;
+  std::vector<double> grid(1000);
+  for (int i = 0; i < 1000; ++i) grid[i] = 1.05 * b_max * i / 999.0;
+  for (auto _ : state) {
+    const stability::ZWidth z(p, 1e-3, d);
+    for (double B : grid) benchmark::DoNotOptimize(z.StableIntervals(B).size());
+  }
+  stability::BoundaryOptions ref_o;
+  ref_o.min_grid_points = 32768;
+  const stability::ZWidth ref(p, 1e-3, d, ref_o), z(p, 1e-3, d);
+  double err = 0;
+  int mismatched = 0;
+  for (double B : grid) {
+    const auto a = z.StableIntervals(B), b = ref.StableIntervals(B);
+    if (a.size() != b.size()) { ++mismatched; continue; }
+    for (size_t k = 0; k < a.size(); ++k) {
+      if (b[k].K_lo > 0) err = std::max(err, std::abs(a[k].K_lo / b[k].K_lo - 1));
+      if (std::isfinite(b[k].K_hi)) err = std::max(err, std::abs(a[k].K_hi / b[k].K_hi - 1));
+    }
+  }
+  state.counters["max_rel_err_ends"] = err;
+  state.counters["interval_count_mismatches"] = mismatched;
+}
+BENCHMARK(BM_StableIntervals)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+// Delta-method std at d = 2 on Table I with a seeded covariance (1% relative
+// std): K_CR(B) on a 1000-point grid (implicit differentiation) plus the four
+// summary quantities (local finite differences). Error: largest relative
+// change of the summary std when the difference step is halved.
+void BM_DeltaMethodStd(benchmark::State& state) {
+  const Plant p = PhantomTable1();
+  const int n = stability::NumLogParameters(p);
+  std::vector<double> cov(n * n, 0.0);
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> g;
+  for (int i = 0; i < n; ++i) cov[i * n + i] = 1e-4 * (1.0 + 0.5 * std::abs(g(rng)));
+  const stability::ZWidth z(p, 1e-3, 2);
+  const stability::DelaySummary s = z.Summarize();
+  std::vector<stability::CriticalPoint> pts;
+  for (int i = 0; i < 1000; ++i) pts.push_back(z.At(1.05 * s.B_max * i / 999.0));
+  stability::SummaryStd sd;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(stability::KcrStd(p, cov, 1e-3, 2, pts).data());
+    sd = stability::SummaryStdDelta(p, cov, 1e-3, 2, s);
+  }
+  stability::UncertaintyOptions half;
+  half.log_step = 5e-5;
+  const stability::SummaryStd h = stability::SummaryStdDelta(p, cov, 1e-3, 2, s, half);
+  double err = 0;
+  for (auto [a, b] : {std::pair{sd.K_cr_at_zero_B, h.K_cr_at_zero_B}, {sd.B_t, h.B_t}, {sd.K_cr_max, h.K_cr_max},
+                      {sd.B_max, h.B_max}}) {
+    err = std::max(err, std::abs(a / b - 1));
+  }
+  state.counters["max_rel_change_half_step"] = err;
+}
+BENCHMARK(BM_DeltaMethodStd)->Unit(benchmark::kMillisecond);
 
 // The relay experiment at d = 2: record length (s) against the error of the
 // estimate and of the paper's reading, at B = 0 and 0.9 B_t (where the plain

@@ -1,5 +1,7 @@
 #include "fit/fit.h"
 
+#include <Eigen/Dense>
+
 #include <algorithm>
 #include <cmath>
 #include <complex>
@@ -496,6 +498,7 @@ FitResult FitModel(const ident::FrequencyResponse& frf, const FitOptions& o) {
   const double inf = std::numeric_limits<double>::infinity();
   res.std_errors.m = res.std_errors.b = inf;
   for (Mode& md : res.std_errors.modes) md = {inf, inf, inf, inf};
+  std::vector<double> fit_cov;  // scaled, in the solver's log space
   {
     ceres::Covariance::Options co;
     co.algorithm_type = ceres::DENSE_SVD;
@@ -508,6 +511,8 @@ FitResult FitModel(const ident::FrequencyResponse& frf, const FitOptions& o) {
       cov.GetCovarianceBlock(x.data(), x.data(), S.data());
       auto s = [&](int i, int j) { return S[i * p + j] * res.std_scale; };
       res.covariance_ok = true;
+      fit_cov.resize(S.size());
+      for (size_t k = 0; k < S.size(); ++k) fit_cov[k] = S[k] * res.std_scale;
       res.std_errors.m = res.plant.m * std::sqrt(s(0, 0));
       res.std_errors.b = res.plant.b * std::sqrt(s(1, 1));
       for (int i = 0; i < n; ++i) {
@@ -555,7 +560,28 @@ FitResult FitModel(const ident::FrequencyResponse& frf, const FitOptions& o) {
     res.nrmse_fit_percent = 100.0 * (1.0 - std::sqrt(err2 / var2));
     res.worst_misfit_hz = std::arg(bins.z[worst_k]) / (2.0 * std::numbers::pi * bins.period_s);
   }
+  const Plant before_order = res.plant;
   CanonicalOrder(&res.plant, &res.std_errors);
+  if (!fit_cov.empty()) {
+    // To (log m, log b, log omega, log c, log v, log d) with log c = log 2 +
+    // log zeta_c + log omega (and d alike), in canonical order: row r of A
+    // expresses output parameter r in the solver's parameters.
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(p, p);
+    A(0, 0) = A(1, 1) = 1.0;
+    for (int i = 0; i < n; ++i) {
+      int ip = 0, iz = 0;  // the solver's section holding this pole pair / zero pair
+      for (int k = 0; k < n; ++k) {
+        if (before_order.modes[k].omega == res.plant.modes[i].omega) ip = k;
+        if (before_order.modes[k].v == res.plant.modes[i].v) iz = k;
+      }
+      A(2 + 4 * i, 2 + 4 * ip) = 1.0;
+      A(3 + 4 * i, 3 + 4 * ip) = A(3 + 4 * i, 2 + 4 * ip) = 1.0;
+      A(4 + 4 * i, 4 + 4 * iz) = 1.0;
+      A(5 + 4 * i, 5 + 4 * iz) = A(5 + 4 * i, 4 + 4 * iz) = 1.0;
+    }
+    const Eigen::MatrixXd C = A * Eigen::Map<const Eigen::MatrixXd>(fit_cov.data(), p, p) * A.transpose();
+    res.log_covariance.assign(C.data(), C.data() + p * p);  // symmetric: row- = column-major
+  }
   if (res.status != FitStatus::kConverged) res.message = "the solver did not converge: " + res.message;
   return res;
 }

@@ -50,6 +50,11 @@ struct FitResult {
   Plant plant;                   // canonical order: poles by omega, zeros by v
   Plant std_errors;              // same shape; +inf where unknown
   bool covariance_ok = false;
+  // Full parameter covariance (scaled by std_scale), row-major (2 + 4 N)^2, in
+  // the order and log space of stability/uncertainty.h: log m, log b, then per
+  // section (canonical order) log omega, log c, log v, log d. Empty when the
+  // covariance could not be computed.
+  std::vector<double> log_covariance;
   double cost = 0.0;             // 0.5 * sum of squared weighted residuals
   int num_residuals = 0;
   int num_parameters = 0;

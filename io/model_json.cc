@@ -8,6 +8,7 @@
 
 #include "io/atomic_file.h"
 #include "model/error.h"
+#include "stability/uncertainty.h"
 
 namespace zwidth::io {
 namespace {
@@ -87,7 +88,7 @@ ModelFile ParseModelJson(const std::string& text, const std::string& source) {
     Fail(source, std::string("not valid JSON (truncated or malformed): ") + e.what());
   }
   if (!j.is_object()) Fail(source, "top level must be a JSON object");
-  CheckKeys(j, {"m", "b", "modes", "delay_samples", "sample_period_s", "name", "std", "fit"},
+  CheckKeys(j, {"m", "b", "modes", "delay_samples", "sample_period_s", "name", "std", "fit", "covariance"},
             source, "");
   ModelFile mf;
   mf.plant = ParsePlant(j, source, "", false);
@@ -115,6 +116,32 @@ ModelFile ParseModelJson(const std::string& text, const std::string& source) {
   if (auto it = j.find("fit"); it != j.end()) mf.fit = *it;
   std::string why;
   if (!mf.plant.IsValid(&why)) Fail(source, "invalid parameter: " + why);
+  if (auto it = j.find("covariance"); it != j.end()) {
+    if (!it->is_object()) Fail(source, "'covariance' must be an object");
+    CheckKeys(*it, {"space", "parameters", "matrix"}, source, "covariance.");
+    if (!it->contains("space") || (*it)["space"] != "log") Fail(source, "'covariance.space' must be \"log\"");
+    const std::vector<std::string> names = stability::LogParameterNames(mf.plant);
+    if (!it->contains("parameters") || (*it)["parameters"] != json(names)) {
+      Fail(source, "'covariance.parameters' must be " + json(names).dump() + " for this model");
+    }
+    const json& mj = (*it)["matrix"];
+    const size_t p = names.size();
+    if (!mj.is_array() || mj.size() != p) Fail(source, "'covariance.matrix' must be " + std::to_string(p) + " rows");
+    for (size_t r = 0; r < p; ++r) {
+      if (!mj[r].is_array() || mj[r].size() != p) {
+        Fail(source, "'covariance.matrix[" + std::to_string(r) + "]' must have " + std::to_string(p) + " numbers");
+      }
+      for (size_t c = 0; c < p; ++c) {
+        if (!mj[r][c].is_number()) Fail(source, "'covariance.matrix[" + std::to_string(r) + "][" + std::to_string(c) + "]' must be a number");
+        mf.log_covariance.push_back(mj[r][c].get<double>());
+      }
+    }
+    try {
+      stability::CheckLogCovariance(mf.plant, mf.log_covariance);
+    } catch (const InputError& e) {
+      Fail(source, std::string("'covariance': ") + e.what());
+    }
+  }
   return mf;
 }
 
@@ -140,6 +167,16 @@ json ModelToJson(const ModelFile& mf) {
   j["delay_samples"] = mf.plant.delay_samples;
   if (mf.sample_period_s) j["sample_period_s"] = *mf.sample_period_s;
   if (mf.std_errors) j["std"] = PlantToJson(*mf.std_errors);
+  if (!mf.log_covariance.empty()) {
+    const size_t p = static_cast<size_t>(stability::NumLogParameters(mf.plant));
+    json rows = json::array();
+    for (size_t r = 0; r < p; ++r) {
+      json row = json::array();
+      for (size_t c = 0; c < p; ++c) row.push_back(mf.log_covariance.at(r * p + c));
+      rows.push_back(row);
+    }
+    j["covariance"] = {{"space", "log"}, {"parameters", stability::LogParameterNames(mf.plant)}, {"matrix", rows}};
+  }
   if (!mf.fit.is_null()) j["fit"] = mf.fit;
   return j;
 }

@@ -18,21 +18,40 @@ void WriteBoundaryCsv(const std::string& path, const std::vector<BoundaryRow>& r
   WriteAtomically(path, [&](const std::string& tmp) {
     std::FILE* f = std::fopen(tmp.c_str(), "wb");
     if (!f) throw InputError("cannot create '" + tmp + "'");
-    std::fputs("delay_samples,B,K_cr,f_cr_hz,K_margin,f_margin_hz,unstable_at_zero_k,"
-               "margin_agrees,verified\n", f);
+    std::fputs("delay_samples,B,interval,num_intervals,K_lo,K_hi,f_lo_hz,f_hi_hz,interval_verified,"
+               "K_cr,K_cr_std,f_cr_hz,K_margin,f_margin_hz,unstable_at_zero_k,margin_agrees,verified\n", f);
+    const double nan = std::numeric_limits<double>::quiet_NaN();
     for (const BoundaryRow& r : rows) {
       const auto& p = r.point;
-      std::fprintf(f, "%d,%.12g,%.15g,%.15g,%.15g,%.15g,%d,%d,%d\n", r.delay_samples, p.B, p.K_cr,
-                   p.f_cr_hz, p.K_margin, p.f_margin_hz, p.unstable_at_zero_k ? 1 : 0,
-                   p.AgreesWithMargin() ? 1 : 0, p.verified ? 1 : 0);
+      const int n = static_cast<int>(r.intervals.size());
+      for (int i = 0; i < std::max(n, 1); ++i) {
+        const stability::KInterval iv = n ? r.intervals[i] : stability::KInterval{nan, nan, nan, nan, false};
+        std::fprintf(f, "%d,%.12g,%d,%d,%.15g,%.15g,%.15g,%.15g,%d,%.15g,%.6g,%.15g,%.15g,%.15g,%d,%d,%d\n",
+                     r.delay_samples, p.B, n ? i : -1, n, iv.K_lo, iv.K_hi, iv.f_lo_hz, iv.f_hi_hz,
+                     iv.verified ? 1 : 0, p.K_cr, r.K_cr_std, p.f_cr_hz, p.K_margin, p.f_margin_hz,
+                     p.unstable_at_zero_k ? 1 : 0, p.AgreesWithMargin() ? 1 : 0, p.verified ? 1 : 0);
+      }
     }
     const bool ok = std::ferror(f) == 0;
     if (std::fclose(f) != 0 || !ok) throw InputError("failed writing '" + path + "'");
   });
 }
 
-nlohmann::json SummaryToJson(const stability::DelaySummary& s) {
-  return {{"delay_samples", s.delay_samples},
+nlohmann::json IntervalsToJson(const std::vector<stability::KInterval>& intervals) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const auto& iv : intervals) {
+    a.push_back({{"K_lo", iv.K_lo}, {"K_hi", NumberOrNull(iv.K_hi)}, {"f_lo_hz", NumberOrNull(iv.f_lo_hz)},
+                 {"f_hi_hz", NumberOrNull(iv.f_hi_hz)}, {"verified", iv.verified}});
+  }
+  return a;
+}
+
+nlohmann::json SummaryToJson(const stability::DelaySummary& s, const stability::SummaryStd* std) {
+  nlohmann::json bands = nlohmann::json::array();
+  for (const auto& b : s.reopened_bands) {
+    bands.push_back({{"B_lo", b.B_lo}, {"B_hi", b.B_hi}, {"K_max", NumberOrNull(b.K_max)}});
+  }
+  nlohmann::json j = {{"delay_samples", s.delay_samples},
           {"K_cr_at_zero_B", NumberOrNull(s.K_cr_at_zero_B)},
           {"f_at_zero_B_hz", NumberOrNull(s.f_at_zero_B_hz)},
           {"B_t", NumberOrNull(s.B_t)},
@@ -40,7 +59,14 @@ nlohmann::json SummaryToJson(const stability::DelaySummary& s) {
           {"B_at_K_cr_max", NumberOrNull(s.B_at_K_cr_max)},
           {"f_before_hz", NumberOrNull(s.f_before_hz)},
           {"f_after_hz", NumberOrNull(s.f_after_hz)},
-          {"B_max", NumberOrNull(s.B_max)}};
+          {"B_max", NumberOrNull(s.B_max)},
+          {"B_max_from_zero", NumberOrNull(s.B_max_from_zero)},
+          {"reopened_bands", bands}};
+  if (std) {
+    j["std"] = {{"K_cr_at_zero_B", NumberOrNull(std->K_cr_at_zero_B)}, {"B_t", NumberOrNull(std->B_t)},
+                {"K_cr_max", NumberOrNull(std->K_cr_max)}, {"B_max", NumberOrNull(std->B_max)}};
+  }
+  return j;
 }
 
 std::vector<SceneObject> ReadScene(const std::string& path) {

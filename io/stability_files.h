@@ -2,6 +2,7 @@
 // haptic scenes {"objects": [{"name": "wall", "K": 20.0, "B": 0.05}, ...]}.
 #pragma once
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -14,14 +15,31 @@ namespace zwidth::io {
 struct BoundaryRow {
   int delay_samples = 0;
   stability::CriticalPoint point;
+  std::vector<stability::KInterval> intervals;  // the stable K intervals at point.B
+  double K_cr_std = std::numeric_limits<double>::quiet_NaN();  // N m/rad; nan = no covariance
 };
 
-// Columns: delay_samples,B,K_cr,f_cr_hz,K_margin,f_margin_hz,
-// unstable_at_zero_k,margin_agrees,verified. inf and nan are written as such.
+// One line per (delay, B, stable interval); a B with no stable K gets one line
+// with interval = -1 and K_lo, K_hi = nan. Columns:
+//   delay_samples, B                      loop delay [samples], damping [N m s/rad]
+//   interval, num_intervals               index of this interval at this B (0 = lowest K), count
+//   K_lo, K_hi                            the interval [N m/rad]; K_lo = 0 means from K = 0+, K_hi may be inf
+//   f_lo_hz, f_hi_hz                      pole frequency at each end (nan at 0 / inf)
+//   interval_verified                     Schur-Cohn agrees at both ends (KInterval::verified)
+//   K_cr, K_cr_std, f_cr_hz               the paper's K_CR(B) (K_hi of the interval from 0+, else 0),
+//                                         its delta-method std (nan without a covariance), its frequency
+//   K_margin, f_margin_hz                 the paper's margin() reading of eq. (4)
+//   unstable_at_zero_k, margin_agrees, verified   as in CriticalPoint
+// The per-B columns from K_cr on repeat on every interval line of that B.
+// inf and nan are written as such.
 void WriteBoundaryCsv(const std::string& path, const std::vector<BoundaryRow>& rows);
 
-// NaN and inf become null.
-nlohmann::json SummaryToJson(const stability::DelaySummary& s);
+// NaN and inf become null. With std: adds "std": {K_cr_at_zero_B, B_t,
+// K_cr_max, B_max} (standard deviations, same units; null = not computed).
+nlohmann::json SummaryToJson(const stability::DelaySummary& s,
+                             const stability::SummaryStd* std = nullptr);
+// [{"K_lo": .., "K_hi": .. (null = +inf), "f_lo_hz", "f_hi_hz", "verified"}]
+nlohmann::json IntervalsToJson(const std::vector<stability::KInterval>& intervals);
 nlohmann::json NumberOrNull(double v);
 
 struct SceneObject {

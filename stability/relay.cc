@@ -187,7 +187,7 @@ Run RunOnce(const StateSpace& ss, int d, const RelayOptions& o, double centre, W
   }
   const size_t start = static_cast<size_t>(o.settle_fraction * n);
   const size_t m = n - start;
-  // Diverging (the loop is unstable without the relay, past B_max): the peak
+  // Diverging (the loop is unstable without the relay, past B_max_from_zero): the peak
   // grows by the same factor, over 1.2, from each quarter of the steady part
   // to the next (exponential growth; a cycle still building up or changing
   // over grows by changing factors), or overflows.

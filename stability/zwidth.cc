@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <cstdio>
 #include <functional>
 #include <numbers>
 
@@ -183,7 +184,10 @@ ZWidth::ZWidth(const Plant& plant, double period_s, int delay_samples,
   breaks.push_back(th.back());
   for (size_t i = 0; i + 1 < breaks.size(); ++i) {
     if (!(breaks[i + 1] > breaks[i])) continue;
-    segments_.push_back({breaks[i], breaks[i + 1], Bof(breaks[i]), Bof(breaks[i + 1])});
+    Segment sg{breaks[i], breaks[i + 1], Bof(breaks[i]), Bof(breaks[i + 1]), 0, -1};
+    sg.ia = static_cast<int>(std::upper_bound(th.begin(), th.end(), sg.ta) - th.begin());
+    sg.ib = static_cast<int>(std::lower_bound(th.begin(), th.end(), sg.tb) - th.begin()) - 1;
+    segments_.push_back(sg);
   }
   const std::complex<double> gpi = response_.AtZ(-1.0);
   const double sgn = (total_delay_ % 2 == 0) ? 1.0 : -1.0;  // z^d at z = -1
@@ -197,10 +201,17 @@ std::complex<double> ZWidth::Gd(std::complex<double> z) const {
 }
 
 void ZWidth::Point(double theta, double* B, double* K) const {
-  const std::complex<double> z = std::polar(1.0, theta);
-  const std::complex<double> W = -std::polar(1.0, theta * total_delay_) / Gd(z);
-  *B = period_s_ * W.imag() / std::sin(theta);
-  *K = W.real() - W.imag() * std::tan(0.5 * theta);
+  const double c = std::cos(theta), s = std::sin(theta);
+  const std::complex<double> z(c, s);
+  // z^d by repeated squaring (one sincos instead of two; error ~ d eps).
+  std::complex<double> zd = 1.0, zp = z;
+  for (int e = total_delay_; e > 0; e >>= 1) {
+    if (e & 1) zd *= zp;
+    zp *= zp;
+  }
+  const std::complex<double> W = -zd / Gd(z);
+  *B = period_s_ * W.imag() / s;
+  *K = W.real() - W.imag() * (s / (1.0 + c));  // tan(theta / 2)
 }
 
 double ZWidth::HzOf(double theta) const { return theta / (2.0 * std::numbers::pi * period_s_); }
@@ -211,7 +222,22 @@ std::vector<Crossing> ZWidth::Crossings(double B) const {
     const double lo = std::min(s.Ba, s.Bb), hi = std::max(s.Ba, s.Bb);
     if (B < lo || B > hi) continue;
     auto g = [&](double t) { double b, k; Point(t, &b, &k); return b - B; };
-    const double t = BrentRoot(g, s.ta, s.tb, s.Ba - B, s.Bb - B, options_.theta_tolerance);
+    // Narrow the bracket to one cell of the tabulated grid (B is monotone on
+    // the piece), so that Brent starts close to the root.
+    double ta = s.ta, tb = s.tb, fa = s.Ba - B, fb = s.Bb - B;
+    if (s.ib >= s.ia) {
+      const bool inc = s.Bb > s.Ba;
+      int lo = s.ia, hi = s.ib + 1;  // first grid index past B
+      while (lo < hi) {
+        const int mid = (lo + hi) / 2;
+        if (inc ? grid_B_[mid] >= B : grid_B_[mid] <= B) hi = mid; else lo = mid + 1;
+      }
+      double ca = ta, cb = tb, ga = fa, gb = fb;
+      if (lo <= s.ib) { cb = grid_theta_[lo]; gb = grid_B_[lo] - B; }
+      if (lo > s.ia) { ca = grid_theta_[lo - 1]; ga = grid_B_[lo - 1] - B; }
+      if (!(ga * gb > 0.0)) { ta = ca; tb = cb; fa = ga; fb = gb; }
+    }
+    const double t = BrentRoot(g, ta, tb, fa, fb, options_.theta_tolerance);
     double b, k;
     Point(t, &b, &k);
     // Reject a spurious "root" at a singularity of B(theta) (a zero of G_d).
@@ -242,6 +268,44 @@ bool ZWidth::IsStable(double K, double B) const {
   for (size_t i = 0; i < den1_.size(); ++i) q[i + d + 1] += den1_[i];
   for (size_t i = 0; i < num_.size(); ++i) q[i] += B / period_s_ * num_[i];
   return AllRootsInsideUnitCircle(q);
+}
+
+bool BGridOptions::IsValid(std::string* why) const {
+  auto bad = [&](const std::string& m) { if (why) *why = m; return false; };
+  if (!(std::isfinite(b_min) && b_min >= 0.0)) return bad("--b-min must be finite and >= 0");
+  if (!std::isnan(b_max) && !(std::isfinite(b_max) && b_max >= b_min)) return bad("--b-max must be finite and >= --b-min");
+  if (!std::isnan(b_step) && !(std::isfinite(b_step) && b_step > 0.0)) return bad("--b-step must be finite and > 0");
+  if (!(b_points >= 2 && b_points <= kMaxBGridValues)) return bad("--b-points must be in [2, 1000000]");
+  return true;
+}
+
+std::vector<double> MakeBGrid(const BGridOptions& o, double largest, double fallback, int num_delays) {
+  std::string why;
+  if (!o.IsValid(&why)) throw InputError(why);
+  double hi = o.b_max;
+  if (std::isnan(hi)) {
+    hi = (largest > 0.0 && std::isfinite(largest)) ? 1.05 * largest : fallback;
+    hi = std::max(hi, o.b_min);
+  }
+  const double nd = std::max(1, num_delays);
+  double count;
+  if (!std::isnan(o.b_step)) count = std::floor((hi - o.b_min) / o.b_step * (1.0 + 1e-12)) + 1.0;
+  else count = hi > o.b_min ? o.b_points : 1.0;
+  if (!(count * nd <= kMaxBGridValues)) {
+    char buf[300];
+    std::snprintf(buf, sizeof buf,
+                  "the B grid would have %.3g values x %d delays, over the cap of %.0f: raise --b-step, "
+                  "lower --b-points or narrow --b-min/--b-max",
+                  count, num_delays, kMaxBGridValues);
+    throw InputError(buf);
+  }
+  const long n = static_cast<long>(count);
+  std::vector<double> g(n);
+  for (long k = 0; k < n; ++k) {
+    g[k] = std::isnan(o.b_step) ? (n == 1 ? o.b_min : o.b_min + (hi - o.b_min) * k / (n - 1))
+                                : o.b_min + k * o.b_step;
+  }
+  return g;
 }
 
 CriticalPoint ZWidth::At(double B) const {
@@ -284,14 +348,86 @@ double ZWidth::FindTransition(double lo, double hi, double f_lo, double f_hi) co
   return 0.5 * (lo + hi);
 }
 
+std::vector<KInterval> ZWidth::StableIntervals(double B) const {
+  std::vector<Crossing> xs = Crossings(B);
+  std::vector<Crossing> pos;
+  for (const Crossing& x : xs) if (x.K > 0.0 && std::isfinite(x.K)) pos.push_back(x);
+  std::sort(pos.begin(), pos.end(), [](const Crossing& a, const Crossing& b) { return a.K < b.K; });
+  // Merge coincident crossings (a double root at one K).
+  std::vector<Crossing> ks;
+  for (const Crossing& x : pos) {
+    if (!ks.empty() && x.K - ks.back().K <= 1e-13 * x.K) continue;
+    ks.push_back(x);
+  }
+  const double inf = std::numeric_limits<double>::infinity();
+  const size_t n = ks.size();
+  std::vector<KInterval> out;
+  // Region i lies between bound(i) and bound(i + 1); bound(0) = 0, bound(n + 1) = inf.
+  auto lo_of = [&](size_t i) { return i == 0 ? 0.0 : ks[i - 1].K; };
+  auto hi_of = [&](size_t i) { return i == n ? inf : ks[i].K; };
+  for (size_t i = 0; i <= n; ++i) {
+    const double a = lo_of(i), b = hi_of(i);
+    double probe;
+    if (i == 0) probe = n == 0 ? 0.0 : 0.5 * b;  // K -> 0+ when there is no crossing at all
+    else if (i == n) probe = 2.0 * a;
+    else probe = std::sqrt(a * b);
+    if (!IsStable(probe, B)) continue;
+    if (!out.empty() && out.back().K_hi == a) {  // a tangential crossing: both sides stable
+      out.back().K_hi = b;
+      out.back().f_hi_hz = i == n ? std::numeric_limits<double>::quiet_NaN() : HzOf(ks[i].theta);
+      continue;
+    }
+    KInterval iv;
+    iv.K_lo = a;
+    iv.K_hi = b;
+    if (i > 0) iv.f_lo_hz = HzOf(ks[i - 1].theta);
+    if (i < n) iv.f_hi_hz = HzOf(ks[i].theta);
+    out.push_back(iv);
+  }
+  for (KInterval& iv : out) {
+    bool ok = true;
+    if (options_.verify) {
+      if (iv.K_lo > 0.0) ok = ok && IsStable(iv.K_lo * (1.0 + 1e-6), B) && !IsStable(iv.K_lo * (1.0 - 1e-6), B);
+      if (std::isfinite(iv.K_hi)) ok = ok && IsStable(iv.K_hi * (1.0 - 1e-6), B) && !IsStable(iv.K_hi * (1.0 + 1e-6), B);
+    }
+    iv.verified = ok;
+  }
+  return out;
+}
+
+double ZWidth::StableBBound() const {
+  // A stable K interval is bounded above by a crossing with K > 0 (for large K,
+  // d + 1 roots leave through infinity), so past the largest B of the curve
+  // with K > 0 nothing is stable. On each monotone piece the largest B with
+  // K > 0 is at an end of the piece or where K(theta) changes sign.
+  double bound = 0.0;
+  auto Kof = [this](double t) { double b, k; Point(t, &b, &k); return k; };
+  for (const Segment& sg : segments_) {
+    const double ka = Kof(sg.ta), kb = Kof(sg.tb);
+    if (ka > 0.0 && std::isfinite(sg.Ba)) bound = std::max(bound, sg.Ba);
+    if (kb > 0.0 && std::isfinite(sg.Bb)) bound = std::max(bound, sg.Bb);
+  }
+  for (size_t i = 1; i < grid_theta_.size(); ++i) {
+    if (grid_K_[i - 1] > 0.0 && std::isfinite(grid_B_[i - 1])) bound = std::max(bound, grid_B_[i - 1]);
+    if ((grid_K_[i - 1] > 0) != (grid_K_[i] > 0)) {
+      const double t = BrentRoot(Kof, grid_theta_[i - 1], grid_theta_[i], grid_K_[i - 1], grid_K_[i],
+                                 options_.theta_tolerance);
+      double b, k;
+      Point(t, &b, &k);
+      if (std::isfinite(b)) bound = std::max(bound, b);
+    }
+  }
+  if (K_pi_at_zero_B_ > 0.0) bound = std::max(bound, 0.5 * period_s_ * K_pi_at_zero_B_);
+  return bound;
+}
+
 DelaySummary ZWidth::Summarize() const {
   DelaySummary s;
   s.delay_samples = total_delay_;
   const CriticalPoint c0 = At(0.0);
   s.K_cr_at_zero_B = c0.K_cr;
   s.f_at_zero_B_hz = c0.f_cr_hz;
-  if (c0.unstable_at_zero_k) { s.B_max = 0.0; return s; }
-  // B_max: the first B > 0 on the K = 0 boundary where K -> 0+ turns unstable.
+  // B_max_from_zero: the first B > 0 on the K = 0 boundary where K -> 0+ turns unstable.
   std::vector<double> cand;
   auto Kof = [this](double t) { double b, k; Point(t, &b, &k); return k; };
   for (size_t i = 1; i < grid_theta_.size(); ++i) {
@@ -305,11 +441,71 @@ DelaySummary ZWidth::Summarize() const {
   }
   if (K_pi_at_zero_B_ > 0.0) cand.push_back(0.5 * period_s_ * K_pi_at_zero_B_);
   std::sort(cand.begin(), cand.end());
-  for (double b : cand) {
-    if (IsStable(0.0, b * (1.0 - 1e-9)) && !IsStable(0.0, b * (1.0 + 1e-9))) { s.B_max = b; break; }
+  if (c0.unstable_at_zero_k) {
+    s.B_max_from_zero = 0.0;
+  } else {
+    for (double b : cand) {
+      if (IsStable(0.0, b * (1.0 - 1e-9)) && !IsStable(0.0, b * (1.0 + 1e-9))) { s.B_max_from_zero = b; break; }
+    }
   }
-  // Scan [0, B_max) for the jump of f_CR and the maximum of K_CR.
-  const double b_hi = std::isfinite(s.B_max) ? s.B_max : (cand.empty() ? 1.0 : 2.0 * cand.back());
+  // B_max and the reopened bands: scan B up to the bound past which no crossing
+  // with K > 0 exists, uniformly, geometrically, and at both sides of every
+  // fold of the curve and every K = 0 point (where bands start or end).
+  const double bound = StableBBound();
+  if (bound > 0.0 && std::isfinite(bound)) {
+    std::vector<double> bs;
+    const int n_scan = 1000;
+    for (int i = 0; i <= n_scan; ++i) bs.push_back(bound * i / n_scan);
+    for (int i = 0; i <= n_scan; ++i) bs.push_back(bound * std::pow(1e-6, 1.0 - double(i) / n_scan));
+    auto add = [&](double b) {
+      if (b > 0.0 && b <= bound && std::isfinite(b)) { bs.push_back(b * (1.0 - 1e-7)); bs.push_back(b * (1.0 + 1e-7)); }
+    };
+    for (double b : cand) add(b);
+    for (const Segment& sg : segments_) { add(sg.Ba); add(sg.Bb); }
+    if (std::isfinite(s.B_max_from_zero)) add(s.B_max_from_zero);
+    bs.push_back(bound * (1.0 + 1e-9));
+    std::sort(bs.begin(), bs.end());
+    bs.erase(std::unique(bs.begin(), bs.end()), bs.end());
+    std::vector<char> st(bs.size());
+    std::vector<double> kmax(bs.size(), 0.0);
+    for (size_t i = 0; i < bs.size(); ++i) {
+      const std::vector<KInterval> iv = StableIntervals(bs[i]);
+      st[i] = !iv.empty();
+      for (const KInterval& v : iv) kmax[i] = std::max(kmax[i], std::isfinite(v.K_hi) ? v.K_hi : v.K_lo);
+    }
+    auto edge = [&](double lo, double hi, bool lo_stable) {  // bisection of "some K stable"
+      for (int it = 0; it < 80 && hi - lo > 1e-14 * hi; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (!StableIntervals(mid).empty() == lo_stable ? lo : hi) = mid;
+      }
+      return 0.5 * (lo + hi);
+    };
+    s.B_max = 0.0;
+    for (size_t i = bs.size(); i-- > 0;) {
+      if (st[i]) {
+        s.B_max = i + 1 < bs.size() ? edge(bs[i], bs[i + 1], true) : bs[i];
+        break;
+      }
+    }
+    // Bands past B_max_from_zero.
+    const double b0 = std::isfinite(s.B_max_from_zero) ? s.B_max_from_zero : bound;
+    for (size_t i = 0; i < bs.size(); ++i) {
+      if (!st[i] || bs[i] <= b0) continue;
+      ReopenedBand band;
+      band.B_lo = (i > 0 && !st[i - 1] && bs[i - 1] > b0) ? edge(bs[i - 1], bs[i], false) : b0;
+      size_t j = i;
+      while (j + 1 < bs.size() && st[j + 1]) { band.K_max = std::max(band.K_max, kmax[j]); ++j; }
+      band.K_max = std::max(band.K_max, kmax[j]);
+      band.B_hi = j + 1 < bs.size() ? edge(bs[j], bs[j + 1], true) : bs[j];
+      s.reopened_bands.push_back(band);
+      i = j;
+    }
+  } else {
+    s.B_max = std::isfinite(s.B_max_from_zero) ? s.B_max_from_zero : s.B_max;
+  }
+  if (c0.unstable_at_zero_k) return s;
+  // Scan [0, B_max_from_zero) for the jump of f_CR and the maximum of K_CR.
+  const double b_hi = std::isfinite(s.B_max_from_zero) ? s.B_max_from_zero : (cand.empty() ? 1.0 : 2.0 * cand.back());
   const int n = 200;
   double prev_f = c0.f_cr_hz, prev_b = 0.0;
   s.K_cr_max = c0.K_cr;
@@ -342,6 +538,44 @@ DelaySummary ZWidth::Summarize() const {
     if (km > s.K_cr_max) { s.K_cr_max = km; s.B_at_K_cr_max = bm; }
   }
   return s;
+}
+
+SummaryStd ZWidth::SummarizeNear(const DelaySummary& nom) const {
+  SummaryStd q;  // here: the values, not their std
+  q.K_cr_at_zero_B = At(0.0).K_cr;
+  const double w = 0.02;
+  if (nom.has_transition) {
+    const double lo = nom.B_t * (1 - w), hi = nom.B_t * (1 + w);
+    const double flo = At(lo).f_cr_hz, fhi = At(hi).f_cr_hz;
+    if (std::abs(std::log(flo / nom.f_before_hz)) < 0.3 && std::abs(std::log(fhi / nom.f_after_hz)) < 0.3) {
+      q.B_t = FindTransition(lo, hi, nom.f_before_hz, nom.f_after_hz);
+    }
+  }
+  const bool at_corner = nom.has_transition && std::abs(nom.B_at_K_cr_max - nom.B_t) <= 1e-6 * nom.B_t;
+  if (at_corner) {
+    if (std::isfinite(q.B_t)) {
+      const double eps = 1e-9 * q.B_t;
+      q.K_cr_max = std::max(At(q.B_t - eps).K_cr, At(q.B_t + eps).K_cr);
+    }
+  } else if (nom.B_at_K_cr_max > 0.0) {
+    const double lo = nom.B_at_K_cr_max * (1 - w), hi = nom.B_at_K_cr_max * (1 + w);
+    const double bm = internal::GoldenExtremum([this](double b) { return At(b).K_cr; }, lo, hi, 1.0,
+                                               1e-12 * hi);
+    q.K_cr_max = At(bm).K_cr;
+  } else {
+    q.K_cr_max = q.K_cr_at_zero_B;
+  }
+  if (std::isfinite(nom.B_max) && nom.B_max > 0.0) {
+    double lo = nom.B_max * (1 - w), hi = nom.B_max * (1 + w);
+    if (!StableIntervals(lo).empty() && StableIntervals(hi).empty()) {
+      for (int it = 0; it < 80 && hi - lo > 1e-14 * hi; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (StableIntervals(mid).empty() ? hi : lo) = mid;
+      }
+      q.B_max = 0.5 * (lo + hi);
+    }
+  }
+  return q;
 }
 
 }  // namespace zwidth::stability

@@ -59,6 +59,29 @@ struct CriticalPoint {
   bool AgreesWithMargin(double rel_tol = 1e-6) const;
 };
 
+// One maximal interval K_lo < K < K_hi of stiffness at a fixed B in which every
+// closed-loop pole of eq. (2) lies strictly inside the unit circle. Its ends
+// are D-decomposition crossings (or 0 / +inf); the number of unstable roots
+// only changes at a crossing, so one Schur-Cohn test inside each region
+// between consecutive crossings decides the whole region.
+struct KInterval {
+  double K_lo = 0.0;  // N m/rad, >= 0; 0 means "from K = 0+"
+  double K_hi = std::numeric_limits<double>::infinity();  // N m/rad, may be +inf
+  double f_lo_hz = std::numeric_limits<double>::quiet_NaN();  // pole frequency at K_lo (nan at 0)
+  double f_hi_hz = std::numeric_limits<double>::quiet_NaN();  // pole frequency at K_hi (nan at inf)
+  // Schur-Cohn agrees at each finite, positive end: stable at (1 -+ 1e-6) of
+  // it inside the interval, unstable just outside.
+  bool verified = false;
+};
+
+// A B range past B_max_from_zero in which some K > 0 is stable again (the
+// stable K interval there starts above 0).
+struct ReopenedBand {
+  double B_lo = 0.0;   // N m s/rad: where the band starts (B_max_from_zero when contiguous)
+  double B_hi = 0.0;   // N m s/rad: where the last stable K disappears
+  double K_max = 0.0;  // N m/rad: largest stable K seen in the band (on the scan of Summarize)
+};
+
 struct DelaySummary {
   int delay_samples = 0;   // loop delay d (the model's own delay is added)
   double K_cr_at_zero_B = std::numeric_limits<double>::quiet_NaN();
@@ -69,8 +92,48 @@ struct DelaySummary {
   double B_at_K_cr_max = std::numeric_limits<double>::quiet_NaN();
   double f_before_hz = std::numeric_limits<double>::quiet_NaN();
   double f_after_hz = std::numeric_limits<double>::quiet_NaN();
-  double B_max = std::numeric_limits<double>::infinity();  // K_CR reaches 0
+  // The B where the interval from K = 0+ closes (K_CR(B) reaches 0): what the
+  // paper and zwidth before issue 13 called B_max.
+  double B_max_from_zero = std::numeric_limits<double>::infinity();
+  // The largest B at which some K > 0 is stable (reopened bands included).
+  // Found on a scan of B up to a proven bound (every stable region is bounded
+  // above by a crossing with K > 0, and no crossing with K > 0 exists past the
+  // largest B of the D-decomposition curve with K > 0); a band narrower than
+  // the scan spacing (1/1000 of that bound, plus 1000 geometric points from
+  // 1e-6 of it and both sides of every fold and K = 0 point of the curve) can
+  // be missed.
+  double B_max = std::numeric_limits<double>::infinity();
+  std::vector<ReopenedBand> reopened_bands;
 };
+
+// Standard deviations [same units as the quantity] of the summary's quantities
+// from a parameter covariance (stability/uncertainty.h); nan = not computed.
+struct SummaryStd {
+  double K_cr_at_zero_B = std::numeric_limits<double>::quiet_NaN();
+  double B_t = std::numeric_limits<double>::quiet_NaN();
+  double K_cr_max = std::numeric_limits<double>::quiet_NaN();
+  double B_max = std::numeric_limits<double>::quiet_NaN();
+};
+
+// The B values of a boundary table, shared by `boundary` and `run`.
+// Default: b_points values from b_min to 1.05 x the largest stable B of the
+// device (B_max over the delays), so the grid scales with the device;
+// b_step, when given, wins over b_points.
+struct BGridOptions {
+  double b_min = 0.0;  // first B [N m s/rad], finite, >= 0
+  double b_max = std::numeric_limits<double>::quiet_NaN();   // last B [N m s/rad]; nan = automatic
+  double b_step = std::numeric_limits<double>::quiet_NaN();  // B step [N m s/rad], > 0; nan = from b_points
+  int b_points = 1000;  // number of B values when b_step is not given, in [2, kMaxBGridValues]
+  bool IsValid(std::string* why) const;  // names the command-line flag
+};
+// Cap on B values x delays of one table (about 100 MB of CSV).
+constexpr double kMaxBGridValues = 1e6;
+// largest_stable_B: B_max over the delays (may be 0 or inf); fallback_B: the
+// range used when that is not finite and positive. Throws InputError (naming
+// --b-min, --b-max, --b-step or --b-points) for an invalid or too large grid;
+// never overflows (counts are computed in double first).
+std::vector<double> MakeBGrid(const BGridOptions& options, double largest_stable_B, double fallback_B,
+                              int num_delays);
 
 class ZWidth {
  public:
@@ -84,6 +147,12 @@ class ZWidth {
   // at z = 1 that K = 0 leaves on the circle moves inside for K > 0).
   bool IsStable(double K, double B) const;
   DelaySummary Summarize() const;
+  // All stable K intervals at this B, ascending. Empty when no K > 0 is stable.
+  std::vector<KInterval> StableIntervals(double B) const;
+  // The four quantities of SummaryStd recomputed near a nominal summary of a
+  // nearby plant (local brackets of +-2%; nan where the bracket fails). Used for
+  // the finite-difference delta method.
+  SummaryStd SummarizeNear(const DelaySummary& nominal) const;
 
   int total_delay() const { return total_delay_; }
   double period_s() const { return period_s_; }
@@ -91,11 +160,14 @@ class ZWidth {
   std::vector<double> CharacteristicPolynomial(double K, double B) const;
 
  private:
-  struct Segment { double ta, tb, Ba, Bb; };
+  // A monotone piece of B(theta); grid points ia..ib lie strictly inside it.
+  struct Segment { double ta, tb, Ba, Bb; int ia, ib; };
   void Point(double theta, double* B, double* K) const;
   // Bisection for the B where f_CR jumps between f_lo (at b_lo) and f_hi.
   double FindTransition(double b_lo, double b_hi, double f_lo, double f_hi) const;
   double HzOf(double theta) const;
+  // Largest B of the D-decomposition curve (and of the theta = pi line) with K > 0.
+  double StableBBound() const;
   // G_d(z) without the delay: the pole-residue form when it reproduces the
   // state-space response (distinct underdamped modes), else the Hessenberg solve.
   std::complex<double> Gd(std::complex<double> z) const;

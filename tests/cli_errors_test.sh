@@ -50,6 +50,15 @@ expect missing-file "cannot open|does it exist" "$T/o16.csv" -- "$ZW" estimate "
 expect bad-window-name "--window 'kaiser'" "$T/o17.csv" -- "$ZW" estimate "$T/good.h5" --window kaiser -o "$T/o17.csv"
 expect relay-negative-delay "delay" "" -- "$ZW" relay "$M" --delay -2 --damping 0
 expect check-negative-K "'K'" "" -- "$ZW" check <(echo '{"objects":[{"name":"w","K":-1,"B":0}]}') --model "$M" --delay 2
+sed 's/"modes"/"covariance": {"space": "log", "parameters": ["m", "b"], "matrix": [[1e-4, 0], [0, 1e-4]]}, "modes"/' "$M" > "$T/cov.json"
+expect model-covariance-shape "covariance.parameters" "$T/o26.csv" -- "$ZW" boundary "$T/cov.json" -o "$T/o26.csv"
+expect b-grid-cap "over the cap.*--b-step" "$T/o24.csv" -- "$ZW" boundary "$M" --b-max 1e300 --b-step 1e-3 -o "$T/o24.csv"
+expect b-grid-bad-max "--b-max must be finite" "$T/o25.csv" -- "$ZW" boundary "$M" --b-max inf -o "$T/o25.csv"
+# check: exit 3 (not 1 or 2) when an object is unstable, 0 when all are stable.
+"$ZW" check <(echo '{"objects":[{"name":"ok","K":1,"B":0.01},{"name":"wall","K":80,"B":0.01}]}') --model "$M" --delay 2 >"$T/stdout" 2>&1; rc=$?
+"$ZW" check <(echo '{"objects":[{"name":"ok","K":1,"B":0.01}]}') --model "$M" --delay 2 >/dev/null 2>&1; rc0=$?
+if [ $rc -eq 3 ] && [ $rc0 -eq 0 ] && grep -q "UNSTABLE" "$T/stdout"; then echo "ok   check-exit-3"; pass=$((pass+1));
+else echo "FAIL check-exit-3: exit $rc / $rc0"; cat "$T/stdout"; fail=$((fail+1)); fi
 expect unknown-flag "unknown|extra|not expected" "" -- "$ZW" boundary "$M" --bogus 1 -o "$T/x.csv"
 awk -F, 'NR!=200' OFS=, "$T/good.csv" > "$T/gap.csv"
 expect not-uniform "not uniformly sampled" "$T/o18.csv" -- "$ZW" estimate "$T/gap.csv" -o "$T/o18.csv"

@@ -86,6 +86,7 @@ subprocess.run([zw, "boundary", model_path, "--delays", "1,2,3,4,5,6,7,8,9,10", 
                 "--b-step", "0.01", "-o", csv, "--summary", summary], check=True,
                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 rows = np.genfromtxt(csv, delimiter=",", names=True)
+rows = rows[rows["interval"] <= 0]  # one line per (delay, B): K_cr repeats on every interval line
 worst_k = worst_f = 0.0
 for row in rows:
     d, B, K, f = int(row["delay_samples"]), row["B"], row["K_cr"], row["f_cr_hz"]
@@ -117,7 +118,9 @@ print(f"relay: 12 points, worst relative error {worst:.1e}")
 
 # Past B_max the loop diverges (K_cr = 0, as the reference says); a record too
 # short for d = 10's crossing near 3.4 Hz says so instead of guessing.
-b_max = {e["delay_samples"]: e["B_max"] for e in json.load(open(summary))["delays"]}
+# B_max_from_zero: where K -> 0+ turns unstable (B_max, the largest B with some
+# stable K, is the same here: Table I has no reopened band).
+b_max = {e["delay_samples"]: e["B_max_from_zero"] for e in json.load(open(summary))["delays"]}
 p = subprocess.run([zw, "relay", model_path, "--delay", "2", "--damping", repr(1.01 * b_max[2]), "--json"],
                    check=True, capture_output=True, text=True)
 j = json.loads(p.stdout)

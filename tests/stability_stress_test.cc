@@ -98,7 +98,7 @@ TEST(Relay, StressRandomModelsFindTheCriticalCrossing) {
     const int d = static_cast<int>(U(rng) * 12);
     const ZWidth z(p, T, d);
     const DelaySummary s = z.Summarize();
-    const double b_ref = std::isfinite(s.B_t) && s.B_t > 0 ? s.B_t : s.B_max;
+    const double b_ref = std::isfinite(s.B_t) && s.B_t > 0 ? s.B_t : s.B_max_from_zero;
     for (double frac : {0.0, 0.3, 0.6}) {
       RelayOptions o;
       o.period_s = T;

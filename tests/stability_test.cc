@@ -24,7 +24,9 @@ TEST(ZWidth, AppendixModelFactsAtTwoAndFourSamples) {
   EXPECT_NEAR(s2.K_cr_max, 36.74, 0.01);
   EXPECT_NEAR(s2.f_before_hz, 27.8, 0.1);
   EXPECT_NEAR(s2.f_after_hz, 171, 1);
-  EXPECT_NEAR(s2.B_max, 0.0997, 0.0001);
+  EXPECT_NEAR(s2.B_max_from_zero, 0.0997, 0.0001);
+  EXPECT_NEAR(s2.B_max, 0.0997, 0.0001);  // no reopened band here
+  EXPECT_TRUE(s2.reopened_bands.empty());
   const DelaySummary s4 = ZWidth(p, 1e-3, 4).Summarize();
   EXPECT_NEAR(s4.B_t, 0.2262, 0.0005);
   EXPECT_NEAR(s4.K_cr_max, 35.24, 0.01);
@@ -147,7 +149,7 @@ TEST(Relay, PastTheTransitionTheModeCrossingIsTheCriticalOne) {
     const DelaySummary s = z.Summarize();
     RelayOptions o;
     o.delay_samples = d;
-    o.damping = 0.5 * (s.B_t + s.B_max);
+    o.damping = 0.5 * (s.B_t + s.B_max_from_zero);
     const RelayResult r = SimulateRelay(p, o);
     const CriticalPoint c = z.At(o.damping);
     ASSERT_GT(c.f_cr_hz, 100.0);
@@ -174,7 +176,7 @@ TEST(Relay, ATangentialCrossingIsProbed) {
 TEST(Relay, PastBMaxTheLoopDivergesAndKcrIsZero) {
   const Plant p = PhantomTable1();
   const ZWidth z(p, 1e-3, 2);
-  const double b_max = z.Summarize().B_max;
+  const double b_max = z.Summarize().B_max_from_zero;  // K -> 0+ turns unstable
   RelayOptions o;
   o.delay_samples = 2;
   o.damping = 1.01 * b_max;

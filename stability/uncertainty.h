@@ -1,0 +1,74 @@
+// Uncertainty of the Z-width from the fitted parameters' covariance.
+//
+// Parameters: x = (log m, log b, then per section i: log omega_i, log c_i,
+// log v_i, log d_i), the natural logs of the SI values of eq. (1) (so their
+// covariance is in relative units: sqrt(cov_ii) is the relative std). The
+// covariance is (2 + 4 N)^2 numbers, row-major, in that order.
+//
+// Delta method, two ways:
+// - K_CR(B) at a fixed B, by implicit differentiation of the crossing
+//   condition 1 + z^-D (K + B (1 - z^-1)/T) G_d(z; x) = 0 at z = e^{j theta}:
+//   with W = -z^D / G_d, Im: (B/T) sin theta = Im W fixes theta(x), and
+//   K = Re W - (B/T)(1 - cos theta), so
+//     dtheta/dx = Im W_x / ((B/T) cos theta - Im W_theta),
+//     dK/dx = Re W_x + (Re W_theta - (B/T) sin theta) dtheta/dx
+//   (theta = pi: dK/dx = Re W_x). It holds where K_CR is set by one simple
+//   crossing: not where two crossings tie (at B_t), not at a fold of B(theta)
+//   (the denominator vanishes), not where K_CR = 0 (std 0 there: the loop is
+//   unstable at K = 0+ for every nearby parameter) or +inf (nan).
+//   W_x by central differences of G_d in x (step log_step), W_theta by central
+//   differences in theta.
+// - K_CR(0), B_t, K_CR^max and B_max: the derivative of each quantity,
+//   recomputed near its nominal value (ZWidth::SummarizeNear) for x +- log_step
+//   e_i, then var = J Sigma J^T. Valid where the quantity is a smooth function
+//   of x (not where, e.g., B_max jumps between two bands).
+// Monte Carlo samples x ~ N(x0, Sigma) (seeded) and recomputes Summarize().
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "model/plant.h"
+#include "stability/zwidth.h"
+
+namespace zwidth::stability {
+
+// 2 + 4 * number of sections.
+int NumLogParameters(const Plant& plant);
+// Names in the order above: "m", "b", "modes[0].omega", ...
+std::vector<std::string> LogParameterNames(const Plant& plant);
+// The plant with every parameter multiplied by exp(dx_i).
+Plant PerturbLog(const Plant& plant, const std::vector<double>& dx);
+
+struct UncertaintyOptions {
+  double log_step = 1e-4;  // central-difference step in log parameters, in (0, 0.1)
+  bool IsValid(std::string* why) const;
+};
+
+// Throws InputError when the covariance is not (2 + 4 N)^2 finite numbers, or
+// not symmetric positive semi-definite (to 1e-9 relative).
+void CheckLogCovariance(const Plant& plant, const std::vector<double>& log_covariance);
+
+// Std of K_CR at each point (points from ZWidth::At on the same plant, T, delay).
+std::vector<double> KcrStd(const Plant& plant, const std::vector<double>& log_covariance,
+                           double period_s, int delay_samples,
+                           const std::vector<CriticalPoint>& points,
+                           const UncertaintyOptions& options = {});
+
+// Std of K_CR(0), B_t, K_CR^max, B_max by the delta method (see above).
+SummaryStd SummaryStdDelta(const Plant& plant, const std::vector<double>& log_covariance,
+                           double period_s, int delay_samples, const DelaySummary& nominal,
+                           const UncertaintyOptions& options = {});
+
+struct MonteCarloResult {
+  int samples = 0;   // drawn
+  SummaryStd std;    // sample std of each quantity over the samples where it is finite
+  SummaryStd mean;   // sample mean, likewise
+  int used_K_cr_at_zero_B = 0, used_B_t = 0, used_K_cr_max = 0, used_B_max = 0;  // finite samples
+};
+// Throws InputError for samples < 2.
+MonteCarloResult SummaryMonteCarlo(const Plant& plant, const std::vector<double>& log_covariance,
+                                   double period_s, int delay_samples, int samples, std::uint64_t seed);
+
+}  // namespace zwidth::stability
