@@ -17,7 +17,7 @@ void AddEstimateCommand(CLI::App& app) {
   cmd->add_option("-o,--output", f->out, "frequency response to write (.csv or .h5)")->required();
   AddEstimateFlags(cmd, &f->est);
   cmd->callback([f] {
-    io::CheckOutputFolder(f->out);
+    io::CheckOutputFolder(f->out, {f->log});
     io::LogInfo info;
     const ident::FrequencyResponse r = EstimateFromLog(f->log, f->est, &info);
     io::WriteFrequencyResponse(f->out, r);

@@ -26,7 +26,7 @@ void AddFitCommands(CLI::App& app) {
   cmd->add_option("--max-iterations", f->o.max_iterations, "solver iterations per start")->capture_default_str();
   AddEstimateFlags(cmd, &f->est);
   cmd->callback([f] {
-    io::CheckOutputFolder(f->out);
+    io::CheckOutputFolder(f->out, {f->input, f->init});
     ResolveDelayFlag(f->delay, &f->o);
     if (!f->init.empty()) f->o.init = io::ReadModelJson(f->init).plant;
     StageTimer timer(false);

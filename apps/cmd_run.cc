@@ -13,6 +13,7 @@
 #include "apps/fit_support.h"
 #include "io/atomic_file.h"
 #include "io/frf_file.h"
+#include "io/isolated.h"
 #include "io/stability_files.h"
 #include "model/error.h"
 #include "model/state_space.h"
@@ -54,11 +55,13 @@ void AddRunCommand(CLI::App& app) {
     EstimateFlags est;
     fit::FitOptions o;
     double b_step = 0.0005;
+    bool force = false;
   };
   auto f = std::make_shared<RunFlags>();
   CLI::App* cmd = app.add_subcommand("run", "estimate, fit, compare, Z-width boundary and an HTML report");
   cmd->add_option("log", f->log, "log file (.h5 or .csv)")->required();
-  cmd->add_option("-o,--output", f->outdir, "output folder (created if its parent exists)")->required();
+  cmd->add_option("-o,--output", f->outdir, "output folder: new, or existing and empty (its parent must exist)")->required();
+  cmd->add_flag("--force", f->force, "write into a non-empty output folder, replacing zwidth's files there");
   cmd->add_option("--reference", f->reference, "reference model (default datasets/phantom/table1.json)");
   cmd->add_option("--delays", f->delays, "loop delays [samples]")->delimiter(',')->capture_default_str();
   cmd->add_option("--modes", f->o.num_modes, "resonance/antiresonance sections")->capture_default_str();
@@ -69,13 +72,12 @@ void AddRunCommand(CLI::App& app) {
     ResolveDelayFlag(f->delay, &f->o);
     for (int d : f->delays) if (d < 0) throw InputError("--delays must be >= 0");
     if (!(f->b_step > 0)) throw InputError("--b-step must be > 0");
-    const fs::path out(f->outdir);
-    if (!fs::is_directory(out)) {
-      io::CheckOutputFolder(f->outdir);  // its parent must exist
-      std::error_code ec;
-      fs::create_directory(out, ec);
-      if (ec) throw InputError("cannot create output folder '" + f->outdir + "': " + ec.message());
-    }
+    // Everything is built in a temporary sibling folder and moved into place
+    // at the end (io::OutputFolder): a failure or a signal leaves nothing, and
+    // two runs into one folder cannot mix.
+    io::OutputFolder folder(f->outdir, f->force);
+    const fs::path out(folder.temp_path());
+    const fs::path final_out(folder.path());
     const std::string ref_path = f->reference.empty() ? DefaultReferencePath() : f->reference;
     const io::ModelFile ref = io::ReadModelJson(ref_path);
     std::fprintf(stderr, "zwidth run %s -> %s\n", f->log.c_str(), f->outdir.c_str());
@@ -103,6 +105,9 @@ void AddRunCommand(CLI::App& app) {
       summary["boundary"].push_back(e);
     }
     if (b_max <= 0) b_max = 0.4;
+    if (!(1.02 * b_max / f->b_step <= 1e5)) {  // grid cap: 1e5 B points per delay
+      throw InputError("--b-step " + std::to_string(f->b_step) + " gives more than 100000 B grid points; use a larger step");
+    }
     const int nB = static_cast<int>(std::floor(1.02 * b_max / f->b_step)) + 1;
     std::vector<io::BoundaryRow> rows;
     int disagree = 0;
@@ -214,12 +219,11 @@ void AddRunCommand(CLI::App& app) {
       io::WriteTextAtomically((fig / "figures.gp").string(), gp.str());
     }
     timer.Lap("figure data (reference, rigid)");
-    bool have_figures = false;
-    if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
-      const std::string cmdline = "cd '" + fig.string() + "' && gnuplot figures.gp 2>gnuplot.log";
-      have_figures = std::system(cmdline.c_str()) == 0;
-      timer.Lap("figures (gnuplot)");
-    }
+    // gnuplot started with an argument vector in the figures folder: no shell,
+    // so no folder name is ever interpreted. 127: not installed.
+    const int gnuplot = io::RunProgram({"gnuplot", "figures.gp"}, fig.string(), (fig / "gnuplot.log").string());
+    const bool have_figures = gnuplot == 0;
+    if (gnuplot != 127) timer.Lap("figures (gnuplot)");
     // The report.
     std::ostringstream h;
     h << "<!DOCTYPE html><html><head><meta charset='utf-8'><title>zwidth report</title>"
@@ -246,9 +250,10 @@ void AddRunCommand(CLI::App& app) {
     }
     h << "</body></html>\n";
     io::WriteTextAtomically((out / "report.html").string(), h.str());
+    folder.Commit();
     std::printf("%s\n%s", ParameterTable(model).c_str(), cmp_text.c_str());
     std::printf("\nboundary: %s (%d of %zu rows where margin() and the exact K_CR disagree)\nreport: %s\n",
-                (out / "boundary.csv").c_str(), disagree, rows.size(), (out / "report.html").c_str());
+                (final_out / "boundary.csv").c_str(), disagree, rows.size(), (final_out / "report.html").c_str());
   });
 }
 

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 
+#include "io/frf_file.h"
 #include "model/error.h"
 
 namespace zwidth::app {
@@ -50,11 +51,14 @@ ident::FrequencyResponse EstimateFromLog(const std::string& path, const Estimate
   const io::LogInfo info = io::StreamLog(path, flags.select,
       [&](const double* u, const double* y, size_t n) { est.Push(u, y, n); });
   if (info_out) *info_out = info;
+  ident::FrequencyResponse frf;
   try {
-    return est.Finish(info.sample_rate_hz);
+    frf = est.Finish(info.sample_rate_hz);
   } catch (const InputError& e) {
     throw InputError(path + ": " + e.what());
   }
+  io::CheckFiniteResponse(frf, path);  // the stage named: estimate, before fit or write
+  return frf;
 }
 
 double StageTimer::Lap(const std::string& stage) {

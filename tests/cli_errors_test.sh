@@ -49,7 +49,9 @@ expect no-output-folder "output folder .* does not exist" "" -- "$ZW" estimate "
 expect missing-file "cannot open|does it exist" "$T/o16.csv" -- "$ZW" estimate "$T/absent.csv" -o "$T/o16.csv"
 expect bad-window-name "--window 'kaiser'" "$T/o17.csv" -- "$ZW" estimate "$T/good.h5" --window kaiser -o "$T/o17.csv"
 expect relay-negative-delay "delay" "" -- "$ZW" relay "$M" --delay -2 --damping 0
-expect check-negative-K "'K'" "" -- "$ZW" check <(echo '{"objects":[{"name":"w","K":-1,"B":0}]}') --model "$M" --delay 2
+echo '{"objects":[{"name":"w","K":-1,"B":0}]}' > "$T/negK.json"
+expect check-negative-K "'K'" "" -- "$ZW" check "$T/negK.json" --model "$M" --delay 2
+expect check-scene-pipe "scene file is a FIFO.*not a regular file" "" -- "$ZW" check <(echo '{"objects":[{"name":"w","K":1,"B":0}]}') --model "$M" --delay 2
 expect unknown-flag "unknown|extra|not expected" "" -- "$ZW" boundary "$M" --bogus 1 -o "$T/x.csv"
 awk -F, 'NR!=200' OFS=, "$T/good.csv" > "$T/gap.csv"
 expect not-uniform "not uniformly sampled" "$T/o18.csv" -- "$ZW" estimate "$T/gap.csv" -o "$T/o18.csv"
@@ -79,6 +81,10 @@ t = sys.argv[1]
 with h5py.File(f"{t}/prealloc.h5", "w") as f:  # a logger that preallocated 1e10 samples and stopped
     f.attrs["sample_rate_hz"] = 1000.0
     for name in ("/input/torque", "/output/position"):
+        f.create_dataset(name, shape=(10**8,), chunks=(4096,), dtype="f8")[:4096] = np.random.randn(4096)
+with h5py.File(f"{t}/huge.h5", "w") as f:  # declares 1e10 samples: over the cap, refused before any read
+    f.attrs["sample_rate_hz"] = 1000.0
+    for name in ("/input/torque", "/output/position"):
         f.create_dataset(name, shape=(10**10,), chunks=(4096,), dtype="f8")[:4096] = np.random.randn(4096)
 with h5py.File(f"{t}/unwritten.h5", "w") as f:  # contiguous, never written
     f.attrs["sample_rate_hz"] = 1000.0
@@ -89,7 +95,8 @@ with h5py.File(f"{t}/compressed.h5", "w") as f:  # fully written, gzip: accepted
     for name in ("/input/torque", "/output/position"):
         f.create_dataset(name, data=np.random.randn(20000), chunks=(4096,), compression="gzip")
 PY
-  expect h5-preallocated "declares 10000000000 samples, but only 1 of its 2441407 chunks were ever written" "$T/o25.csv" -- "$ZW" estimate "$T/prealloc.h5" -o "$T/o25.csv"
+  expect h5-preallocated "declares 100000000 samples, but only 1 of its 24415 chunks were ever written" "$T/o25.csv" -- "$ZW" estimate "$T/prealloc.h5" -o "$T/o25.csv"
+  expect h5-over-sample-cap "declares 10000000000 samples, more than zwidth reads \(1073741824\)" "$T/o28.csv" -- "$ZW" estimate "$T/huge.h5" -o "$T/o28.csv"
   expect h5-unwritten "torque: declares 1000000 samples, but its data were never written" "$T/o26.csv" -- "$ZW" estimate "$T/unwritten.h5" -o "$T/o26.csv"
   if "$ZW" estimate "$T/compressed.h5" -o "$T/o27.csv" >/dev/null 2>&1 && [ -s "$T/o27.csv" ]; then
     echo "ok   h5-compressed: a fully written gzip log is read"; pass=$((pass+1))
