@@ -13,6 +13,7 @@
 #include <utility>
 
 #include <fcntl.h>
+#include <hdf5.h>
 #include <sys/stat.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -219,6 +220,16 @@ void SyncFile(const std::string& tmp, const std::string& shown) {
   if (::close(fd) != 0) throw InputError("failed writing '" + shown + "' (disk full?); nothing was written");
 }
 
+// An HDF5 file whose close failed (a full disk) stays open inside libhdf5,
+// which retries at exit and crashes (SIGSEGV instead of exit 2; closing it
+// again crashes the same way). So once that happened, the process ends with
+// the exit code of an InputError before libhdf5's exit handler runs (atexit
+// handlers run in reverse order of registration, this one is the latest).
+void ExitBeforeHdf5Cleanup() {
+  std::fflush(nullptr);
+  ::_exit(2);
+}
+
 // Removes the (registered) temporary file however the scope is left.
 struct TempGuard {
   std::string path;
@@ -275,7 +286,17 @@ void WriteAtomically(const std::string& path, const std::function<void(const std
   const std::string dest = Destination(path);
   CheckNotAnInput(path, dest, {});
   TempGuard tmp(CreateTemp(dest));
+  const ssize_t h5_open_before = H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_ALL);
   write(tmp.path);
+  // An HDF5 writer whose file or objects failed to close (a full disk at the
+  // final flush: the C++ API swallows that error in its destructors) leaves
+  // them open. Such a file is corrupt: it is never renamed into place.
+  if (H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_ALL) > h5_open_before) {
+    static std::once_flag once;
+    std::call_once(once, [] { std::atexit(ExitBeforeHdf5Cleanup); });
+    throw InputError("failed writing '" + path + "': the HDF5 library could not close the file "
+                     "(disk full?); nothing was written");
+  }
   SyncFile(tmp.path, path);
   // Checked again just before the rename: the destination may have changed
   // (another process) during the work.

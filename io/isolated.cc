@@ -168,6 +168,8 @@ void RunIsolated(const std::string& path, const std::function<void(const FrameSe
   if (!done) throw InputError(path + ": could not read the file (corrupt or truncated?)");
 }
 
+bool SanitizedBuild() { return ZWIDTH_SANITIZED != 0; }
+
 int RunProgram(const std::vector<std::string>& argv, const std::string& cwd, const std::string& stderr_path) {
   if (argv.empty()) return 127;
   std::vector<char*> args;

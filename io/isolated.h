@@ -30,6 +30,10 @@ using FrameSender = std::function<void(const void* data, size_t size)>;
 void RunIsolated(const std::string& path, const std::function<void(const FrameSender&)>& produce,
                  const std::function<void(std::string_view frame)>& consume);
 
+// True in an ASan/UBSan build of zwidth's io library (then a child's sanitizer
+// report aborts the parent, see above).
+bool SanitizedBuild();
+
 inline constexpr long kChildCpuSeconds = 600;
 inline constexpr unsigned long long kChildAddressSpaceBytes = 4ull << 30;
 

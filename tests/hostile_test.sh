@@ -128,6 +128,10 @@ if [ "$(id -u)" = 0 ] && mount -t tmpfs -o size=64k tmpfs "$T/full" 2>/dev/null;
   expect full-disk-log-h5 "(disk full|No space|cannot write)" -- "$ZW" simulate --model "$M" -o "$T/full/log.h5" --seconds 10
   expect full-disk-log-csv "(disk full|No space|failed writing)" -- "$ZW" simulate --model "$M" -o "$T/full/log.csv" --seconds 10
   check full-disk-nothing-left-2 '[ -z "$(ls -A "$T/full")" ]'
+  head -c $((60 * 1024)) /dev/zero > "$T/full/filler" 2>/dev/null  # room for HDF5's first writes only
+  expect full-disk-export-h5 "(disk full|No space|cannot write|could not close)" -- "$ZW" export "$M" --format hdf5 --period 0.001 -o "$T/full/m.h5"
+  check full-disk-export-nothing-left '[ "$(ls -A "$T/full")" = filler ]'
+  rm -f "$T/full/filler"
   umount "$T/full"
 else
   echo "skip full-disk cases (needs root and tmpfs)"; skipped=$((skipped+1))

@@ -242,6 +242,20 @@ TEST(Isolated, AKilledChildIsAnInputErrorNamingTheFile) {
   }
 }
 
+TEST(Isolated, AChildsSanitizerExitCodeIsACrashInSanitizerBuilds) {
+  // ASan/UBSan end a process that they report on with exit code 1 (or the
+  // ASAN_OPTIONS exitcode): in a sanitizer build that must not pass as an
+  // ordinary refusal, so the parent aborts and the fuzzer or test sees a crash.
+  auto run = [] {
+    RunIsolated("report.h5", [](const FrameSender&) { ::_exit(86); }, [](std::string_view) {});
+  };
+  if (SanitizedBuild()) {
+    EXPECT_DEATH(run(), "sanitizer report");
+  } else {
+    EXPECT_THROW(run(), InputError);
+  }
+}
+
 // An HDF5 log whose sample_rate_hz attribute holds `n` values.
 void WriteLogWithArrayRate(const std::string& path, hsize_t n) {
   const hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
