@@ -150,10 +150,13 @@ void RunIsolated(const std::string& path, const std::function<void(const FrameSe
     throw;
   }
   const int status = reap(false);
-  if (ZWIDTH_SANITIZED && WIFEXITED(status) && WEXITSTATUS(status) != 0 && WEXITSTATUS(status) != 2 &&
-      WEXITSTATUS(status) != 3) {
-    std::fprintf(stderr, "zwidth: the reader child for %s exited with %d: a sanitizer report (see above)\n",
-                 path.c_str(), WEXITSTATUS(status));
+  // A sanitizer ends a process it reports on with its exitcode (1 by default),
+  // or with SIGABRT under abort_on_error=1 (scripts/sanitize).
+  if (ZWIDTH_SANITIZED && ((WIFEXITED(status) && WEXITSTATUS(status) != 0 && WEXITSTATUS(status) != 2 &&
+                            WEXITSTATUS(status) != 3) ||
+                           (WIFSIGNALED(status) && WTERMSIG(status) == SIGABRT))) {
+    std::fprintf(stderr, "zwidth: the reader child for %s ended with status %d: a sanitizer report (see above)\n",
+                 path.c_str(), status);
     std::abort();
   }
   if (!error.empty()) throw InputError(error);

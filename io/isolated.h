@@ -26,7 +26,7 @@ using FrameSender = std::function<void(const void* data, size_t size)>;
 // of address space (a corrupt file cannot make it allocate or loop without end).
 // In sanitizer builds a child that exits with a code other than zwidth's own
 // (a sanitizer report: ASan/UBSan exit with 1 by default, see ASAN_OPTIONS
-// exitcode) aborts this process, so that tests and fuzzers count it as a crash.
+// exitcode), or dies of SIGABRT (abort_on_error=1), aborts this process, so that tests and fuzzers count it as a crash.
 void RunIsolated(const std::string& path, const std::function<void(const FrameSender&)>& produce,
                  const std::function<void(std::string_view frame)>& consume);
 
