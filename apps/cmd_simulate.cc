@@ -35,6 +35,10 @@ void AddSimulateCommand(CLI::App& app) {
       throw InputError("--seconds x --rate = " + std::to_string(samples) + " samples, more than " +
                        "simulate writes (1e8); shorten --seconds or lower --rate");
     }
+    if (f->o.delay_samples > io::kMaxDelaySamples) {  // the model's own plus this one may not wrap
+      throw InputError("--delay-samples " + std::to_string(f->o.delay_samples) + " is more than " +
+                       std::to_string(io::kMaxDelaySamples));
+    }
     const io::ModelFile mf = io::ReadModelJson(f->model);
     const SimulatedLog log = SimulateLog(mf.plant, f->o);
     io::WriteLog(f->out, log.sample_rate_hz, log.torque, log.position);
