@@ -323,7 +323,33 @@ bool H5LinkExists(hid_t file, const std::string& path, const std::string& name) 
   return true;
 }
 
+bool IsPlainNumber(hid_t type) {
+  const H5T_class_t cls = H5Tget_class(type);
+  if (cls == H5T_FLOAT) {
+    // Only the IEEE single and double layouts: a corrupt file can declare any
+    // (mantissa, exponent) split, whose soft conversion libhdf5 does slowly and
+    // with buffers sized by that declaration.
+    for (hid_t std_type : {H5T_IEEE_F32LE, H5T_IEEE_F32BE, H5T_IEEE_F64LE, H5T_IEEE_F64BE}) {
+      if (H5Tequal(type, std_type) > 0) return true;
+    }
+    return false;
+  }
+  if (cls == H5T_INTEGER) {
+    const size_t size = H5Tget_size(type);
+    return (size == 1 || size == 2 || size == 4 || size == 8) && H5Tget_precision(type) == 8 * size &&
+           H5Tget_offset(type) == 0;
+  }
+  return false;
+}
+
 void CheckH5DatasetLocal(hid_t dataset, const std::string& where) {
+  const hid_t type = H5Dget_type(dataset);
+  const bool plain = type >= 0 && IsPlainNumber(type);
+  if (type >= 0) H5Tclose(type);
+  if (!plain) {
+    throw InputError(where + ": not stored as plain numbers (expected IEEE float32/float64 or 8- to 64-bit "
+                     "integers)");
+  }
   const hid_t dcpl = H5Dget_create_plist(dataset);
   if (dcpl < 0) throw InputError(where + ": unreadable dataset properties (corrupt file?)");
   const int external = H5Pget_external_count(dcpl);
@@ -344,10 +370,10 @@ double ReadH5ScalarAttribute(hid_t object, const std::string& name, const std::s
   const hid_t space = H5Aget_space(a);
   const hid_t type = H5Aget_type(a);
   const hssize_t points = space >= 0 ? H5Sget_simple_extent_npoints(space) : -1;
-  const H5T_class_t cls = type >= 0 ? H5Tget_class(type) : H5T_NO_CLASS;
   double v = 0.0;
   herr_t read = -1;
-  if (points == 1 && (cls == H5T_FLOAT || cls == H5T_INTEGER)) read = H5Aread(a, H5T_NATIVE_DOUBLE, &v);
+  const bool plain = type >= 0 && IsPlainNumber(type);
+  if (points == 1 && plain) read = H5Aread(a, H5T_NATIVE_DOUBLE, &v);
   if (type >= 0) H5Tclose(type);
   if (space >= 0) H5Sclose(space);
   H5Aclose(a);
@@ -355,7 +381,7 @@ double ReadH5ScalarAttribute(hid_t object, const std::string& name, const std::s
     throw InputError(where + ": attribute " + name + " has " + std::to_string(points) +
                      " values; it must be one number (a scalar)");
   }
-  if (cls != H5T_FLOAT && cls != H5T_INTEGER) {
+  if (!plain) {
     throw InputError(where + ": attribute " + name + " is not a number; it must be one number (a scalar)");
   }
   if (read < 0) throw InputError(where + ": attribute " + name + " is unreadable (corrupt file?)");
