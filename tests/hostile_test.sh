@@ -194,6 +194,7 @@ expect h5-external-storage "torque: its data are stored in external files" -- "$
 expect h5-external-dev-zero "torque: its data are stored in external files|more than zwidth reads" -- "$ZW" estimate "$T/external_zero.h5" -o "$T/x13.csv"
 expect h5-external-link "/input/torque: is an external link" -- "$ZW" estimate "$T/external_link.h5" -o "$T/x14.csv"
 expect h5-external-link-group "external_group.h5:/input: is an external link" -- "$ZW" estimate "$T/external_group.h5" -o "$T/x15.csv"
+expect h5-odd-float-layout "f_hz: not stored as plain numbers" -- "$ZW" fit "$SRC/tests/fuzz/hdf5_frf/odd_float_layout_oom.h5" -o "$T/x27.json"
 deep() { $PY -c "import sys; n=int(sys.argv[1]); sys.stdout.write(sys.argv[2] + '['*n + ']'*n + sys.argv[3])" "$@"; }
 deep 100000 "" "" > "$T/deep.json"
 expect json-deep-model "nested deeper than 64 levels" -- "$ZW" boundary "$T/deep.json" -o "$T/x16.csv"

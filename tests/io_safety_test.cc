@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <chrono>
 #include <climits>
+#include <cstring>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
@@ -12,6 +13,7 @@
 #include <thread>
 
 #include <fcntl.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
 #include <sys/wait.h>
@@ -231,6 +233,27 @@ TEST(Isolated, TheReaderChildDiesWithItsParent) {
     if (!gone) std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   EXPECT_TRUE(gone) << "reader child " << child << " outlived its parent";
+}
+
+TEST(Isolated, TheReaderChildRunsUnderCpuAndAddressSpaceLimits) {
+  rlimit limits[2] = {};
+  RunIsolated(
+      "limits.h5",
+      [](const FrameSender& send) {
+        rlimit l[2];
+        ::getrlimit(RLIMIT_CPU, &l[0]);
+        ::getrlimit(RLIMIT_AS, &l[1]);
+        send(l, sizeof l);
+      },
+      [&](std::string_view frame) {
+        ASSERT_EQ(frame.size(), sizeof limits);
+        std::memcpy(limits, frame.data(), sizeof limits);
+      });
+  EXPECT_EQ(limits[0].rlim_cur, static_cast<rlim_t>(kChildCpuSeconds));
+  if (!SanitizedBuild()) EXPECT_EQ(limits[1].rlim_cur, static_cast<rlim_t>(kChildAddressSpaceBytes));
+  rlimit mine;
+  ::getrlimit(RLIMIT_CPU, &mine);
+  EXPECT_NE(mine.rlim_cur, static_cast<rlim_t>(kChildCpuSeconds));  // the parent is not limited
 }
 
 TEST(Isolated, AKilledChildIsAnInputErrorNamingTheFile) {
