@@ -343,8 +343,11 @@ void UnregisterTempPath(const std::string& path) {
 
 // ---- OutputFolder
 
-OutputFolder::OutputFolder(const std::string& path, bool force) : path_(path), force_(force) {
-  if (path.empty()) throw InputError("output folder name is empty");
+OutputFolder::OutputFolder(const std::string& path_given, bool force) : path_(path_given), force_(force) {
+  if (path_given.empty()) throw InputError("output folder name is empty");
+  std::string path = path_given;  // "out/" is the folder "out"
+  while (path.size() > 1 && path.back() == '/') path.pop_back();
+  path_ = path;
   struct stat ls;
   if (::lstat(path.c_str(), &ls) == 0) {
     struct stat ts;

@@ -154,6 +154,12 @@ TEST(OutputFolder, AppearsWholeOnCommitAndNotAtAllOnFailure) {
     f.Commit();
   }
   EXPECT_EQ(Slurp(dir / "out/a.txt"), "a");
+  {
+    OutputFolder f(dir / "slash/", false);  // a trailing slash names the same folder
+    Put(f.temp_path() + "/b.txt", "b");
+    f.Commit();
+  }
+  EXPECT_EQ(Slurp(dir / "slash/b.txt"), "b");
   EXPECT_THROW(OutputFolder(dir / "out", false), InputError);  // not empty
   Put(dir / "plain", "x");
   EXPECT_THROW(OutputFolder(dir / "plain", false), InputError);  // not a folder
