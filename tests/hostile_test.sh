@@ -146,7 +146,9 @@ expect in-fifo-model "the model file is a FIFO" -- "$ZW" export "$T/good_fifo.cs
 expect in-fifo-fit "is a FIFO" -- "$ZW" fit "$T/good_fifo.csv" -o "$T/x5.json"
 expect in-dir-log "the log is a folder" -- "$ZW" estimate "$T/adir" -o "$T/x6.csv"
 expect in-fifo-scene "scene file is a FIFO" -- "$ZW" check "$T/good_fifo.csv" --model "$M" --delay 2
-{ echo "f_hz,H_re,H_im,H_re,H_re,H_re,H_re,H_re,H_re"; for i in $(seq 1 50); do echo "$i,1,2,3,4,5,6,7,8"; done; } > "$T/dup.csv"
+# The old reader mapped names to positions (H_re -> 8) but counted distinct
+# names (3), so rows of 3 fields passed and were read at index 8: past the row.
+{ echo "f_hz,H_re,H_im,H_re,H_re,H_re,H_re,H_re,H_re"; for i in $(seq 1 50); do echo "$i,1,2"; done; } > "$T/dup.csv"
 expect frf-csv-duplicate-column "line 1: column 'H_re' appears twice" -- "$ZW" fit "$T/dup.csv" --rate 1000 -o "$T/x7.json"
 awk -F, 'NR==5{$0=$0",9"}1' "$T/frf.csv" > "$T/extra.csv"
 expect frf-csv-extra-field "line 5 has 14 fields, the header has 13" -- "$ZW" fit "$T/extra.csv" -o "$T/x8.json"
