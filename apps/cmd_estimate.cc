@@ -18,7 +18,7 @@ void AddEstimateCommand(CLI::App& app) {
   cmd->add_option("-o,--output", f->out, "frequency response to write (.csv or .h5)")->required();
   AddEstimateFlags(cmd, &f->est);
   cmd->callback([f] {
-    io::CheckOutputFolder(f->out);
+    io::CheckOutputFolder(f->out, f->logs);
     const LogsEstimate e = EstimateFromLogs(f->logs, f->est);
     const ident::FrequencyResponse& r = e.response.frf;
     io::WriteFrequencyResponse(f->out, r);

@@ -16,7 +16,7 @@ void AddExportCommand(CLI::App& app) {
   cmd->add_option("--period", f->period, "sample period T [s] for the discrete model (default: the model's, if any)");
   cmd->add_option("-o,--output", f->out, "file to write")->required();
   cmd->callback([f] {
-    io::CheckOutputFolder(f->out);
+    io::CheckOutputFolder(f->out, {f->model});
     io::ExportFormat fmt;
     if (!io::FromString(f->format, &fmt)) {
       throw InputError("--format '" + f->format + "' is not one of json, hdf5, matlab, python, statespace");

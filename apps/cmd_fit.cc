@@ -28,7 +28,9 @@ void AddFitCommands(CLI::App& app) {
   AddEstimateFlags(cmd, &f->est);
   AddUnitsFlag(cmd, &f->units);
   cmd->callback([f] {
-    io::CheckOutputFolder(f->out);
+    std::vector<std::string> read = f->inputs;
+    if (!f->init.empty()) read.push_back(f->init);
+    io::CheckOutputFolder(f->out, read);
     ResolveDelayFlag(f->delay, &f->o);
     const bool linear = LinearUnits(f->units);
     const std::string source = JoinPaths(f->inputs);

@@ -15,6 +15,7 @@
 #include "io/atomic_file.h"
 #include "io/frf_file.h"
 #include "io/reference_models.h"
+#include "io/isolated.h"
 #include "io/stability_files.h"
 #include "model/error.h"
 #include "model/state_space.h"
@@ -43,11 +44,13 @@ void AddRunCommand(CLI::App& app) {
     EstimateFlags est;
     fit::FitOptions o;
     stability::BGridOptions grid;
+    bool force = false;
   };
   auto f = std::make_shared<RunFlags>();
   CLI::App* cmd = app.add_subcommand("run", "estimate, fit, compare, Z-width boundary and an HTML report");
   cmd->add_option("logs", f->logs, "log files (text, .mat, .h5): runs of one device, spectra averaged")->required();
-  cmd->add_option("-o,--output", f->outdir, "output folder (created if its parent exists)")->required();
+  cmd->add_option("-o,--output", f->outdir, "output folder: new, or existing and empty (its parent must exist)")->required();
+  cmd->add_flag("--force", f->force, "write into a non-empty output folder, replacing zwidth's files there");
   cmd->add_option("--reference", f->reference, "compare with: table1 (the paper's PHANToM, built in) or a model JSON (default: no comparison)");
   cmd->add_option("--delays", f->delays, "loop delays [samples]")->delimiter(',')->capture_default_str();
   cmd->add_option("--modes", f->o.num_modes, "resonance/antiresonance sections")->capture_default_str();
@@ -69,13 +72,12 @@ void AddRunCommand(CLI::App& app) {
       std::string why;
       if (!f->grid.IsValid(&why)) throw InputError(why);
     }
-    const fs::path out(f->outdir);
-    if (!fs::is_directory(out)) {
-      io::CheckOutputFolder(f->outdir);  // its parent must exist
-      std::error_code ec;
-      fs::create_directory(out, ec);
-      if (ec) throw InputError("cannot create output folder '" + f->outdir + "': " + ec.message());
-    }
+    // Everything is built in a temporary sibling folder and moved into place
+    // at the end (io::OutputFolder): a failure or a signal leaves nothing, and
+    // two runs into one folder cannot mix.
+    io::OutputFolder folder(f->outdir, f->force);
+    const fs::path out(folder.temp_path());
+    const fs::path final_out(folder.path());
     std::fprintf(stderr, "zwidth run %s -> %s\n", source.c_str(), f->outdir.c_str());
     StageTimer timer;
     const LogsEstimate est = EstimateFromLogs(f->logs, f->est);
@@ -266,12 +268,11 @@ void AddRunCommand(CLI::App& app) {
       io::WriteTextAtomically((fig / "figures.gp").string(), gp.str());
     }
     timer.Lap("figure data (reference, rigid)");
-    bool have_figures = false;
-    if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
-      const std::string cmdline = "cd '" + fig.string() + "' && gnuplot figures.gp 2>gnuplot.log";
-      have_figures = std::system(cmdline.c_str()) == 0;
-      timer.Lap("figures (gnuplot)");
-    }
+    // gnuplot started with an argument vector in the figures folder: no shell,
+    // so no folder name is ever interpreted. 127: not installed.
+    const int gnuplot = io::RunProgram({"gnuplot", "figures.gp"}, fig.string(), (fig / "gnuplot.log").string());
+    const bool have_figures = gnuplot == 0;
+    if (gnuplot != 127) timer.Lap("figures (gnuplot)");
     // The report.
     std::ostringstream h;
     h << "<!DOCTYPE html><html><head><meta charset='utf-8'><title>zwidth report</title>"
@@ -333,9 +334,10 @@ void AddRunCommand(CLI::App& app) {
     }
     h << "</body></html>\n";
     io::WriteTextAtomically((out / "report.html").string(), h.str());
+    folder.Commit();
     std::printf("%s\n%s", ParameterTable(model, linear).c_str(), cmp_text.c_str());
     std::printf("\nboundary: %s (%d of %zu rows where margin() and the exact K_CR disagree)\nreport: %s\n",
-                (out / "boundary.csv").c_str(), disagree, rows.size(), (out / "report.html").c_str());
+                (final_out / "boundary.csv").c_str(), disagree, rows.size(), (final_out / "report.html").c_str());
   });
 }
 

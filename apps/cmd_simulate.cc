@@ -27,7 +27,18 @@ void AddSimulateCommand(CLI::App& app) {
   cmd->add_option("--delay-samples", f->o.delay_samples, "extra input delay [samples]")->capture_default_str();
   cmd->add_option("--seed", f->o.seed, "random seed")->capture_default_str();
   cmd->callback([f] {
-    io::CheckOutputFolder(f->out);
+    io::CheckOutputFolder(f->out, {f->model});
+    // At most kMaxSimulateSamples (1e8, 28 h at 1 kHz: 1.6 GB of samples in memory).
+    constexpr double kMaxSimulateSamples = 1e8;
+    const double samples = f->o.seconds * f->o.sample_rate_hz;
+    if (!(samples <= kMaxSimulateSamples)) {
+      throw InputError("--seconds x --rate = " + std::to_string(samples) + " samples, more than " +
+                       "simulate writes (1e8); shorten --seconds or lower --rate");
+    }
+    if (f->o.delay_samples > io::kMaxDelaySamples) {  // the model's own plus this one may not wrap
+      throw InputError("--delay-samples " + std::to_string(f->o.delay_samples) + " is more than " +
+                       std::to_string(io::kMaxDelaySamples));
+    }
     const io::ModelFile mf = io::ReadModelJson(f->model);
     const SimulatedLog log = SimulateLog(mf.plant, f->o);
     io::WriteLog(f->out, log.sample_rate_hz, log.torque, log.position);

@@ -61,8 +61,8 @@ void AddStabilityCommands(CLI::App& app) {
                 "sample std beside the delta method's (0 = off)")->capture_default_str();
   b->add_option("--seed", bf->seed, "seed of --monte-carlo")->capture_default_str();
   b->callback([bf] {
-    io::CheckOutputFolder(bf->out);
-    if (!bf->summary.empty()) io::CheckOutputFolder(bf->summary);
+    io::CheckOutputFolder(bf->out, {bf->model});
+    if (!bf->summary.empty()) io::CheckOutputFolder(bf->summary, {bf->model});
     const io::ModelFile mf = io::ReadModelJson(bf->model);
     const double T = ResolvePeriod(bf->period, mf);
     if (bf->delays.empty()) throw InputError("--delays is empty");

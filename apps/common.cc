@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "io/frf_file.h"
 #include "model/error.h"
 
 namespace zwidth::app {
@@ -198,6 +199,7 @@ LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const Estim
                  median(r.coherence_ru), median(r.coherence_ry));
   }
   std::fprintf(stderr, "\n");
+  io::CheckFiniteResponse(out.response.frf, JoinPaths(paths));  // the stage named: estimate, before fit or write
   return out;
 }
 

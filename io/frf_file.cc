@@ -11,6 +11,7 @@
 #include <H5Cpp.h>
 
 #include "io/atomic_file.h"
+#include "io/h5_safety.h"
 #include "io/isolated.h"
 #include "io/log.h"
 #include "model/error.h"
@@ -44,6 +45,7 @@ void WriteH5(const std::string& tmp, const ident::FrequencyResponse& r) {
     auto put = [&](const char* name, const std::vector<double>& v) {
       H5::DataSet ds = g.createDataSet(name, H5::PredType::IEEE_F64LE, space);
       ds.write(v.data(), H5::PredType::NATIVE_DOUBLE);
+      ds.close();
     };
     std::vector<double> re(n), im(n);
     for (hsize_t k = 0; k < n; ++k) { re[k] = r.H[k].real(); im[k] = r.H[k].imag(); }
@@ -53,12 +55,19 @@ void WriteH5(const std::string& tmp, const ident::FrequencyResponse& r) {
     auto attr = [&](const char* name, double v) {
       H5::Attribute a = root.createAttribute(name, H5::PredType::IEEE_F64LE, H5::DataSpace(H5S_SCALAR));
       a.write(H5::PredType::NATIVE_DOUBLE, &v);
+      a.close();
     };
     attr("sample_rate_hz", r.sample_rate_hz);
     attr("num_averages", r.num_averages);
     attr("effective_averages", r.effective_averages);
     attr("bin_correlation", r.bin_correlation);
     attr("window_length", r.window_length);
+    // Closed inside the try: an error at flush or close (a full disk) fails
+    // the write instead of vanishing in a destructor.
+    root.close();
+    g.close();
+    file.flush(H5F_SCOPE_GLOBAL);
+    file.close();
   } catch (const H5::Exception& e) {
     throw InputError("cannot write HDF5 '" + tmp + "': " + e.getDetailMsg());
   }
@@ -78,12 +87,18 @@ int Count(double v, const std::string& path, const char* name) {
   return static_cast<int>(v);
 }
 
+// The most values a response holds: the bins of a Welch window of 2^21
+// samples (about 35 min at 1 kHz in one window). More is refused before it is
+// read, so a small corrupt file cannot become gigabytes.
+constexpr size_t kMaxBins = size_t{1} << 20;
+
 ident::FrequencyResponse ReadCsv(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path + ": cannot open frequency-response file");
   std::string line;
   if (!std::getline(in, line)) throw InputError(path + ": empty file");
   std::map<std::string, int> col;
+  size_t num_columns = 0;
   {
     size_t start = 0;
     int idx = 0;
@@ -91,7 +106,11 @@ ident::FrequencyResponse ReadCsv(const std::string& path) {
       size_t c = line.find(',', start);
       std::string name = line.substr(start, c == std::string::npos ? std::string::npos : c - start);
       while (!name.empty() && (name.back() == '\r' || name.back() == ' ')) name.pop_back();
-      col[name] = idx++;
+      if (!col.emplace(name, idx++).second) {
+        throw InputError(path + ": line 1: column '" + name + "' appears twice in the header; "
+                         "each column name must be unique");
+      }
+      ++num_columns;
       if (c == std::string::npos) break;
       start = c + 1;
     }
@@ -130,7 +149,13 @@ ident::FrequencyResponse ReadCsv(const std::string& path) {
       if (c == std::string::npos) break;
       start = c + 1;
     }
-    if (v.size() < col.size()) throw InputError(path + ": line " + std::to_string(line_no) + " is truncated");
+    if (v.size() != num_columns) {
+      throw InputError(path + ": line " + std::to_string(line_no) + " has " + std::to_string(v.size()) +
+                       " fields, the header has " + std::to_string(num_columns) + " (truncated or damaged row?)");
+    }
+    if (r.f_hz.size() >= kMaxBins) {
+      throw InputError(path + ": more than " + std::to_string(kMaxBins) + " rows, more than a response has");
+    }
     for (double x : v) {
       if (!std::isfinite(x)) {
         throw InputError(path + ": line " + std::to_string(line_no) + " has a value that is not finite");
@@ -177,9 +202,6 @@ void Finish(ident::FrequencyResponse& r, const std::string& path, double rate) {
   }
 }
 
-// The most values a response holds: the bins of a Welch window of 2^25 samples.
-constexpr hsize_t kMaxBins = hsize_t{1} << 24;
-
 // /frf/{f_hz,H_re,H_im[,coherence,H_std,S_uu,S_yy]} and root attributes, as
 // WriteH5 writes them, read in this process (RunIsolated calls it in a child)
 // and packed as doubles: n, the four scalars, then the seven columns.
@@ -187,17 +209,20 @@ std::string ReadH5Packed(const std::string& path) {
   H5::Exception::dontPrint();
   try {
     if (!H5::H5File::isHdf5(path)) throw InputError(path + ": not an HDF5 file");
-    H5::H5File file(path, H5F_ACC_RDONLY);
-    if (!file.nameExists("/frf")) throw InputError(path + ": no group /frf (not written by `zwidth estimate`?)");
+    H5::H5File file(path, H5F_ACC_RDONLY, H5::FileCreatPropList::DEFAULT, internal::SafeH5Access());
+    if (!internal::H5LinkExists(file.getId(), path, "/frf")) {
+      throw InputError(path + ": no group /frf (not written by `zwidth estimate`?)");
+    }
     size_t n = 0;
     auto get = [&](const char* name, bool required) {
       const std::string full = std::string("/frf/") + name;
       std::vector<double> v;
-      if (!file.nameExists(full)) {
+      if (!internal::H5LinkExists(file.getId(), path, full)) {
         if (required) throw InputError(path + ": no dataset '" + full + "'");
         return v;
       }
       H5::DataSet ds = file.openDataSet(full);
+      internal::CheckH5DatasetLocal(ds.getId(), path + ":" + full);
       H5::DataSpace sp = ds.getSpace();
       if (sp.getSimpleExtentNdims() != 1) throw InputError(path + ":" + full + ": expected a 1-D dataset");
       hsize_t len = 0;
@@ -236,9 +261,7 @@ std::string ReadH5Packed(const std::string& path) {
     }
     auto attr = [&](const char* name, double fallback) {
       if (!file.attrExists(name)) return fallback;
-      double v = fallback;
-      file.openAttribute(name).read(H5::PredType::NATIVE_DOUBLE, &v);
-      return v;
+      return internal::ReadH5ScalarAttribute(file.getId(), name, path);
     };
     std::vector<double> packed = {static_cast<double>(n), attr("sample_rate_hz", 0.0), attr("num_averages", 0.0),
                                   attr("effective_averages", 0.0), attr("bin_correlation", 1.0)};
@@ -252,11 +275,15 @@ std::string ReadH5Packed(const std::string& path) {
   }
 }
 
-ident::FrequencyResponse ReadH5(const std::string& path) {
+ident::FrequencyResponse ReadH5(const std::string& path, bool isolated) {
   std::string bytes;
-  RunIsolated(
-      path, [&](const FrameSender& send) { const std::string b = ReadH5Packed(path); send(b.data(), b.size()); },
-      [&](std::string_view frame) { bytes = frame; });
+  if (isolated) {
+    RunIsolated(
+        path, [&](const FrameSender& send) { const std::string b = ReadH5Packed(path); send(b.data(), b.size()); },
+        [&](std::string_view frame) { bytes = frame; });
+  } else {
+    bytes = ReadH5Packed(path);
+  }
   std::vector<double> v(bytes.size() / sizeof(double));
   std::memcpy(v.data(), bytes.data(), v.size() * sizeof(double));
   if (v.size() < 5) throw InputError(path + ": could not read the frequency response");
@@ -281,12 +308,28 @@ ident::FrequencyResponse ReadH5(const std::string& path) {
 
 }  // namespace
 
+void CheckFiniteResponse(const ident::FrequencyResponse& r, const std::string& source) {
+  for (size_t k = 0; k < r.f_hz.size(); ++k) {
+    const double values[] = {r.f_hz[k], r.H[k].real(), r.H[k].imag(), r.coherence[k], r.H_std[k],
+                             k < r.S_uu.size() ? r.S_uu[k] : 0.0, k < r.S_yy.size() ? r.S_yy[k] : 0.0};
+    for (double v : values) {
+      if (!std::isfinite(v)) {
+        throw InputError(source + ": the frequency response has non-finite values (at bin " + std::to_string(k) +
+                         ", f = " + Num(r.f_hz[k]) + " Hz): input scaled out of range (values near 1e308 "
+                         "overflow the spectra); rescale the log's columns to SI units");
+      }
+    }
+  }
+}
+
 void WriteFrequencyResponse(const std::string& path, const ident::FrequencyResponse& r) {
+  CheckFiniteResponse(r, path);
   const bool h5 = DetectLogFormat(path) == LogFormat::kHdf5;
   WriteAtomically(path, [&](const std::string& tmp) { h5 ? WriteH5(tmp, r) : WriteCsv(tmp, r); });
 }
 
 bool IsFrequencyResponseFile(const std::string& path) {
+  CheckInputFile(path, "input file");
   if (DetectLogFormat(path) == LogFormat::kHdf5) {
     bool frf = false;
     RunIsolated(
@@ -295,9 +338,14 @@ bool IsFrequencyResponseFile(const std::string& path) {
           H5::Exception::dontPrint();
           char yes = 0;
           try {
-            yes = H5::H5File::isHdf5(path) && H5::H5File(path, H5F_ACC_RDONLY).nameExists("/frf");
+            if (H5::H5File::isHdf5(path)) {
+              H5::H5File file(path, H5F_ACC_RDONLY, H5::FileCreatPropList::DEFAULT, internal::SafeH5Access());
+              yes = internal::H5LinkExists(file.getId(), path, "/frf");
+            }
           } catch (const H5::Exception&) {
             // not readable as HDF5: the log reader says why
+          } catch (const InputError&) {
+            // an external link: the reader says why
           }
           send(&yes, 1);
         },
@@ -311,9 +359,18 @@ bool IsFrequencyResponseFile(const std::string& path) {
 }
 
 ident::FrequencyResponse ReadFrequencyResponse(const std::string& path, double rate) {
-  ident::FrequencyResponse r = DetectLogFormat(path) == LogFormat::kHdf5 ? ReadH5(path) : ReadCsv(path);
+  CheckInputFile(path, "frequency-response file");
+  ident::FrequencyResponse r = DetectLogFormat(path) == LogFormat::kHdf5 ? ReadH5(path, true) : ReadCsv(path);
   Finish(r, path, rate);
   return r;
 }
+
+namespace internal {
+ident::FrequencyResponse ReadFrequencyResponseInProcess(const std::string& path, double rate) {
+  ident::FrequencyResponse r = DetectLogFormat(path) == LogFormat::kHdf5 ? ReadH5(path, false) : ReadCsv(path);
+  Finish(r, path, rate);
+  return r;
+}
+}  // namespace internal
 
 }  // namespace zwidth::io

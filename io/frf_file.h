@@ -23,4 +23,15 @@ ident::FrequencyResponse ReadFrequencyResponse(const std::string& path, double s
 // an HDF5 file with a /frf group.
 bool IsFrequencyResponseFile(const std::string& path);
 
+// Throws InputError naming `source` and the first bin when any value of r is
+// NaN or infinite (an input scaled out of range overflows the spectra).
+// WriteFrequencyResponse calls it: a non-finite response is never written.
+void CheckFiniteResponse(const ident::FrequencyResponse& r, const std::string& source);
+
+namespace internal {
+// ReadFrequencyResponse without the child process for HDF5 (the fuzzer's
+// entry point; the isolation is tested on its own).
+ident::FrequencyResponse ReadFrequencyResponseInProcess(const std::string& path, double sample_rate_hz = 0.0);
+}  // namespace internal
+
 }  // namespace zwidth::io

@@ -4,14 +4,38 @@
 #include <csignal>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
+#include <new>
+#include <fcntl.h>
+#include <sys/prctl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include "model/error.h"
 
+#if defined(__SANITIZE_ADDRESS__)
+#define ZWIDTH_SANITIZED 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(undefined_behavior_sanitizer)
+#define ZWIDTH_SANITIZED 1
+#endif
+#endif
+#ifndef ZWIDTH_SANITIZED
+#define ZWIDTH_SANITIZED 0
+#endif
+
 namespace zwidth::io {
 namespace {
+
+// In a fresh child: die with the parent, default signal actions (the parent's
+// temporary-file handler is not the child's business).
+void BecomeChild(pid_t parent, int death_signal) {
+  ::prctl(PR_SET_PDEATHSIG, death_signal);
+  if (::getppid() != parent) ::_exit(3);  // the parent died before prctl
+  for (int sig : {SIGINT, SIGTERM, SIGHUP, SIGPIPE}) ::signal(sig, SIG_DFL);
+}
 
 // write()/read() of exactly n bytes, retried on EINTR; false on error or EOF.
 bool WriteAll(int fd, const void* data, size_t n) {
@@ -56,6 +80,7 @@ void RunIsolated(const std::string& path, const std::function<void(const FrameSe
   int fds[2];
   if (::pipe(fds) != 0) return in_process();
   std::fflush(nullptr);
+  const pid_t parent = ::getpid();
   const pid_t pid = ::fork();
   if (pid < 0) {
     ::close(fds[0]);
@@ -63,6 +88,13 @@ void RunIsolated(const std::string& path, const std::function<void(const FrameSe
     return in_process();
   }
   if (pid == 0) {  // child: produce, and leave without running destructors
+    BecomeChild(parent, SIGKILL);
+    const rlimit cpu = {kChildCpuSeconds, kChildCpuSeconds + 5};
+    ::setrlimit(RLIMIT_CPU, &cpu);
+    if (!ZWIDTH_SANITIZED) {  // ASan reserves terabytes of address space for its shadow
+      const rlimit as = {kChildAddressSpaceBytes, kChildAddressSpaceBytes};
+      ::setrlimit(RLIMIT_AS, &as);
+    }
     ::close(fds[0]);
     const int out = fds[1];
     int code = 0;
@@ -71,6 +103,11 @@ void RunIsolated(const std::string& path, const std::function<void(const FrameSe
         if (!WriteFrame(out, kData, data, n)) ::_exit(3);  // the parent is gone
       });
       WriteFrame(out, kEnd, nullptr, 0);
+    } catch (const std::bad_alloc&) {
+      const std::string msg = path + ": reading it needs more memory than a valid file would "
+                                     "(corrupt sizes in the file?)";
+      WriteFrame(out, kError, msg.data(), msg.size());
+      code = 2;
     } catch (const std::exception& e) {
       const std::string msg = e.what();
       WriteFrame(out, kError, msg.data(), msg.size());
@@ -113,12 +150,56 @@ void RunIsolated(const std::string& path, const std::function<void(const FrameSe
     throw;
   }
   const int status = reap(false);
+  // A sanitizer ends a process it reports on with its exitcode (1 by default),
+  // or with SIGABRT under abort_on_error=1 (scripts/sanitize).
+  if (ZWIDTH_SANITIZED && ((WIFEXITED(status) && WEXITSTATUS(status) != 0 && WEXITSTATUS(status) != 2 &&
+                            WEXITSTATUS(status) != 3) ||
+                           (WIFSIGNALED(status) && WTERMSIG(status) == SIGABRT))) {
+    std::fprintf(stderr, "zwidth: the reader child for %s ended with status %d: a sanitizer report (see above)\n",
+                 path.c_str(), status);
+    std::abort();
+  }
   if (!error.empty()) throw InputError(error);
+  if (WIFSIGNALED(status) && (WTERMSIG(status) == SIGXCPU || WTERMSIG(status) == SIGKILL)) {
+    throw InputError(path + ": reading this file took more than the " + std::to_string(kChildCpuSeconds) +
+                     " s of CPU allowed, or was killed (corrupt file?)");
+  }
   if (WIFSIGNALED(status)) {
     throw InputError(path + ": the HDF5 library crashed reading this file (signal " +
                      std::to_string(WTERMSIG(status)) + "): the file is corrupt or truncated");
   }
   if (!done) throw InputError(path + ": could not read the file (corrupt or truncated?)");
+}
+
+bool SanitizedBuild() { return ZWIDTH_SANITIZED != 0; }
+
+int RunProgram(const std::vector<std::string>& argv, const std::string& cwd, const std::string& stderr_path) {
+  if (argv.empty()) return 127;
+  std::vector<char*> args;
+  for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  std::fflush(nullptr);
+  const pid_t parent = ::getpid();
+  const pid_t pid = ::fork();
+  if (pid < 0) return 127;
+  if (pid == 0) {
+    BecomeChild(parent, SIGTERM);
+    if (!cwd.empty() && ::chdir(cwd.c_str()) != 0) ::_exit(127);
+    const int in = ::open("/dev/null", O_RDONLY);
+    if (in >= 0) ::dup2(in, 0);
+    if (!stderr_path.empty()) {
+      const int err = ::open(stderr_path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0666);
+      if (err >= 0) ::dup2(err, 2);
+    }
+    ::execvp(args[0], args.data());
+    ::_exit(127);
+  }
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) return 127;
+  }
+  if (WIFEXITED(status)) return WEXITSTATUS(status);
+  return 128 + WTERMSIG(status);
 }
 
 }  // namespace zwidth::io

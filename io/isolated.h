@@ -7,6 +7,7 @@
 #include <functional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace zwidth::io {
 
@@ -20,7 +21,27 @@ using FrameSender = std::function<void(const void* data, size_t size)>;
 // InputError with its message; a crash of the child as an InputError naming
 // `path`; an exception thrown by consume() ends the child and propagates.
 // Where pipe() or fork() fail, produce() runs in this process.
+// The child dies with its parent (PR_SET_PDEATHSIG) and runs under resource
+// limits: kChildCpuSeconds of CPU and, outside sanitizer builds, kChildAddressSpaceBytes
+// of address space (a corrupt file cannot make it allocate or loop without end).
+// In sanitizer builds a child that exits with a code other than zwidth's own
+// (a sanitizer report: ASan/UBSan exit with 1 by default, see ASAN_OPTIONS
+// exitcode), or dies of SIGABRT (abort_on_error=1), aborts this process, so that tests and fuzzers count it as a crash.
 void RunIsolated(const std::string& path, const std::function<void(const FrameSender&)>& produce,
                  const std::function<void(std::string_view frame)>& consume);
+
+// True in an ASan/UBSan build of zwidth's io library (then a child's sanitizer
+// report aborts the parent, see above).
+bool SanitizedBuild();
+
+inline constexpr long kChildCpuSeconds = 600;
+inline constexpr unsigned long long kChildAddressSpaceBytes = 4ull << 30;
+
+// Runs argv[0] (searched in PATH) with arguments argv[1..], without a shell:
+// no string is ever interpreted. Its working folder is `cwd` (when not empty),
+// its standard input /dev/null, its standard error appended to `stderr_path`
+// (when not empty). It receives SIGTERM when this process dies. Returns its exit
+// status, 127 when it cannot be started (not installed), 128 + signal when killed.
+int RunProgram(const std::vector<std::string>& argv, const std::string& cwd, const std::string& stderr_path);
 
 }  // namespace zwidth::io

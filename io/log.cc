@@ -12,10 +12,13 @@
 #include <memory>
 #include <sstream>
 
+#include <sys/stat.h>
+
 #include <H5Cpp.h>
 #include <matio.h>
 
 #include "io/atomic_file.h"
+#include "io/h5_safety.h"
 #include "io/isolated.h"
 #include "model/error.h"
 
@@ -674,14 +677,22 @@ std::string H5Where(const std::string& path, const std::string& ds) { return pat
 
 H5::DataSet OpenDataset(H5::H5File& file, const std::string& path, const std::string& name,
                         const char* flag) {
-  if (!file.nameExists(name)) {
+  if (!internal::H5LinkExists(file.getId(), path, name)) {
     throw InputError(path + ": no dataset '" + name + "'; choose one with " + flag);
   }
+  H5::DataSet ds;
   try {
-    return file.openDataSet(name);
+    ds = file.openDataSet(name);
   } catch (const H5::Exception&) {
     throw InputError(path + ": '" + name + "' is not a readable dataset");
   }
+  internal::CheckH5DatasetLocal(ds.getId(), H5Where(path, name));
+  const H5T_class_t cls = ds.getTypeClass();
+  if (cls != H5T_FLOAT && cls != H5T_INTEGER) {
+    throw InputError(H5Where(path, name) + ": not a numeric dataset (HDF5 type class " + std::to_string(cls) +
+                     "); expected floating-point or integer samples");
+  }
+  return ds;
 }
 
 size_t Length1D(const H5::DataSet& ds, const std::string& where) {
@@ -689,9 +700,15 @@ size_t Length1D(const H5::DataSet& ds, const std::string& where) {
   const int rank = sp.getSimpleExtentNdims();
   std::vector<hsize_t> dims(std::max(rank, 1));
   sp.getSimpleExtentDims(dims.data());
-  if (rank == 1) return dims[0];
-  if (rank == 2 && (dims[0] == 1 || dims[1] == 1)) return dims[0] * dims[1];
-  throw InputError(where + ": expected a 1-D dataset, found rank " + std::to_string(rank));
+  hsize_t n = 0;
+  if (rank == 1) n = dims[0];
+  else if (rank == 2 && (dims[0] == 1 || dims[1] == 1)) n = dims[0] * dims[1];
+  else throw InputError(where + ": expected a 1-D dataset, found rank " + std::to_string(rank));
+  if (n > kMaxLogSamples) {
+    throw InputError(where + ": declares " + std::to_string(n) + " samples, more than zwidth reads (" +
+                     std::to_string(kMaxLogSamples) + "); split the log");
+  }
+  return n;
 }
 
 void ReadSlab(const H5::DataSet& ds, hsize_t offset, hsize_t count, double* out,
@@ -743,12 +760,114 @@ void CheckWritten(const H5::DataSet& ds, const std::string& where) {
   }
 }
 
+}  // namespace
+
+namespace internal {
+
+herr_t DenyExternalLink(const char*, const char*, const char*, const char*, unsigned*, hid_t, void*) {
+  return -1;  // an external link would read another file: never followed
+}
+
+H5::FileAccPropList SafeH5Access() {
+  H5::FileAccPropList fapl;
+  H5Pset_elink_cb(fapl.getId(), DenyExternalLink, nullptr);
+  return fapl;
+}
+
+bool H5LinkExists(hid_t file, const std::string& path, const std::string& name) {
+  // Component by component from the root: H5Lexists on "/a/b" would follow a
+  // link "/a" into another file; H5Lget_info on each prefix does not.
+  if (name.empty() || name[0] != '/') return false;
+  std::string prefix;
+  size_t start = 1;
+  while (start <= name.size()) {
+    size_t slash = name.find('/', start);
+    if (slash == std::string::npos) slash = name.size();
+    if (slash == start) { start = slash + 1; continue; }
+    prefix = name.substr(0, slash);
+    if (H5Lexists(file, prefix.c_str(), H5P_DEFAULT) <= 0) return false;
+    H5L_info_t info;
+    if (H5Lget_info(file, prefix.c_str(), &info, H5P_DEFAULT) < 0) return false;
+    if (info.type == H5L_TYPE_EXTERNAL || info.type >= H5L_TYPE_UD_MIN) {
+      throw InputError(path + ":" + prefix + ": is an external link (to another file); zwidth reads only "
+                       "what is inside the file: copy the data into it");
+    }
+    start = slash + 1;
+  }
+  return true;
+}
+
+bool IsPlainNumber(hid_t type) {
+  const H5T_class_t cls = H5Tget_class(type);
+  if (cls == H5T_FLOAT) {
+    // Only the IEEE single and double layouts: a corrupt file can declare any
+    // (mantissa, exponent) split, whose soft conversion libhdf5 does slowly and
+    // with buffers sized by that declaration.
+    for (hid_t std_type : {H5T_IEEE_F32LE, H5T_IEEE_F32BE, H5T_IEEE_F64LE, H5T_IEEE_F64BE}) {
+      if (H5Tequal(type, std_type) > 0) return true;
+    }
+    return false;
+  }
+  if (cls == H5T_INTEGER) {
+    const size_t size = H5Tget_size(type);
+    return (size == 1 || size == 2 || size == 4 || size == 8) && H5Tget_precision(type) == 8 * size &&
+           H5Tget_offset(type) == 0;
+  }
+  return false;
+}
+
+void CheckH5DatasetLocal(hid_t dataset, const std::string& where) {
+  const hid_t type = H5Dget_type(dataset);
+  const bool plain = type >= 0 && IsPlainNumber(type);
+  if (type >= 0) H5Tclose(type);
+  if (!plain) {
+    throw InputError(where + ": not stored as plain numbers (expected IEEE float32/float64 or 8- to 64-bit "
+                     "integers)");
+  }
+  const hid_t dcpl = H5Dget_create_plist(dataset);
+  if (dcpl < 0) throw InputError(where + ": unreadable dataset properties (corrupt file?)");
+  const int external = H5Pget_external_count(dcpl);
+  const H5D_layout_t layout = H5Pget_layout(dcpl);
+  H5Pclose(dcpl);
+  if (external != 0) {
+    throw InputError(where + ": its data are stored in external files; zwidth reads only what is "
+                     "inside the file: copy the data into it");
+  }
+  if (layout == H5D_VIRTUAL) {
+    throw InputError(where + ": a virtual dataset (data from other files); copy the data into the file");
+  }
+}
+
+double ReadH5ScalarAttribute(hid_t object, const std::string& name, const std::string& where) {
+  const hid_t a = H5Aopen(object, name.c_str(), H5P_DEFAULT);
+  if (a < 0) throw InputError(where + ": attribute " + name + " is unreadable (corrupt file?)");
+  const hid_t space = H5Aget_space(a);
+  const hid_t type = H5Aget_type(a);
+  const hssize_t points = space >= 0 ? H5Sget_simple_extent_npoints(space) : -1;
+  double v = 0.0;
+  herr_t read = -1;
+  const bool plain = type >= 0 && IsPlainNumber(type);
+  if (points == 1 && plain) read = H5Aread(a, H5T_NATIVE_DOUBLE, &v);
+  if (type >= 0) H5Tclose(type);
+  if (space >= 0) H5Sclose(space);
+  H5Aclose(a);
+  if (points != 1) {
+    throw InputError(where + ": attribute " + name + " has " + std::to_string(points) +
+                     " values; it must be one number (a scalar)");
+  }
+  if (!plain) {
+    throw InputError(where + ": attribute " + name + " is not a number; it must be one number (a scalar)");
+  }
+  if (read < 0) throw InputError(where + ": attribute " + name + " is unreadable (corrupt file?)");
+  return v;
+}
+
 LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& sel, const LogSink& sink) {
   H5::Exception::dontPrint();
   std::unique_ptr<H5::H5File> file;
   try {
     if (!H5::H5File::isHdf5(path)) throw InputError(path + ": not an HDF5 file");
-    file = std::make_unique<H5::H5File>(path, H5F_ACC_RDONLY);
+    file = std::make_unique<H5::H5File>(path, H5F_ACC_RDONLY, H5::FileCreatPropList::DEFAULT, SafeH5Access());
   } catch (const H5::Exception&) {
     throw InputError(path + ": cannot open as HDF5 (missing, truncated or corrupt file)");
   }
@@ -765,14 +884,13 @@ LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& sel, const
     CheckWritten(dy, H5Where(path, sel.output_dataset));
     double attr_rate = 0.0;
     if (file->attrExists("sample_rate_hz")) {
-      H5::Attribute a = file->openAttribute("sample_rate_hz");
-      a.read(H5::PredType::NATIVE_DOUBLE, &attr_rate);
+      attr_rate = ReadH5ScalarAttribute(file->getId(), "sample_rate_hz", path);
       if (!(attr_rate > 0.0) || !std::isfinite(attr_rate)) {
         throw InputError(path + ": attribute sample_rate_hz = " + std::to_string(attr_rate) +
                          " must be finite and > 0");
       }
     }
-    const bool have_time = file->nameExists(sel.time_dataset);
+    const bool have_time = H5LinkExists(file->getId(), path, sel.time_dataset);
     H5::DataSet dt;
     if (have_time) {
       dt = OpenDataset(*file, path, sel.time_dataset, "--time-dataset");
@@ -829,6 +947,10 @@ LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& sel, const
   }
 }
 
+}  // namespace internal
+
+namespace {
+
 // The file is read in a child process (io/isolated.h) that streams the chunks
 // through a pipe: a crash in libhdf5 becomes an InputError here, and the data
 // is still read once, in bounded memory. Frames: 'c' then u[n], y[n] (a chunk);
@@ -841,7 +963,7 @@ LogInfo StreamHdf5(const std::string& path, const LogSelect& sel, const LogSink&
       path,
       [&](const FrameSender& send) {
         std::vector<char> frame;
-        const LogInfo in = StreamHdf5InProcess(path, sel, [&](const double* cu, const double* cy, size_t n) {
+        const LogInfo in = internal::StreamHdf5InProcess(path, sel, [&](const double* cu, const double* cy, size_t n) {
           frame.resize(1 + 2 * n * sizeof(double));
           frame[0] = 'c';
           std::memcpy(frame.data() + 1, cu, n * sizeof(double));
@@ -893,6 +1015,7 @@ void WriteStringAttr(H5::H5Object& obj, const std::string& name, const std::stri
   H5::StrType st(H5::PredType::C_S1, value.size() + 1);
   H5::Attribute a = obj.createAttribute(name, st, H5::DataSpace(H5S_SCALAR));
   a.write(st, value.c_str());
+  a.close();
 }
 
 void WriteHdf5Log(const std::string& tmp, double rate, const std::vector<double>& u,
@@ -909,6 +1032,7 @@ void WriteHdf5Log(const std::string& tmp, double rate, const std::vector<double>
       H5::DataSet ds = parent.createDataSet(name, H5::PredType::IEEE_F64LE, space);
       ds.write(v.data(), H5::PredType::NATIVE_DOUBLE);
       WriteStringAttr(ds, "units", unit);
+      ds.close();
     };
     H5::Group root = file.openGroup("/");
     write(root, "time", t, "s");
@@ -920,6 +1044,14 @@ void WriteHdf5Log(const std::string& tmp, double rate, const std::vector<double>
                                            H5::DataSpace(H5S_SCALAR));
     a.write(H5::PredType::NATIVE_DOUBLE, &rate);
     WriteStringAttr(root, "sample_rate_units", "Hz");
+    // Closed here, inside the try: an error at flush or close (a full disk)
+    // must fail the write, not vanish in a destructor.
+    a.close();
+    gi.close();
+    go.close();
+    root.close();
+    file.flush(H5F_SCOPE_GLOBAL);
+    file.close();
   } catch (const H5::Exception& e) {
     throw InputError("cannot write HDF5 '" + tmp + "': " + e.getDetailMsg());
   }
@@ -937,8 +1069,13 @@ static bool HasExtension(const std::string& path, std::initializer_list<const ch
 }
 
 LogFormat DetectLogFormat(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {  // not there (a file to write): by extension
+  // Only a regular file is opened to sniff (a FIFO or a device would block or
+  // never end); anything else is classified by name and refused by its reader.
+  struct stat st;
+  const bool regular = ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+  std::ifstream in;
+  if (regular) in.open(path, std::ios::binary);
+  if (!regular || !in) {  // not there (a file to write): by extension
     return HasExtension(path, {".h5", ".hdf5", ".he5"}) ? LogFormat::kHdf5
            : HasExtension(path, {".mat"})                 ? LogFormat::kMat
                                                           : LogFormat::kCsv;
@@ -970,8 +1107,18 @@ LogInfo StreamLog(const std::string& path, const LogSelect& select, const LogSin
     }
   }
   TimeScale(select.time_unit);  // validates the flag
+  CheckInputFile(path, "log");
+  size_t total = 0;
+  const LogSink capped = [&](const double* u, const double* y, size_t n) {
+    total += n;
+    if (total > kMaxLogSamples) {
+      throw InputError(path + ": more than " + std::to_string(kMaxLogSamples) +
+                       " samples, more than zwidth reads; split the log");
+    }
+    sink(u, y, n);
+  };
   const LogFormat format = DetectLogFormat(path);
-  if (format == LogFormat::kCsv) return StreamCsv(path, select, sink);
+  if (format == LogFormat::kCsv) return StreamCsv(path, select, capped);
   if (!select.time_unit.empty() && select.time_unit != "s") {
     throw InputError(path + ": --time-unit applies to text logs; this " +
                      std::string(format == LogFormat::kMat ? "MATLAB" : "HDF5") +
@@ -984,7 +1131,7 @@ LogInfo StreamLog(const std::string& path, const LogSelect& select, const LogSin
     sy.assign(y, y + n);
     for (double& v : su) v *= select.input_scale;
     for (double& v : sy) v *= select.output_scale;
-    sink(su.data(), sy.data(), n);
+    capped(su.data(), sy.data(), n);
   };
   LogInfo info = format == LogFormat::kMat ? StreamMat(path, select, scaled) : StreamHdf5(path, select, scaled);
   if (info.layout.empty()) info.layout = format == LogFormat::kMat ? "MATLAB v5 .mat" : "HDF5";

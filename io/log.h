@@ -65,6 +65,10 @@ LogFormat DetectLogFormat(const std::string& path);
 
 using LogSink = std::function<void(const double* input, const double* output, size_t n)>;
 
+// The most samples a log may hold (2^30, 12 days at 1 kHz): more is refused
+// before reading (HDF5) or when reached (CSV), never silently truncated.
+inline constexpr size_t kMaxLogSamples = size_t{1} << 30;
+
 // Streams (input, output) chunks to sink after validating them. Throws
 // InputError on any problem; the sink may have seen earlier chunks by then.
 LogInfo StreamLog(const std::string& path, const LogSelect& select, const LogSink& sink);
@@ -75,6 +79,12 @@ struct Log {
   std::vector<double> output;  // rad
 };
 Log ReadLog(const std::string& path, const LogSelect& select = {});
+
+// The HDF5 parsing that StreamLog runs in a child process (io/isolated.h),
+// callable in this process for the fuzzer (the isolation is tested on its own).
+namespace internal {
+LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& select, const LogSink& sink);
+}  // namespace internal
 
 // Writers (atomic). time may be empty: then t = k / sample_rate_hz.
 void WriteLog(const std::string& path, double sample_rate_hz,

@@ -1,6 +1,8 @@
 #include "io/model_json.h"
 
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <fstream>
 #include <limits>
 #include <set>
@@ -44,6 +46,18 @@ double Number(const json& obj, const std::string& key, const std::string& source
   return v;
 }
 
+// Parameters of a model (not its standard errors) must lie in
+// [kPlausibleMin, kPlausibleMax] (SI units, rad/s): values outside (m = 1e-300)
+// make the Z-width overflow to inf, which no device has.
+void CheckPlausible(double v, const std::string& source, const std::string& name) {
+  if (!(v >= kPlausibleMin && v <= kPlausibleMax)) {
+    char b[64];
+    std::snprintf(b, sizeof b, "%g", v);
+    Fail(source, "key '" + name + "' = " + b + " is outside the plausible range [1e-12, 1e12] (SI units, rad/s); "
+                 "check the units");
+  }
+}
+
 Plant ParsePlant(const json& j, const std::string& source, const std::string& where,
                  bool is_std) {
   if (!j.is_object()) Fail(source, "'" + (where.empty() ? "(top level)" : where) + "' must be an object");
@@ -53,6 +67,10 @@ Plant ParsePlant(const json& j, const std::string& source, const std::string& wh
   auto modes = j.find("modes");
   if (modes == j.end()) Fail(source, "missing key '" + where + "modes' (use [] for the rigid body alone)");
   if (!modes->is_array()) Fail(source, "key '" + where + "modes' must be an array");
+  if (modes->size() > kMaxModes) {
+    Fail(source, "key '" + where + "modes' has " + std::to_string(modes->size()) + " entries, more than " +
+                     std::to_string(kMaxModes) + " (the most zwidth handles)");
+  }
   for (size_t i = 0; i < modes->size(); ++i) {
     const json& mj = (*modes)[i];
     const std::string w = where + "modes[" + std::to_string(i) + "].";
@@ -60,6 +78,18 @@ Plant ParsePlant(const json& j, const std::string& source, const std::string& wh
     CheckKeys(mj, {"omega", "c", "v", "d"}, source, w);
     p.modes.push_back({Number(mj, "omega", source, w, is_std), Number(mj, "c", source, w, is_std),
                        Number(mj, "v", source, w, is_std), Number(mj, "d", source, w, is_std)});
+  }
+  if (!is_std) {
+    CheckPlausible(p.m, source, where + "m");
+    CheckPlausible(p.b, source, where + "b");
+    for (size_t i = 0; i < p.modes.size(); ++i) {
+      const std::string w = where + "modes[" + std::to_string(i) + "].";
+      const Mode& md = p.modes[i];
+      CheckPlausible(md.omega, source, w + "omega");
+      CheckPlausible(md.c, source, w + "c");
+      CheckPlausible(md.v, source, w + "v");
+      CheckPlausible(md.d, source, w + "d");
+    }
   }
   return p;
 }
@@ -80,7 +110,50 @@ json PlantToJson(const Plant& p) {
 
 }  // namespace
 
+void CheckJsonDepth(const std::string& text, const std::string& source, int max_depth) {
+  int depth = 0;
+  bool in_string = false;
+  size_t line = 1;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '\n') ++line;
+    if (in_string) {
+      if (c == '\\') ++i;
+      else if (c == '"') in_string = false;
+      continue;
+    }
+    if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > max_depth) {
+        throw InputError(source + ": line " + std::to_string(line) + ": JSON nested deeper than " +
+                         std::to_string(max_depth) + " levels; a model or scene file is never that deep");
+      }
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+}
+
+std::string ReadSmallFile(const std::string& path, const std::string& what, size_t max_bytes) {
+  CheckInputFile(path, what);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open " + what + " (does it exist?)");
+  std::string text;
+  char buf[1 << 16];
+  while (in.read(buf, sizeof buf) || in.gcount() > 0) {
+    text.append(buf, static_cast<size_t>(in.gcount()));
+    if (text.size() > max_bytes) {
+      throw InputError(path + ": the " + what + " is larger than " + std::to_string(max_bytes >> 20) +
+                       " MiB, more than such a file holds");
+    }
+  }
+  if (in.bad()) throw InputError(path + ": read error");
+  return text;
+}
+
 ModelFile ParseModelJson(const std::string& text, const std::string& source) {
+  CheckJsonDepth(text, source);
   json j;
   try {
     j = json::parse(text);
@@ -94,7 +167,13 @@ ModelFile ParseModelJson(const std::string& text, const std::string& source) {
   mf.plant = ParsePlant(j, source, "", false);
   if (auto it = j.find("delay_samples"); it != j.end()) {
     if (!it->is_number_integer()) Fail(source, "key 'delay_samples' must be an integer, got " + it->dump());
-    mf.plant.delay_samples = it->get<int>();
+    // Range-checked as a 64-bit value before narrowing: 4294967298 is not 2.
+    const bool negative = it->is_number_integer() && !it->is_number_unsigned() && it->get<std::int64_t>() < 0;
+    if (negative || it->get<std::uint64_t>() > static_cast<std::uint64_t>(kMaxDelaySamples)) {
+      Fail(source, "key 'delay_samples' = " + it->dump() + " is outside [0, " + std::to_string(kMaxDelaySamples) +
+                       "] samples");
+    }
+    mf.plant.delay_samples = static_cast<int>(it->get<std::int64_t>());
   }
   if (auto it = j.find("name"); it != j.end()) {
     if (!it->is_string()) Fail(source, "key 'name' must be a string");
@@ -146,11 +225,7 @@ ModelFile ParseModelJson(const std::string& text, const std::string& source) {
 }
 
 ModelFile ReadModelJson(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open model file (does it exist?)");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string text = ss.str();
+  const std::string text = ReadSmallFile(path, "model file", kMaxJsonBytes);
   if (text.find_first_not_of(" \t\r\n") == std::string::npos) {
     throw InputError(path + ": empty model file");
   }
@@ -182,6 +257,14 @@ json ModelToJson(const ModelFile& mf) {
 }
 
 void WriteModelJson(const std::string& path, const ModelFile& mf) {
+  // A model with a NaN or inf parameter would be written as null and refused
+  // when read back: it is a failed computation, not an output.
+  const Plant& p = mf.plant;
+  bool finite = std::isfinite(p.m) && std::isfinite(p.b);
+  for (const Mode& md : p.modes) {
+    finite = finite && std::isfinite(md.omega) && std::isfinite(md.c) && std::isfinite(md.v) && std::isfinite(md.d);
+  }
+  if (!finite) throw ComputationError("the model has a non-finite parameter; '" + path + "' was not written");
   WriteTextAtomically(path, ModelToJson(mf).dump(2) + "\n");
 }
 

@@ -32,6 +32,23 @@ struct ModelFile {
   nlohmann::json fit;  // null when absent
 };
 
+// Limits of a model file, refused with an InputError naming the key:
+inline constexpr size_t kMaxModes = 64;            // entries of "modes"
+inline constexpr int kMaxDelaySamples = 1000;      // "delay_samples" in [0, this]
+inline constexpr double kPlausibleMin = 1e-12;     // m, b, omega, c, v, d in
+inline constexpr double kPlausibleMax = 1e12;      //   [min, max] (SI, rad/s)
+inline constexpr int kMaxJsonDepth = 64;           // nesting of [ and { (anywhere, "fit" too)
+inline constexpr size_t kMaxJsonBytes = 64u << 20; // size of a model or scene file
+
+// InputError when `text` nests arrays/objects deeper than max_depth: checked
+// by a scan of the brackets (outside strings) before nlohmann parses, whose
+// parser, copies and error paths recurse once per level.
+void CheckJsonDepth(const std::string& text, const std::string& source, int max_depth = kMaxJsonDepth);
+
+// The whole content of a small input file (a model, a scene): a regular file
+// (CheckInputFile) of at most max_bytes.
+std::string ReadSmallFile(const std::string& path, const std::string& what, size_t max_bytes = kMaxJsonBytes);
+
 // Parses and validates; throws InputError naming the file and the key.
 ModelFile ParseModelJson(const std::string& text, const std::string& source);
 ModelFile ReadModelJson(const std::string& path);

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "io/atomic_file.h"
+#include "io/model_json.h"
 #include "model/error.h"
 
 namespace zwidth::io {
@@ -70,13 +71,11 @@ nlohmann::json SummaryToJson(const stability::DelaySummary& s, const stability::
 }
 
 std::vector<SceneObject> ReadScene(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open scene file (does it exist?)");
-  std::stringstream ss;
-  ss << in.rdbuf();
+  const std::string text = ReadSmallFile(path, "scene file");  // a regular file, bounded size
+  CheckJsonDepth(text, path);
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(ss.str());
+    j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {  // parse_error, out_of_range (1e999)
     throw InputError(path + ": not valid JSON (truncated or malformed): " + e.what());
   }

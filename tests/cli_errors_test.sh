@@ -49,14 +49,18 @@ expect no-output-folder "output folder .* does not exist" "" -- "$ZW" estimate "
 expect missing-file "cannot open|does it exist" "$T/o16.csv" -- "$ZW" estimate "$T/absent.csv" -o "$T/o16.csv"
 expect bad-window-name "--window 'kaiser'" "$T/o17.csv" -- "$ZW" estimate "$T/good.h5" --window kaiser -o "$T/o17.csv"
 expect relay-negative-delay "delay" "" -- "$ZW" relay "$M" --delay -2 --damping 0
-expect check-negative-K "'K'" "" -- "$ZW" check <(echo '{"objects":[{"name":"w","K":-1,"B":0}]}') --model "$M" --delay 2
+echo '{"objects":[{"name":"w","K":-1,"B":0}]}' > "$T/negK.json"
+expect check-negative-K "'K'" "" -- "$ZW" check "$T/negK.json" --model "$M" --delay 2
+expect check-scene-pipe "scene file is a FIFO.*not a regular file" "" -- "$ZW" check <(echo '{"objects":[{"name":"w","K":1,"B":0}]}') --model "$M" --delay 2
 sed 's/"modes"/"covariance": {"space": "log", "parameters": ["m", "b"], "matrix": [[1e-4, 0], [0, 1e-4]]}, "modes"/' "$M" > "$T/cov.json"
 expect model-covariance-shape "covariance.parameters" "$T/o26.csv" -- "$ZW" boundary "$T/cov.json" -o "$T/o26.csv"
 expect b-grid-cap "over the cap.*--b-step" "$T/o24.csv" -- "$ZW" boundary "$M" --b-max 1e300 --b-step 1e-3 -o "$T/o24.csv"
 expect b-grid-bad-max "--b-max must be finite" "$T/o25.csv" -- "$ZW" boundary "$M" --b-max inf -o "$T/o25.csv"
 # check: exit 3 (not 1 or 2) when an object is unstable, 0 when all are stable.
-"$ZW" check <(echo '{"objects":[{"name":"ok","K":1,"B":0.01},{"name":"wall","K":80,"B":0.01}]}') --model "$M" --delay 2 >"$T/stdout" 2>&1; rc=$?
-"$ZW" check <(echo '{"objects":[{"name":"ok","K":1,"B":0.01}]}') --model "$M" --delay 2 >/dev/null 2>&1; rc0=$?
+echo '{"objects":[{"name":"ok","K":1,"B":0.01},{"name":"wall","K":80,"B":0.01}]}' > "$T/scene2.json"
+echo '{"objects":[{"name":"ok","K":1,"B":0.01}]}' > "$T/scene1.json"
+"$ZW" check "$T/scene2.json" --model "$M" --delay 2 >"$T/stdout" 2>&1; rc=$?
+"$ZW" check "$T/scene1.json" --model "$M" --delay 2 >/dev/null 2>&1; rc0=$?
 if [ $rc -eq 3 ] && [ $rc0 -eq 0 ] && grep -q "UNSTABLE" "$T/stdout"; then echo "ok   check-exit-3"; pass=$((pass+1));
 else echo "FAIL check-exit-3: exit $rc / $rc0"; cat "$T/stdout"; fail=$((fail+1)); fi
 expect unknown-flag "unknown|extra|not expected" "" -- "$ZW" boundary "$M" --bogus 1 -o "$T/x.csv"
@@ -88,6 +92,10 @@ t = sys.argv[1]
 with h5py.File(f"{t}/prealloc.h5", "w") as f:  # a logger that preallocated 1e10 samples and stopped
     f.attrs["sample_rate_hz"] = 1000.0
     for name in ("/input/torque", "/output/position"):
+        f.create_dataset(name, shape=(10**8,), chunks=(4096,), dtype="f8")[:4096] = np.random.randn(4096)
+with h5py.File(f"{t}/huge.h5", "w") as f:  # declares 1e10 samples: over the cap, refused before any read
+    f.attrs["sample_rate_hz"] = 1000.0
+    for name in ("/input/torque", "/output/position"):
         f.create_dataset(name, shape=(10**10,), chunks=(4096,), dtype="f8")[:4096] = np.random.randn(4096)
 with h5py.File(f"{t}/unwritten.h5", "w") as f:  # contiguous, never written
     f.attrs["sample_rate_hz"] = 1000.0
@@ -98,7 +106,8 @@ with h5py.File(f"{t}/compressed.h5", "w") as f:  # fully written, gzip: accepted
     for name in ("/input/torque", "/output/position"):
         f.create_dataset(name, data=np.random.randn(20000), chunks=(4096,), compression="gzip")
 PY
-  expect h5-preallocated "declares 10000000000 samples, but only 1 of its 2441407 chunks were ever written" "$T/o25.csv" -- "$ZW" estimate "$T/prealloc.h5" -o "$T/o25.csv"
+  expect h5-preallocated "declares 100000000 samples, but only 1 of its 24415 chunks were ever written" "$T/o25.csv" -- "$ZW" estimate "$T/prealloc.h5" -o "$T/o25.csv"
+  expect h5-over-sample-cap "declares 10000000000 samples, more than zwidth reads \(1073741824\)" "$T/o28.csv" -- "$ZW" estimate "$T/huge.h5" -o "$T/o28.csv"
   expect h5-unwritten "torque: declares 1000000 samples, but its data were never written" "$T/o26.csv" -- "$ZW" estimate "$T/unwritten.h5" -o "$T/o26.csv"
   if "$ZW" estimate "$T/compressed.h5" -o "$T/o27.csv" >/dev/null 2>&1 && [ -s "$T/o27.csv" ]; then
     echo "ok   h5-compressed: a fully written gzip log is read"; pass=$((pass+1))
