@@ -784,7 +784,7 @@ LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& sel, const
       throw InputError(path + ": neither a '" + sel.time_dataset +
                        "' dataset nor a sample_rate_hz attribute; pass --rate");
     }
-    TimeChecker times(path, sel.max_interval_deviation);
+    TimeChecker times(path, sel.max_interval_deviation, sel.sample_rate_hz <= 0.0);  // --rate: only increasing
     ConstantCheck constant;
     std::vector<double> u(kChunk), y(kChunk), t(kChunk);
     for (size_t off = 0; off < n; off += kChunk) {

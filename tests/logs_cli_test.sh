@@ -92,6 +92,13 @@ PY
 # Closed-loop flags: with r = u the joint estimate is H1 (CSV and HDF5).
 "$ZW" estimate "$T/good.csv" --reference-column torque -o "$T/joint.csv" 2>"$T/err" && grep -q "joint G = S_ry/S_ru" "$T/err" \
   && same_frf "$T/ref.csv" "$T/joint.csv" 1e-9 && ok "--reference-column: joint estimate, equals H1 when r = u" || { bad "reference column"; cat "$T/err"; }
+"$ZW" estimate "$T/good.csv" --reference-column torque --coherences-output "$T/coh.csv" -o "$T/joint2.csv" 2>/dev/null && $PY - "$T/coh.csv" <<'PY' && ok "--coherences-output: r->u = 1 and r->y = u->y when r = u" || bad "coherences output"
+import sys, csv
+rows = list(csv.DictReader(open(sys.argv[1])))
+sys.exit(0 if rows and all(abs(float(r["coherence_ru"]) - 1) < 1e-9 and abs(float(r["coherence_ry"]) - float(r["coherence_uy"])) < 1e-9 for r in rows) else 1)
+PY
+"$ZW" run "$T/good.csv" -o "$T/rj" --delays 2 --reference-column torque >/dev/null 2>"$T/err" && grep -q "coherence_ru coherence_ry" "$T/rj/figures/bode.dat" \
+  && grep -q "joint" "$T/rj/summary.json" && ok "run --reference-column: joint estimate, r->u and r->y in the figure data" || { bad "run joint"; cat "$T/err"; }
 "$ZW" simulate --model "$M" -o "$T/good.h5" --seconds 20 --seed 3 2>/dev/null
 if $PY -c "import h5py" 2>/dev/null; then
   $PY -c "import h5py,sys; f=h5py.File(sys.argv[1],'a'); f['/input/r']=f['/input/torque'][()]" "$T/good.h5"
