@@ -1,5 +1,6 @@
 // zwidth run: estimate -> fit -> compare -> boundary -> report, the job a user
 // runs on a new device log. Figures are drawn by gnuplot when it is installed.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -175,7 +176,8 @@ void AddRunCommand(CLI::App& app) {
       // Table II (the paper's relay points), drawn only beside Table I.
       if (table1) {
         std::ostringstream t2;
-        for (const io::Table2Point& p : io::Table2Points()) {
+        for (const io::Table2Point& p : io::Table2Points()) {  // at the delays drawn
+          if (std::find(f->delays.begin(), f->delays.end(), p.delay_samples) == f->delays.end()) continue;
           t2 << p.delay_samples << " " << p.B << " " << p.K_cr << " " << p.f_cr_hz << "\n";
         }
         io::WriteTextAtomically((fig / "table2.dat").string(), t2.str());

@@ -110,8 +110,9 @@ fi
 "$ZW" run "$T/good.csv" -o "$T/r0" --delays 2 >/dev/null 2>"$T/err" && [ ! -e "$T/r0/figures/kcr_reference.dat" ] && [ ! -e "$T/r0/figures/table2.dat" ] \
   && grep -q '"reference": "none"' "$T/r0/summary.json" && ok "run without --reference: no comparison, no Table II" || { bad "run default"; cat "$T/err"; }
 "$ZW" run "$T/good.csv" -o "$T/r1" --delays 2 --reference table1 >"$T/out" 2>"$T/err" && [ -s "$T/r1/figures/kcr_reference.dat" ] \
-  && [ "$(wc -l < "$T/r1/figures/table2.dat")" -gt 10 ] && grep -q "diff/std" "$T/out" \
-  && ok "run --reference table1: comparison and $(wc -l < "$T/r1/figures/table2.dat") Table II points" || { bad "run table1"; cat "$T/err"; }
+  && [ "$(awk '$1 == 2' "$T/r1/figures/table2.dat" | wc -l)" -eq 7 ] && [ "$(awk '$1 != 2' "$T/r1/figures/table2.dat" | wc -l)" -eq 0 ] \
+  && grep -q "diff/std" "$T/out" \
+  && ok "run --reference table1: comparison and the 7 Table II points at d = 2" || { bad "run table1"; cat "$T/err"; }
 "$ZW" run "$T/good.csv" -o "$T/r2" --delays 2 --reference "$M" >/dev/null 2>"$T/err" && [ ! -e "$T/r2/figures/table2.dat" ] \
   && ok "run --reference MODEL.json: no Table II points" || { bad "run model ref"; cat "$T/err"; }
 "$ZW" fit "$T/good.csv" --units linear -o "$T/lin.json" >"$T/out" 2>"$T/err" && grep -q "N s/m" "$T/out" && ok "--units linear labels" || { bad "units"; cat "$T/err"; }
