@@ -72,7 +72,7 @@ void AddRunCommand(CLI::App& app) {
     }
     std::fprintf(stderr, "zwidth run %s -> %s\n", source.c_str(), f->outdir.c_str());
     StageTimer timer;
-    const LogsEstimate est = EstimateFromLogs(f->logs, f->est);
+    const LogsEstimate est = EstimateFromLogs(f->logs, f->est, true);
     const ident::FrequencyResponse& frf = est.response.frf;
     double t_total = timer.Lap("estimate (read + Welch)");
     fit::FitResult fr;

@@ -130,6 +130,7 @@ expect column-on-hdf5 "--reference-dataset" "$T/e6.csv" -- "$ZW" estimate "$T/go
 expect bad-delimiter "--delimiter '5'" "$T/e7.csv" -- "$ZW" estimate "$T/good.csv" --delimiter 5 -o "$T/e7.csv"
 expect runs-differ "same rate and segment length" "$T/e8.csv" -- "$ZW" estimate "$T/good.csv" "$T/ms.csv" --time-unit ms --whole-record -o "$T/e8.csv"
 expect period-without-whole "--period-samples 500: needs --whole-record" "$T/e10.csv" -- "$ZW" estimate "$T/good.csv" --period-samples 500 -o "$T/e10.csv"
+expect fit-one-whole-record "no per-bin std to weight the fit" "$T/e11.json" -- "$ZW" fit "$T/good.csv" --whole-record -o "$T/e11.json"
 expect excite-kind "--kind 'pink'" "$T/e9.txt" -- "$ZW" excite --kind pink -o "$T/e9.txt"
 expect run-bad-reference "cannot open|does it exist|not found" "$T/r9" -- "$ZW" run "$T/good.csv" -o "$T/r9" --reference "$T/absent.json"
 
