@@ -39,7 +39,7 @@ void AddFitCommands(CLI::App& app) {
     const bool frf_file = f->inputs.size() == 1 && io::IsFrequencyResponseFile(f->inputs[0]);
     const ident::FrequencyResponse frf = frf_file
         ? io::ReadFrequencyResponse(f->inputs[0], f->est.select.sample_rate_hz)
-        : EstimateFromLogs(f->inputs, f->est).response.frf;
+        : EstimateFromLogs(f->inputs, f->est, true).response.frf;
     fit::FitResult r;
     const io::ModelFile mf = FitToModelFile(frf, f->o, source, &r);
     io::WriteModelJson(f->out, mf);

@@ -1,5 +1,6 @@
 // zwidth run: estimate -> fit -> compare -> boundary -> report, the job a user
 // runs on a new device log. Figures are drawn by gnuplot when it is installed.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -80,7 +81,7 @@ void AddRunCommand(CLI::App& app) {
     const fs::path final_out(folder.path());
     std::fprintf(stderr, "zwidth run %s -> %s\n", source.c_str(), f->outdir.c_str());
     StageTimer timer;
-    const LogsEstimate est = EstimateFromLogs(f->logs, f->est);
+    const LogsEstimate est = EstimateFromLogs(f->logs, f->est, true);
     const ident::FrequencyResponse& frf = est.response.frf;
     double t_total = timer.Lap("estimate (read + Welch)");
     fit::FitResult fr;
@@ -157,7 +158,8 @@ void AddRunCommand(CLI::App& app) {
     {
       std::ostringstream b;
       b.precision(10);
-      b << "# f_hz |H| phase_deg |G| phase_G_deg coherence\n";
+      const bool joint = est.response.method == ident::CombinedMethod::kJoint;
+      b << "# f_hz |H| phase_deg |G| phase_G_deg coherence" << (joint ? " coherence_ru coherence_ry" : "") << "\n";
       const DiscreteResponse g(DiscretizeZoh(model.plant, T));
       // Phases unwrapped along frequency (the model's continuously; the
       // measured one kept within half a turn of the model's).
@@ -171,7 +173,9 @@ void AddRunCommand(CLI::App& app) {
         double ph = std::arg(frf.H[k]) * 180 / std::numbers::pi;
         ph += 360.0 * std::round((pm - ph) / 360.0);
         b << frf.f_hz[k] << " " << std::abs(frf.H[k]) << " " << ph << " " << std::abs(gm) << " " << pm << " "
-          << frf.coherence[k] << "\n";
+          << frf.coherence[k];
+        if (joint) b << " " << est.response.coherence_ru[k] << " " << est.response.coherence_ry[k];
+        b << "\n";
       }
       io::WriteTextAtomically((fig / "bode.dat").string(), b.str());
       // Curves: the model's are the boundary rows; reference and rigid-only
@@ -220,7 +224,8 @@ void AddRunCommand(CLI::App& app) {
       // Table II (the paper's relay points), drawn only beside Table I.
       if (table1) {
         std::ostringstream t2;
-        for (const io::Table2Point& p : io::Table2Points()) {
+        for (const io::Table2Point& p : io::Table2Points()) {  // at the delays drawn
+          if (std::find(f->delays.begin(), f->delays.end(), p.delay_samples) == f->delays.end()) continue;
           t2 << p.delay_samples << " " << p.B << " " << p.K_cr << " " << p.f_cr_hz << "\n";
         }
         io::WriteTextAtomically((fig / "table2.dat").string(), t2.str());
@@ -242,7 +247,9 @@ void AddRunCommand(CLI::App& app) {
            << "unset logscale y\nset format y '%g'\nset ylabel 'phase [deg]'\nset xlabel 'frequency [Hz]'\n"
            << "plot 'bode.dat' u 1:3 w l lc rgb '#1f77b4' t 'measured', '' u 1:5 w l lw 2 lc rgb 'black' t 'fitted model'\nunset multiplot\n";
         gp << "set output 'coherence." << ext << "'\nset title 'Magnitude-squared coherence'\nset xlabel 'frequency [Hz]'\nset ylabel 'coherence [-]'\nset yrange [0:1.05]\n"
-           << "plot 'bode.dat' u 1:6 w l lc rgb '#1f77b4' t 'coherence'\nset yrange [*:*]\nunset logscale x\nunset title\n";
+           << (joint ? "plot 'bode.dat' u 1:7 w l lc rgb '#1f77b4' t 'r -> u', '' u 1:8 w l lc rgb '#d62728' t 'r -> y'\n"
+                     : "plot 'bode.dat' u 1:6 w l lc rgb '#1f77b4' t 'coherence'\n")
+           << "set yrange [*:*]\nunset logscale x\nunset title\n";
         gp << "set output 'kcr." << ext << "'\nset multiplot layout 2,1 title 'Critical stiffness and ultimate frequency vs damping - Fig. 6 / Fig. 10'\n"
            << "set xlabel 'B [" << (linear ? "N s/m" : "N m s/rad") << "]'\nset ylabel 'K_{CR} [" << (linear ? "N/m" : "N m/rad") << "]'\n"
            << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:2 w l lt i t 'model, d='.word(delays,i)"

@@ -93,7 +93,7 @@ void WarnDropped(const std::string& path, size_t n_samples, const ident::WelchOp
 
 }  // namespace
 
-LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const EstimateFlags& flags) {
+LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const EstimateFlags& flags, bool for_fit) {
   ident::WelchOptions options = flags.Resolve();
   const bool closed = !flags.reference_column.empty() || !flags.reference_dataset.empty();
   if (flags.whole_record && flags.welch.window_length != ident::WelchOptions{}.window_length) {
@@ -183,6 +183,10 @@ LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const Estim
   }
   out.response = ident::CombineRuns(runs, options.estimator,
                                     flags.whole_record ? ident::StdSource::kRunScatter : ident::StdSource::kCoherence);
+  if (for_fit && flags.whole_record && runs.size() < 2) {
+    throw InputError("--whole-record with one log and no --period-samples gives one segment: no per-bin std to "
+                     "weight the fit; pass several runs of the same excitation, or --period-samples");
+  }
   if (flags.whole_record && runs.size() < 2) {
     std::fprintf(stderr, "warning: --whole-record with one segment: no scatter between runs, the per-bin std is "
                          "infinite (pass several runs of the same excitation, or --period-samples)\n");

@@ -42,7 +42,10 @@ struct LogsEstimate {
 };
 // Reads the logs (runs of one device) and combines their spectra. Prints how
 // each log was read, its warnings and samples left out of the segments.
-LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const EstimateFlags& flags);
+// for_fit: a whole record of one segment (no per-bin std to weight a fit) is
+// refused rather than warned about.
+LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const EstimateFlags& flags,
+                              bool for_fit = false);
 std::string JoinPaths(const std::vector<std::string>& paths);
 
 // --units rotary|linear: parameter labels (kg m^2, N m s/rad | kg, N s/m).

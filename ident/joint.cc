@@ -64,8 +64,10 @@ CombinedResponse CombineRuns(const std::vector<RunSpectra>& runs, Estimator esti
   const bool joint = runs.front().ru.has_value();
   for (size_t i = 0; i < runs.size(); ++i) {
     const FrequencyResponse& f = runs[i].uy;
-    if (f.sample_rate_hz != first.sample_rate_hz || f.window_length != first.window_length ||
-        f.f_hz.size() != first.f_hz.size()) {
+    // Rates measured from time columns differ in the last digits; 0.1 % is a
+    // different logger setting.
+    if (std::abs(f.sample_rate_hz - first.sample_rate_hz) > 1e-3 * first.sample_rate_hz ||
+        f.window_length != first.window_length || f.f_hz.size() != first.f_hz.size()) {
       throw InputError("run " + std::to_string(i + 1) + " has " + std::to_string(f.sample_rate_hz) + " Hz and " +
                        std::to_string(f.window_length) + "-sample segments, run 1 " +
                        std::to_string(first.sample_rate_hz) + " Hz and " + std::to_string(first.window_length) +

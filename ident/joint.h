@@ -63,8 +63,9 @@ struct CombinedResponse {
   int num_runs = 0;
 };
 
-// Combines runs of one device (all with the same rate and window, and all with
-// or without r). Throws InputError when they differ.
+// Combines runs of one device (all with the same window, rates within 0.1 %
+// (run 1's is used), and all with or without r). Throws InputError when they
+// differ.
 CombinedResponse CombineRuns(const std::vector<RunSpectra>& runs, Estimator estimator, StdSource std_source);
 
 }  // namespace zwidth::ident

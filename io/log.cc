@@ -217,6 +217,8 @@ void Split(std::string_view sv, const Delim& d, std::vector<std::string_view>* o
     if (p == std::string_view::npos) break;
     start = p + 1;
   }
+  // A trailing delimiter (spreadsheet exports) ends the row, it adds no field.
+  if (out->size() > 1 && out->back().empty()) out->pop_back();
 }
 
 bool ParseNumber(std::string_view f, double* v) {
@@ -317,7 +319,7 @@ LogInfo StreamCsv(const std::string& path, const LogSelect& sel, const LogSink& 
     last = Pre{reader.line_no(), line, IsComment(line)};
     if (reader.line_no() > kMaxPreambleLines) {
       throw InputError(path + ": no numeric data row in the first " + std::to_string(kMaxPreambleLines) +
-                       " lines (line 1 starts " + Shown(line) + "); not a text log?");
+                       " lines (line " + std::to_string(reader.line_no()) + ": " + Shown(line) + "); not a text log?");
     }
   }
   if (!found) {
@@ -902,7 +904,7 @@ LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& sel, const
       throw InputError(path + ": neither a '" + sel.time_dataset +
                        "' dataset nor a sample_rate_hz attribute; pass --rate");
     }
-    TimeChecker times(path, sel.max_interval_deviation);
+    TimeChecker times(path, sel.max_interval_deviation, sel.sample_rate_hz <= 0.0);  // --rate: only increasing
     ConstantCheck constant;
     std::vector<double> u(kChunk), y(kChunk), t(kChunk);
     for (size_t off = 0; off < n; off += kChunk) {

@@ -94,6 +94,11 @@ TEST_F(LogFormats, CommaHeaderLf) {
   EXPECT_NE(log.info.layout.find("header at line 1"), std::string::npos) << log.info.layout;
 }
 
+TEST_F(LogFormats, TrailingDelimiterOfSpreadsheetExports) {
+  const Signals s = MakeSignals();
+  ExpectSame(ReadLog(Write("tr.csv", "t,torque,position,\n" + Rows(s, ",", ",\n"))), s);
+}
+
 TEST_F(LogFormats, SemicolonCrlfGivenOrDetected) {
   const Signals s = MakeSignals();
   const std::string p = Write("b.txt", "t;torque;position\r\n" + Rows(s, ";", "\r\n"));

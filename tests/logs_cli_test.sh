@@ -92,6 +92,13 @@ PY
 # Closed-loop flags: with r = u the joint estimate is H1 (CSV and HDF5).
 "$ZW" estimate "$T/good.csv" --reference-column torque -o "$T/joint.csv" 2>"$T/err" && grep -q "joint G = S_ry/S_ru" "$T/err" \
   && same_frf "$T/ref.csv" "$T/joint.csv" 1e-9 && ok "--reference-column: joint estimate, equals H1 when r = u" || { bad "reference column"; cat "$T/err"; }
+"$ZW" estimate "$T/good.csv" --reference-column torque --coherences-output "$T/coh.csv" -o "$T/joint2.csv" 2>/dev/null && $PY - "$T/coh.csv" <<'PY' && ok "--coherences-output: r->u = 1 and r->y = u->y when r = u" || bad "coherences output"
+import sys, csv
+rows = list(csv.DictReader(open(sys.argv[1])))
+sys.exit(0 if rows and all(abs(float(r["coherence_ru"]) - 1) < 1e-9 and abs(float(r["coherence_ry"]) - float(r["coherence_uy"])) < 1e-9 for r in rows) else 1)
+PY
+"$ZW" run "$T/good.csv" -o "$T/rj" --delays 2 --reference-column torque >/dev/null 2>"$T/err" && grep -q "coherence_ru coherence_ry" "$T/rj/figures/bode.dat" \
+  && grep -q "joint" "$T/rj/summary.json" && ok "run --reference-column: joint estimate, r->u and r->y in the figure data" || { bad "run joint"; cat "$T/err"; }
 "$ZW" simulate --model "$M" -o "$T/good.h5" --seconds 20 --seed 3 2>/dev/null
 if $PY -c "import h5py" 2>/dev/null; then
   $PY -c "import h5py,sys; f=h5py.File(sys.argv[1],'a'); f['/input/r']=f['/input/torque'][()]" "$T/good.h5"
@@ -103,8 +110,9 @@ fi
 "$ZW" run "$T/good.csv" -o "$T/r0" --delays 2 >/dev/null 2>"$T/err" && [ ! -e "$T/r0/figures/kcr_reference.dat" ] && [ ! -e "$T/r0/figures/table2.dat" ] \
   && grep -q '"reference": "none"' "$T/r0/summary.json" && ok "run without --reference: no comparison, no Table II" || { bad "run default"; cat "$T/err"; }
 "$ZW" run "$T/good.csv" -o "$T/r1" --delays 2 --reference table1 >"$T/out" 2>"$T/err" && [ -s "$T/r1/figures/kcr_reference.dat" ] \
-  && [ "$(wc -l < "$T/r1/figures/table2.dat")" -gt 10 ] && grep -q "diff/std" "$T/out" \
-  && ok "run --reference table1: comparison and $(wc -l < "$T/r1/figures/table2.dat") Table II points" || { bad "run table1"; cat "$T/err"; }
+  && [ "$(awk '$1 == 2' "$T/r1/figures/table2.dat" | wc -l)" -eq 7 ] && [ "$(awk '$1 != 2' "$T/r1/figures/table2.dat" | wc -l)" -eq 0 ] \
+  && grep -q "diff/std" "$T/out" \
+  && ok "run --reference table1: comparison and the 7 Table II points at d = 2" || { bad "run table1"; cat "$T/err"; }
 "$ZW" run "$T/good.csv" -o "$T/r2" --delays 2 --reference "$M" >/dev/null 2>"$T/err" && [ ! -e "$T/r2/figures/table2.dat" ] \
   && ok "run --reference MODEL.json: no Table II points" || { bad "run model ref"; cat "$T/err"; }
 "$ZW" fit "$T/good.csv" --units linear -o "$T/lin.json" >"$T/out" 2>"$T/err" && grep -q "N s/m" "$T/out" && ok "--units linear labels" || { bad "units"; cat "$T/err"; }
@@ -122,6 +130,7 @@ expect column-on-hdf5 "--reference-dataset" "$T/e6.csv" -- "$ZW" estimate "$T/go
 expect bad-delimiter "--delimiter '5'" "$T/e7.csv" -- "$ZW" estimate "$T/good.csv" --delimiter 5 -o "$T/e7.csv"
 expect runs-differ "same rate and segment length" "$T/e8.csv" -- "$ZW" estimate "$T/good.csv" "$T/ms.csv" --time-unit ms --whole-record -o "$T/e8.csv"
 expect period-without-whole "--period-samples 500: needs --whole-record" "$T/e10.csv" -- "$ZW" estimate "$T/good.csv" --period-samples 500 -o "$T/e10.csv"
+expect fit-one-whole-record "no per-bin std to weight the fit" "$T/e11.json" -- "$ZW" fit "$T/good.csv" --whole-record -o "$T/e11.json"
 expect excite-kind "--kind 'pink'" "$T/e9.txt" -- "$ZW" excite --kind pink -o "$T/e9.txt"
 expect run-bad-reference "cannot open|does it exist|not found" "$T/r9" -- "$ZW" run "$T/good.csv" -o "$T/r9" --reference "$T/absent.json"
 
