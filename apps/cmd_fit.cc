@@ -10,35 +10,35 @@
 namespace zwidth::app {
 
 void AddFitCommands(CLI::App& app) {
-  struct FitFlags {
-    std::string input, out, init, delay = "0";
+  struct Flags {
+    std::string input, out, init;
     EstimateFlags est;
-    fit::FitOptions o;
+    FitFlags fit;
   };
-  auto f = std::make_shared<FitFlags>();
+  auto f = std::make_shared<Flags>();
   CLI::App* cmd = app.add_subcommand("fit", "fit the parameters of eq. (1) to a log or a saved frequency response");
   cmd->add_option("input", f->input, "log (.h5/.csv) or frequency response (.csv/.h5) from `zwidth estimate`")->required();
   cmd->add_option("-o,--output", f->out, "model JSON to write")->required();
-  cmd->add_option("--modes", f->o.num_modes, "resonance/antiresonance sections (0: rigid body)")->capture_default_str();
-  cmd->add_option("--delay-samples", f->delay, "input delay [samples] or 'auto'")->capture_default_str();
+  AddFitFlags(cmd, &f->fit);
   cmd->add_option("--init", f->init, "model JSON to start from (tried before the automatic starts)");
-  cmd->add_option("--starts", f->o.max_starts, "automatic starts tried")->capture_default_str();
-  cmd->add_option("--max-iterations", f->o.max_iterations, "solver iterations per start")->capture_default_str();
+  cmd->add_option("--starts", f->fit.o.max_starts, "automatic starts tried")->capture_default_str();
+  cmd->add_option("--max-iterations", f->fit.o.max_iterations, "solver iterations per start")->capture_default_str();
   AddEstimateFlags(cmd, &f->est);
   cmd->callback([f] {
     io::CheckOutputFolder(f->out);
-    ResolveDelayFlag(f->delay, &f->o);
-    if (!f->init.empty()) f->o.init = io::ReadModelJson(f->init).plant;
+    f->fit.Resolve(f->est.welch.fmin_hz, f->est.welch.fmax_hz);
+    if (!f->init.empty()) f->fit.o.init = io::ReadModelJson(f->init).plant;
     StageTimer timer(false);
     const ident::FrequencyResponse frf = io::IsFrequencyResponseFile(f->input)
         ? io::ReadFrequencyResponse(f->input, f->est.select.sample_rate_hz)
         : EstimateFromLog(f->input, f->est);
     fit::FitResult r;
-    const io::ModelFile mf = FitToModelFile(frf, f->o, f->input, &r);
+    const io::ModelFile mf = FitToModelFile(frf, f->fit.o, f->input, &r);
     io::WriteModelJson(f->out, mf);
     std::printf("%s", ParameterTable(mf).c_str());
     std::printf("%s (%.1f ms)\n", r.BriefReport().c_str(), timer.Lap("fit"));
-    std::printf("order: pole pairs sorted by omega, zero pairs by v (G is unchanged)\n");
+    std::printf("order: pole pairs sorted by omega, zero pairs by v (G is unchanged); sections numbered from 1\n");
+    std::printf("%s", FitReport(r).c_str());
   });
 
   struct CompareFlags {

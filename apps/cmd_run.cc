@@ -49,10 +49,10 @@ std::string Html(const std::string& s) {
 
 void AddRunCommand(CLI::App& app) {
   struct RunFlags {
-    std::string log, outdir, reference, delay = "0";
+    std::string log, outdir, reference;
     std::vector<int> delays = {2, 4, 8};
     EstimateFlags est;
-    fit::FitOptions o;
+    FitFlags fit;
     double b_step = 0.0005;
   };
   auto f = std::make_shared<RunFlags>();
@@ -61,12 +61,12 @@ void AddRunCommand(CLI::App& app) {
   cmd->add_option("-o,--output", f->outdir, "output folder (created if its parent exists)")->required();
   cmd->add_option("--reference", f->reference, "reference model (default datasets/phantom/table1.json)");
   cmd->add_option("--delays", f->delays, "loop delays [samples]")->delimiter(',')->capture_default_str();
-  cmd->add_option("--modes", f->o.num_modes, "resonance/antiresonance sections")->capture_default_str();
-  cmd->add_option("--delay-samples", f->delay, "model input delay [samples] or 'auto'")->capture_default_str();
+  f->fit.modes = "auto";  // run chooses the order unless told
+  AddFitFlags(cmd, &f->fit);
   cmd->add_option("--b-step", f->b_step, "B step of the boundary [N m s/rad]")->capture_default_str();
   AddEstimateFlags(cmd, &f->est);
   cmd->callback([f] {
-    ResolveDelayFlag(f->delay, &f->o);
+    f->fit.Resolve(f->est.welch.fmin_hz, f->est.welch.fmax_hz);
     for (int d : f->delays) if (d < 0) throw InputError("--delays must be >= 0");
     if (!(f->b_step > 0)) throw InputError("--b-step must be > 0");
     const fs::path out(f->outdir);
@@ -81,10 +81,11 @@ void AddRunCommand(CLI::App& app) {
     std::fprintf(stderr, "zwidth run %s -> %s\n", f->log.c_str(), f->outdir.c_str());
     StageTimer timer;
     io::LogInfo info;
-    const ident::FrequencyResponse frf = EstimateFromLog(f->log, f->est, &info);
+    ident::FrequencyResponse frf = EstimateFromLog(f->log, f->est, &info);
     double t_total = timer.Lap("estimate (read + Welch)");
     fit::FitResult fr;
-    const io::ModelFile model = FitToModelFile(frf, f->o, f->log, &fr);
+    const io::ModelFile model = FitToModelFile(frf, f->fit.o, f->log, &fr);
+    frf.used_by_fit = fr.band.used;
     t_total += timer.Lap("fit");
     const double T = 1.0 / frf.sample_rate_hz;
     // The model's Z-width per delay, computed once for the summary, the
@@ -128,7 +129,12 @@ void AddRunCommand(CLI::App& app) {
     summary["num_samples"] = info.num_samples;
     summary["fit"] = model.fit;
     summary["reference"] = ref_path;
-    io::WriteTextAtomically((out / "summary.json").string(), summary.dump(2) + "\n");
+    {  // The verdict first, above any Z-width computed from the model.
+      nlohmann::ordered_json top = {{"fit_quality", fit::ToString(fr.quality)},
+                                    {"fit_quality_reasons", nlohmann::ordered_json::parse(model.fit["quality_reasons"].dump())}};
+      for (const auto& [k, v] : summary.items()) top[k] = nlohmann::ordered_json::parse(v.dump());
+      io::WriteTextAtomically((out / "summary.json").string(), top.dump(2) + "\n");
+    }
     t_total += timer.Lap("write outputs");
     std::fprintf(stderr, "  %-28s %9.3f ms\n", "total (figures excluded)", t_total);
 
@@ -225,6 +231,8 @@ void AddRunCommand(CLI::App& app) {
     h << "<!DOCTYPE html><html><head><meta charset='utf-8'><title>zwidth report</title>"
       << "<style>body{font-family:sans-serif;max-width:1000px;margin:auto}pre{background:#f4f4f4;padding:8px}"
       << "img{max-width:100%}</style></head><body>\n<h1>zwidth report</h1>\n"
+      << "<p><b>Fit quality: " << fit::ToString(fr.quality) << "</b>"
+      << (fr.quality == fit::FitQuality::kGood ? "" : ": the Z-width below comes from a model that does not explain the log; do not rely on it") << "</p>\n<pre>" << Html(FitReport(fr)) << "</pre>\n"
       << "<p>Log <code>" << Html(f->log) << "</code>: " << info.num_samples << " samples at "
       << frf.sample_rate_hz << " Hz; Welch " << frf.num_averages << " averages of " << frf.window_length
       << " samples; " << frf.f_hz.size() << " bins from " << frf.f_hz.front() << " to " << frf.f_hz.back()
@@ -246,7 +254,8 @@ void AddRunCommand(CLI::App& app) {
     }
     h << "</body></html>\n";
     io::WriteTextAtomically((out / "report.html").string(), h.str());
-    std::printf("%s\n%s", ParameterTable(model).c_str(), cmp_text.c_str());
+    std::printf("fit quality: %s\n%s\n%s", fit::ToString(fr.quality).c_str(), ParameterTable(model).c_str(), cmp_text.c_str());
+    std::fprintf(stderr, "%s", FitReport(fr).c_str());
     std::printf("\nboundary: %s (%d of %zu rows where margin() and the exact K_CR disagree)\nreport: %s\n",
                 (out / "boundary.csv").c_str(), disagree, rows.size(), (out / "report.html").c_str());
   });

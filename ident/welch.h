@@ -63,6 +63,9 @@ struct FrequencyResponse {
   std::vector<double> H_std;
   std::vector<double> S_uu, S_yy;       // one-sided PSDs [unit^2/Hz]
   std::vector<std::complex<double>> S_uy;
+  // Per bin, 1 where a fit used it (FitResult::band.used), set by the caller
+  // before writing the response; empty when no fit was made.
+  std::vector<char> used_by_fit;
 };
 
 // Streaming estimator: memory is a few windows whatever the log length.
