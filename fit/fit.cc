@@ -477,11 +477,14 @@ std::vector<Plant> AutomaticStarts(const ident::FrequencyResponse& frf, int n, i
     return p;
   };
   const std::vector<double> wp = pick(peaks, -1), wz = pick(notches, -1);
-  // The linear rational (Sanathanan-Koerner) fit converted to eq. (1): one
-  // start that does not depend on spotting peaks, which closely spaced or
-  // interlaced modes hide.
-  if (std::optional<Plant> sk = LinearRationalStart(frf, n, delay)) starts.push_back(*sk);
-  for (double zeta : {0.1, 0.03, 0.3}) starts.push_back(make(wp, wz, zeta));
+  starts.push_back(make(wp, wz, 0.1));
+  // Second: the linear rational (Sanathanan-Koerner) fit converted to eq. (1),
+  // which does not depend on spotting peaks that closely spaced or interlaced
+  // modes hide. It takes the place of the last peak-swap start.
+  if (max_starts > 1) {
+    if (std::optional<Plant> sk = LinearRationalStart(frf, n, delay)) starts.push_back(*sk);
+  }
+  for (double zeta : {0.03, 0.3}) starts.push_back(make(wp, wz, zeta));
   for (int s = n - 1; s >= 0 && static_cast<int>(starts.size()) < max_starts + 2; --s) {
     starts.push_back(make(pick(peaks, s), wz, 0.1));
     starts.push_back(make(wp, pick(notches, s), 0.1));

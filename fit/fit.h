@@ -112,8 +112,8 @@ struct FitResult {
   // The bins used (ident::SelectExcitedBand); band.used has one entry per bin.
   ident::ExcitedBand band;
   // Verdict: poor when any of these fails (thresholds in fit.cc, QualityTests):
-  //   chi2/dof above 1.5 + 4 sqrt(2 / dof) (about 1.2 on correct models with
-  //   >= 8 averages, see the tests), residual runs test z < -4 on every 3rd bin
+  //   chi2/dof above 1.5 + 4 sqrt(2 kappa / dof) (1.0-1.4 on correct models
+  //   with >= 8 averages, see the tests), residual runs test z < -4 on every 3rd bin
   //   (bins 3 apart are uncorrelated for Hann), one octave band with
   //   chi2/dof > 4 and > 3x the rest, fewer than min_averages segments,
   //   damping at a bound, a spurious section, a search ended at its limit.
