@@ -965,7 +965,16 @@ std::vector<std::string> SpuriousSections(const FitResult& r, const FitOptions& 
     const Mode& mz = p.modes[j];
     const cd s(0.0, md.omega);
     const cd ratio = (s * s + mz.d * s + mz.v * mz.v) / (s * s + md.c * s + md.omega * md.omega);
-    if (std::abs(ratio - 1.0) < 0.05) {
+    // Cancelled: the pair changes G by less than 5 % at the pole, or by less
+    // than 50 % with the two frequencies within 2 % and within two standard
+    // deviations of each other (a lightly damped pair that only fits noise).
+    bool same_frequency = false;
+    if (r.std_errors.modes.size() == p.modes.size()) {
+      const double sw = r.std_errors.modes[i].omega, sv = r.std_errors.modes[j].v;
+      same_frequency = std::abs(ratio - 1.0) < 0.5 && std::abs(md.omega - mz.v) < 0.02 * md.omega &&
+                       std::abs(md.omega - mz.v) < 2.0 * std::sqrt(sw * sw + sv * sv);
+    }
+    if (std::abs(ratio - 1.0) < 0.05 || same_frequency) {
       out.push_back(name + Fmt(": its pole at %.4g Hz is cancelled by the zero at %.4g Hz", md.omega / kHz, mz.v / kHz));
     }
     const double zc = md.c / (2 * md.omega), zd = md.d / (2 * md.v);

@@ -137,7 +137,8 @@ std::vector<Plant> AutomaticStarts(const ident::FrequencyResponse& frf, int num_
                                    int delay_samples, int max_starts);
 
 // Reasons the fitted sections may be spurious: a pole that its nearest zero
-// cancels (|N/D - 1| < 0.05 at s = j omega), a damping ratio at its bound, a
+// cancels (|N/D - 1| < 0.05 at s = j omega, or < 0.5 with the two frequencies
+// within 2 % and within two std of each other), a damping ratio at its bound, a
 // std larger than the value, a section outside the used band. Sections are
 // named as printed: canonical order, from 1.
 std::vector<std::string> SpuriousSections(const FitResult& r, const FitOptions& o);
