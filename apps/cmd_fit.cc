@@ -10,42 +10,42 @@
 namespace zwidth::app {
 
 void AddFitCommands(CLI::App& app) {
-  struct FitFlags {
+  struct Flags {
     std::vector<std::string> inputs;
-    std::string out, init, delay = "0", units = "rotary";
+    std::string out, init, units = "rotary";
     EstimateFlags est;
-    fit::FitOptions o;
+    FitFlags fit;
   };
-  auto f = std::make_shared<FitFlags>();
+  auto f = std::make_shared<Flags>();
   CLI::App* cmd = app.add_subcommand("fit", "fit the parameters of eq. (1) to a log or a saved frequency response");
   cmd->add_option("input", f->inputs, "logs (text, .mat, .h5; several runs averaged) or one frequency response from `zwidth estimate`")->required();
   cmd->add_option("-o,--output", f->out, "model JSON to write")->required();
-  cmd->add_option("--modes", f->o.num_modes, "resonance/antiresonance sections (0: rigid body)")->capture_default_str();
-  cmd->add_option("--delay-samples", f->delay, "input delay [samples] or 'auto'")->capture_default_str();
+  AddFitFlags(cmd, &f->fit);
   cmd->add_option("--init", f->init, "model JSON to start from (tried before the automatic starts)");
-  cmd->add_option("--starts", f->o.max_starts, "automatic starts tried")->capture_default_str();
-  cmd->add_option("--max-iterations", f->o.max_iterations, "solver iterations per start")->capture_default_str();
+  cmd->add_option("--starts", f->fit.o.max_starts, "automatic starts tried")->capture_default_str();
+  cmd->add_option("--max-iterations", f->fit.o.max_iterations, "solver iterations per start")->capture_default_str();
   AddEstimateFlags(cmd, &f->est);
   AddUnitsFlag(cmd, &f->units);
   cmd->callback([f] {
     std::vector<std::string> read = f->inputs;
     if (!f->init.empty()) read.push_back(f->init);
     io::CheckOutputFolder(f->out, read);
-    ResolveDelayFlag(f->delay, &f->o);
+    f->fit.Resolve(f->est.welch.fmin_hz, f->est.welch.fmax_hz);
     const bool linear = LinearUnits(f->units);
     const std::string source = JoinPaths(f->inputs);
-    if (!f->init.empty()) f->o.init = io::ReadModelJson(f->init).plant;
+    if (!f->init.empty()) f->fit.o.init = io::ReadModelJson(f->init).plant;
     StageTimer timer(false);
     const bool frf_file = f->inputs.size() == 1 && io::IsFrequencyResponseFile(f->inputs[0]);
     const ident::FrequencyResponse frf = frf_file
         ? io::ReadFrequencyResponse(f->inputs[0], f->est.select.sample_rate_hz)
         : EstimateFromLogs(f->inputs, f->est, true).response.frf;
     fit::FitResult r;
-    const io::ModelFile mf = FitToModelFile(frf, f->o, source, &r);
+    const io::ModelFile mf = FitToModelFile(frf, f->fit.o, source, &r);
     io::WriteModelJson(f->out, mf);
     std::printf("%s", ParameterTable(mf, linear).c_str());
     std::printf("%s (%.1f ms)\n", r.BriefReport().c_str(), timer.Lap("fit"));
-    std::printf("order: pole pairs sorted by omega, zero pairs by v (G is unchanged)\n");
+    std::printf("order: pole pairs sorted by omega, zero pairs by v (G is unchanged); sections numbered from 1\n");
+    std::printf("%s", FitReport(r).c_str());
   });
 
   struct CompareFlags {

@@ -40,10 +40,10 @@ std::string Html(const std::string& s) {
 void AddRunCommand(CLI::App& app) {
   struct RunFlags {
     std::vector<std::string> logs;
-    std::string outdir, reference, delay = "0", units = "rotary";
+    std::string outdir, reference, units = "rotary";
     std::vector<int> delays = {2, 4, 8};
     EstimateFlags est;
-    fit::FitOptions o;
+    FitFlags fit;
     stability::BGridOptions grid;
     bool force = false;
   };
@@ -54,15 +54,15 @@ void AddRunCommand(CLI::App& app) {
   cmd->add_flag("--force", f->force, "write into a non-empty output folder, replacing zwidth's files there");
   cmd->add_option("--reference", f->reference, "compare with: table1 (the paper's PHANToM, built in) or a model JSON (default: no comparison)");
   cmd->add_option("--delays", f->delays, "loop delays [samples]")->delimiter(',')->capture_default_str();
-  cmd->add_option("--modes", f->o.num_modes, "resonance/antiresonance sections")->capture_default_str();
-  cmd->add_option("--delay-samples", f->delay, "model input delay [samples] or 'auto'")->capture_default_str();
+  f->fit.modes = "auto";  // run chooses the order unless told
+  AddFitFlags(cmd, &f->fit);
   cmd->add_option("--b-step", f->grid.b_step, "B step of the boundary [N m s/rad] (wins over --b-points)");
   cmd->add_option("--b-points", f->grid.b_points, "B values of the boundary, 0 to 1.05 x the largest stable B")
       ->capture_default_str();
   AddEstimateFlags(cmd, &f->est);
   AddUnitsFlag(cmd, &f->units);
   cmd->callback([f] {
-    ResolveDelayFlag(f->delay, &f->o);
+    f->fit.Resolve(f->est.welch.fmin_hz, f->est.welch.fmax_hz);
     const bool linear = LinearUnits(f->units);
     const std::string source = JoinPaths(f->logs);
     for (int d : f->delays) if (d < 0) throw InputError("--delays must be >= 0");
@@ -82,10 +82,11 @@ void AddRunCommand(CLI::App& app) {
     std::fprintf(stderr, "zwidth run %s -> %s\n", source.c_str(), f->outdir.c_str());
     StageTimer timer;
     const LogsEstimate est = EstimateFromLogs(f->logs, f->est, true);
-    const ident::FrequencyResponse& frf = est.response.frf;
+    ident::FrequencyResponse frf = est.response.frf;
     double t_total = timer.Lap("estimate (read + Welch)");
     fit::FitResult fr;
-    const io::ModelFile model = FitToModelFile(frf, f->o, source, &fr);
+    const io::ModelFile model = FitToModelFile(frf, f->fit.o, source, &fr);
+    frf.used_by_fit = fr.band.used;
     t_total += timer.Lap("fit");
     const double T = 1.0 / frf.sample_rate_hz;
     // The model's Z-width per delay, computed once for the summary, the
@@ -148,7 +149,12 @@ void AddRunCommand(CLI::App& app) {
     summary["num_samples"] = est.total_samples;
     summary["fit"] = model.fit;
     summary["reference"] = have_ref ? (table1 ? "table1 (built in)" : f->reference) : "none";
-    io::WriteTextAtomically((out / "summary.json").string(), summary.dump(2) + "\n");
+    {  // The verdict first, above any Z-width computed from the model.
+      nlohmann::ordered_json top = {{"fit_quality", fit::ToString(fr.quality)},
+                                    {"fit_quality_reasons", nlohmann::ordered_json::parse(model.fit["quality_reasons"].dump())}};
+      for (const auto& [k, v] : summary.items()) top[k] = nlohmann::ordered_json::parse(v.dump());
+      io::WriteTextAtomically((out / "summary.json").string(), top.dump(2) + "\n");
+    }
     t_total += timer.Lap("write outputs");
     std::fprintf(stderr, "  %-28s %9.3f ms\n", "total (figures excluded)", t_total);
 
@@ -285,6 +291,8 @@ void AddRunCommand(CLI::App& app) {
     h << "<!DOCTYPE html><html><head><meta charset='utf-8'><title>zwidth report</title>"
       << "<style>body{font-family:sans-serif;max-width:1000px;margin:auto}pre{background:#f4f4f4;padding:8px}"
       << "img{max-width:100%}</style></head><body>\n<h1>zwidth report</h1>\n"
+      << "<p><b>Fit quality: " << fit::ToString(fr.quality) << "</b>"
+      << (fr.quality == fit::FitQuality::kGood ? "" : ": the Z-width below comes from a model that does not explain the log; do not rely on it") << "</p>\n<pre>" << Html(FitReport(fr)) << "</pre>\n"
       << "<p>Log <code>" << Html(source) << "</code>: " << est.total_samples << " samples at "
       << frf.sample_rate_hz << " Hz; Welch " << frf.num_averages << " averages of " << frf.window_length
       << " samples; " << Html(ident::ToString(est.response.method)) << "; " << frf.f_hz.size() << " bins from " << frf.f_hz.front() << " to " << frf.f_hz.back()
@@ -342,7 +350,8 @@ void AddRunCommand(CLI::App& app) {
     h << "</body></html>\n";
     io::WriteTextAtomically((out / "report.html").string(), h.str());
     folder.Commit();
-    std::printf("%s\n%s", ParameterTable(model, linear).c_str(), cmp_text.c_str());
+    std::printf("fit quality: %s\n%s\n%s", fit::ToString(fr.quality).c_str(), ParameterTable(model, linear).c_str(), cmp_text.c_str());
+    std::fprintf(stderr, "%s", FitReport(fr).c_str());
     std::printf("\nboundary: %s (%d of %zu rows where margin() and the exact K_CR disagree)\nreport: %s\n",
                 (final_out / "boundary.csv").c_str(), disagree, rows.size(), (final_out / "report.html").c_str());
   });

@@ -6,6 +6,8 @@
 #include <sstream>
 
 #include "io/reference_models.h"
+#include <glog/logging.h>
+
 #include "io/stability_files.h"
 #include "model/error.h"
 #include "stability/uncertainty.h"
@@ -31,12 +33,90 @@ std::vector<Row> Rows(const Plant& p, const Plant* s, bool linear = false) {
   return r;
 }
 
+nlohmann::json QualityJson(const fit::FitResult& r) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const fit::QualityReason& q : r.reasons) a.push_back({{"code", q.code}, {"message", q.message}, {"advice", q.advice}});
+  return a;
+}
+
+nlohmann::json OrderTableJson(const fit::FitResult& r) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const fit::OrderTrial& t : r.order_table) {
+    std::vector<bool> persists(t.persists.begin(), t.persists.end());
+    a.push_back({{"modes", t.num_modes}, {"converged", t.converged}, {"chi2_per_dof", t.chi2_per_dof},
+                 {"bic", t.bic}, {"pole_hz", t.pole_hz}, {"persists", persists}, {"rejected_because", t.spurious},
+                 {"delay_samples", t.delay_samples}});
+  }
+  return a;
+}
+
 }  // namespace
 
 io::ModelFile ReadReference(const std::string& flag, bool* is_table1) {
   const bool t1 = flag == "table1";
   if (is_table1) *is_table1 = t1;
   return t1 ? io::Table1Model() : io::ReadModelJson(flag);
+}
+
+void ResolveModesFlag(const std::string& flag, fit::FitOptions* o) {
+  if (flag == "auto") { o->auto_modes = true; return; }
+  try {
+    size_t pos = 0;
+    const int n = std::stoi(flag, &pos);
+    if (pos != flag.size() || n < 0) throw std::invalid_argument("");
+    o->num_modes = n;
+    o->auto_modes = false;
+  } catch (const std::exception&) {
+    throw InputError("--modes '" + flag + "': expected 'auto' or an integer >= 0");
+  }
+}
+
+void AddFitFlags(CLI::App* cmd, FitFlags* f) {
+  cmd->add_option("--modes", f->modes, "resonance/antiresonance sections (0: rigid body) or 'auto' (0..--max-modes, by BIC)")->capture_default_str();
+  cmd->add_option("--max-modes", f->o.max_modes, "largest order --modes auto tries, <= 8")->capture_default_str();
+  cmd->add_option("--delay-samples", f->delay, "input delay [samples] or 'auto' (searched around the phase slope's)")->capture_default_str();
+  cmd->add_option("--max-delay", f->o.max_auto_delay, "largest delay --delay-samples auto tries [samples]")->capture_default_str();
+  cmd->add_flag("--allow-short", f->o.allow_few_averages, "fit a response of fewer than 3 Welch segments anyway (judged poor)");
+  cmd->add_option("--min-input-power", f->o.band.min_input_power_ratio,
+                  "bins used only where the input PSD is at least this fraction of its 99th percentile")->capture_default_str();
+  cmd->add_option("--min-coherence", f->o.band.min_coherence, "bins with lower coherence are not used")->capture_default_str();
+}
+
+void FitFlags::Resolve(double fmin_hz, double fmax_hz) {
+  ResolveModesFlag(modes, &o);
+  ResolveDelayFlag(delay, &o);
+  o.band.fmin_hz = fmin_hz;
+  o.band.fmax_hz = fmax_hz;
+  std::string why;
+  if (!o.IsValid(&why)) throw InputError(why);
+}
+
+std::string FitReport(const fit::FitResult& r) {
+  std::ostringstream os;
+  os << "band: " << r.band.Describe() << "\n";
+  if (!r.delay_choice.empty()) os << r.delay_choice << "\n";
+  if (!r.order_table.empty()) {
+    char line[400];
+    os << "order search (stabilisation table; * = pole within 2% of one at the order below):\n";
+    std::snprintf(line, sizeof line, "  %5s %10s %12s  %s\n", "modes", "chi2/dof", "BIC", "poles [Hz]; rejected because");
+    os << line;
+    for (const fit::OrderTrial& t : r.order_table) {
+      std::string poles;
+      for (size_t i = 0; i < t.pole_hz.size(); ++i) {
+        char p[40];
+        std::snprintf(p, sizeof p, "%s%.4g%s", i ? " " : "", t.pole_hz[i], t.persists[i] ? "*" : "");
+        poles += p;
+      }
+      if (!t.spurious.empty()) poles += (poles.empty() ? "" : "; ") + t.spurious.front();
+      if (t.spurious.size() > 1) poles += " (+" + std::to_string(t.spurious.size() - 1) + " more)";
+      std::snprintf(line, sizeof line, "  %5d %10.4g %12.6g  %s\n", t.num_modes, t.chi2_per_dof, t.bic, poles.c_str());
+      os << line;
+    }
+    os << "chosen: " << r.order_choice << "\n";
+  }
+  os << "quality: " << fit::ToString(r.quality) << "\n";
+  for (const fit::QualityReason& q : r.reasons) os << "  - " << q.message << "\n    advice: " << q.advice << "\n";
+  return os.str();
 }
 
 void ResolveDelayFlag(const std::string& flag, fit::FitOptions* o) {
@@ -53,6 +133,10 @@ void ResolveDelayFlag(const std::string& flag, fit::FitOptions* o) {
 
 io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::FitOptions& o,
                              const std::string& source, fit::FitResult* out) {
+  // Ceres logs through glog (e.g. "Covariance matrix is near rank
+  // deficient"): keep it off the terminal; what matters reaches the fit's own
+  // warnings and quality reasons.
+  FLAGS_minloglevel = google::GLOG_FATAL;
   const fit::FitResult r = fit::FitModel(frf, o);
   if (out) *out = r;
   for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
@@ -65,19 +149,34 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
   mf.sample_period_s = 1.0 / frf.sample_rate_hz;
   mf.fit = {{"status", fit::ToString(r.status)},
             {"source", source},
-            {"modes", o.num_modes},
+            {"quality", fit::ToString(r.quality)},
+            {"quality_reasons", QualityJson(r)},
+            {"modes", r.plant.modes.size()},
+            {"modes_chosen_automatically", o.auto_modes},
+            {"order_choice", r.order_choice},
+            {"order_table", OrderTableJson(r)},
+            {"delay_choice", r.delay_choice},
+            {"band", {{"f_min_used_hz", r.band.f_lo_hz}, {"f_max_used_hz", r.band.f_hi_hz},
+                      {"num_used", r.band.num_used}, {"num_outside_fmin_fmax", r.band.num_outside},
+                      {"num_low_input_power", r.band.num_low_input},
+                      {"num_low_coherence", r.band.num_low_coherence},
+                      {"min_input_power_ratio", o.band.min_input_power_ratio},
+                      {"min_coherence", o.band.min_coherence},
+                      {"input_power_checked", r.band.input_power_known}}},
+            {"runs_test_z", r.runs_z},
             {"delay_samples", r.plant.delay_samples},
             {"delay_chosen_automatically", o.auto_delay},
             {"chi2_per_dof", r.chi2_per_dof},
             {"nrmse_fit_percent", r.nrmse_fit_percent},
+            {"nrmse_note", "100 (1 - |H - G| / |H - mean H|), unweighted: dominated by the largest |H|; judge by chi2/dof and quality"},
             {"worst_misfit_hz", r.worst_misfit_hz},
             {"std_scale", r.std_scale},
             {"covariance_ok", r.covariance_ok},
             {"num_bins", r.num_residuals / 2},
             {"num_averages", frf.num_averages},
             {"sample_rate_hz", frf.sample_rate_hz},
-            {"f_min_hz", frf.f_hz.front()},
-            {"f_max_hz", frf.f_hz.back()},
+            {"f_min_hz", r.band.f_lo_hz},
+            {"f_max_hz", r.band.f_hi_hz},
             {"starts_tried", r.starts_tried},
             {"residual", "exact ZOH response, weighted by the Welch per-bin std"},
             {"order", "canonical: pole pairs sorted by omega, zero pairs by v (G is unchanged)"},

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include "fit/fit.h"
@@ -14,6 +15,23 @@ namespace zwidth::app {
 
 // Parses "auto" or an integer for --delay-samples.
 void ResolveDelayFlag(const std::string& flag, fit::FitOptions* o);
+// Parses "auto" or an integer for --modes.
+void ResolveModesFlag(const std::string& flag, fit::FitOptions* o);
+
+// The fit flags shared by `fit` and `run`: --modes, --max-modes,
+// --delay-samples, --max-delay, --allow-short, --min-input-power,
+// --min-coherence. Resolve() after parsing: the strings, and the band from
+// the Welch flags (--fmin/--fmax also limit a saved response's bins).
+struct FitFlags {
+  std::string modes = "2", delay = "0";
+  fit::FitOptions o;
+  void Resolve(double fmin_hz, double fmax_hz);
+};
+void AddFitFlags(CLI::App* cmd, FitFlags* flags);
+
+// The verdict, its reasons with advice, the band, the delay and order
+// choices, and the stabilisation table, as printed by `fit` and `run`.
+std::string FitReport(const fit::FitResult& r);
 
 // Fits and packs the model file (std, fit metrics); throws ComputationError
 // when the fit does not converge.

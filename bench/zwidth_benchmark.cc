@@ -95,6 +95,26 @@ void BM_Fit(benchmark::State& state) {
 }
 BENCHMARK(BM_Fit)->ArgsProduct({{1, 3, 6}, {6, 8, 10}})->Unit(benchmark::kMillisecond);
 
+// --modes auto (0..4 sections, BIC) on the shipped log (datasets/phantom/
+// phantom_30s.h5 is this same simulation: Table I, seed 1, defaults); range(0)
+// = 1 adds --delay-samples auto. The chosen order and the parameter error are
+// reported beside the time (error NaN when the order is not Table I's 2).
+void BM_FitAutoModes(benchmark::State& state) {
+  const ident::FrequencyResponse r =
+      ident::EstimateFrequencyResponse(Log().torque, Log().position, 1000, ident::WelchOptions{});
+  fit::FitOptions o;
+  o.auto_modes = true;
+  o.auto_delay = state.range(0) != 0;
+  fit::FitResult res;
+  for (auto _ : state) res = fit::FitModel(r, o);
+  state.counters["chosen_modes"] = static_cast<double>(res.plant.modes.size());
+  state.counters["chosen_delay"] = res.plant.delay_samples;
+  state.counters["max_rel_err_m_b_freqs"] =
+      res.plant.modes.size() == 2 ? MaxParamError(res.plant, PhantomTable1()) : NAN;
+  state.counters["good"] = res.quality == fit::FitQuality::kGood;
+}
+BENCHMARK(BM_FitAutoModes)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
 // 100-point sweep at d = 2 (construction included), error against a reference
 // computed with a 16x finer grid and verification.
 void BM_BoundarySweep(benchmark::State& state) {

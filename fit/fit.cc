@@ -5,11 +5,15 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <cstdio>
+#include <iomanip>
+#include <memory>
 #include <numbers>
 #include <sstream>
 
 #include <ceres/ceres.h>
 #include <ceres/jet.h>
+#include <Eigen/Dense>
 
 #include "model/error.h"
 #include "model/zoh_modal.h"
@@ -18,6 +22,7 @@ namespace zwidth::fit {
 namespace internal {
 
 using cd = std::complex<double>;
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
 // Measured data on the unit circle, prepared once per fit.
 struct Bins {
@@ -234,7 +239,7 @@ bool FitOptions::IsValid(std::string* why) const {
   auto bad = [&](const std::string& m) { if (why) *why = m; return false; };
   if (num_modes < 0 || num_modes > 20) return bad("--modes must be in [0, 20]");
   if (delay_samples < 0) return bad("--delay-samples must be >= 0");
-  if (max_auto_delay < 0 || max_auto_delay > 1000) return bad("max_auto_delay must be in [0, 1000]");
+  if (max_auto_delay < 0 || max_auto_delay > 1000) return bad("max_auto_delay (--max-delay) must be in [0, 1000]");
   if (!(min_damping_ratio > 0 && min_damping_ratio < max_pole_damping_ratio)) return bad("min_damping_ratio must be in (0, max_pole_damping_ratio)");
   if (!(max_pole_damping_ratio < 1.0)) return bad("max_pole_damping_ratio must be < 1");
   if (!(max_zero_damping_ratio > min_damping_ratio)) return bad("max_zero_damping_ratio must be > min_damping_ratio");
@@ -243,7 +248,12 @@ bool FitOptions::IsValid(std::string* why) const {
   if (max_iterations < 1) return bad("max_iterations must be >= 1");
   if (!(function_tolerance > 0)) return bad("function_tolerance must be > 0");
   if (max_starts < 1) return bad("max_starts must be >= 1");
-  if (init && static_cast<int>(init->modes.size()) != num_modes) {
+  if (max_modes < 0 || max_modes > 8) return bad("max_modes (--max-modes) must be in [0, 8]");
+  if (min_averages < 1) return bad("min_averages must be >= 1");
+  if (max_converged_starts < 1) return bad("max_converged_starts must be >= 1");
+  if (!(runner_up_cost_ratio >= 1.0)) return bad("runner_up_cost_ratio must be >= 1");
+  if (std::string w; !band.IsValid(&w)) return bad(w);
+  if (!auto_modes && init && static_cast<int>(init->modes.size()) != num_modes) {
     return bad("--init has " + std::to_string(init->modes.size()) + " modes but --modes is " + std::to_string(num_modes));
   }
   return true;
@@ -276,6 +286,143 @@ void CanonicalOrder(Plant* plant, Plant* std_errors) {
   };
   apply(plant);
   if (std_errors && std_errors->modes.size() == n) apply(std_errors);
+}
+
+namespace internal {
+
+// Roots of the real polynomial sum_i a[i] x^i (a.back() != 0), from the
+// eigenvalues of its companion matrix.
+std::vector<cd> Roots(const std::vector<double>& a) {
+  const int deg = static_cast<int>(a.size()) - 1;
+  if (deg < 1) return {};
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(deg, deg);
+  for (int i = 1; i < deg; ++i) C(i, i - 1) = 1.0;
+  for (int i = 0; i < deg; ++i) C(i, deg - 1) = -a[i] / a[deg];
+  Eigen::EigenSolver<Eigen::MatrixXd> es(C, false);
+  std::vector<cd> r(deg);
+  for (int i = 0; i < deg; ++i) r[i] = es.eigenvalues()[i];
+  return r;
+}
+
+// Second-order factors (s^2 + 2 zeta w s + w^2) from roots: complex pairs
+// directly, the real roots paired in order (an overdamped factor).
+std::vector<std::pair<double, double>> Quadratics(std::vector<cd> r) {
+  std::vector<std::pair<double, double>> q;  // (w, 2 zeta w)
+  std::vector<double> real;
+  for (const cd& x : r) {
+    if (std::abs(x.imag()) > 1e-9 * std::abs(x)) {
+      if (x.imag() > 0) q.push_back({std::abs(x), -2.0 * x.real()});
+    } else {
+      real.push_back(x.real());
+    }
+  }
+  std::sort(real.begin(), real.end());
+  for (size_t i = 0; i + 1 < real.size(); i += 2) {
+    q.push_back({std::sqrt(std::abs(real[i] * real[i + 1])), -(real[i] + real[i + 1])});
+  }
+  return q;
+}
+
+}  // namespace internal
+
+std::optional<Plant> LinearRationalStart(const ident::FrequencyResponse& frf, int n, int delay, int iterations) {
+  const size_t nb = frf.f_hz.size();
+  const int dd = 2 * n + 1;  // D'(s) monic of degree 2n + 1, N(s) of degree 2n
+  const int unknowns = dd + 2 * n + 1;
+  if (n < 1 || static_cast<int>(2 * nb) <= unknowns + 4) return std::nullopt;
+  const double T = 1.0 / frf.sample_rate_hz;
+  const double w0 = kTwoPi * frf.f_hz.back();
+  // F = s H with the delay and the ZOH's half sample taken out: a strictly
+  // proper rational N / D' in sigma = s / w0.
+  std::vector<cd> F(nb), sig(nb);
+  std::vector<double> wt(nb);
+  for (size_t k = 0; k < nb; ++k) {
+    const double w = kTwoPi * frf.f_hz[k];
+    sig[k] = cd(0.0, w / w0);
+    F[k] = cd(0.0, w) * frf.H[k] * std::polar(1.0, w * T * (delay + 0.5));
+    const double s = std::max(frf.H_std[k], 1e-3 * std::abs(frf.H[k]));
+    wt[k] = (s > 0 && std::isfinite(s)) ? 1.0 / (w * s) : 0.0;
+  }
+  std::vector<double> den_prev(dd + 1, 0.0);
+  den_prev[0] = 1.0;  // first pass: D'_prev = 1
+  bool first = true;
+  std::vector<double> num(2 * n + 1), den(dd + 1);
+  Eigen::MatrixXd A(2 * nb, unknowns);
+  Eigen::VectorXd rhs(2 * nb);
+  for (int it = 0; it < iterations; ++it) {
+    for (size_t k = 0; k < nb; ++k) {
+      cd dp = 1.0;
+      if (!first) {
+        dp = 0.0;
+        for (int i = dd; i >= 0; --i) dp = dp * sig[k] + den_prev[i];
+      }
+      const double w = wt[k] / std::max(std::abs(dp), 1e-300);
+      cd p = 1.0;
+      // N(sigma) - F (a_0 + ... + a_{dd-1} sigma^{dd-1}) = F sigma^dd
+      for (int i = 0; i <= 2 * n; ++i) {
+        A(2 * k, i) = w * p.real();
+        A(2 * k + 1, i) = w * p.imag();
+        p *= sig[k];
+      }
+      p = 1.0;
+      for (int i = 0; i < dd; ++i) {
+        const cd c = -F[k] * p * w;
+        A(2 * k, 2 * n + 1 + i) = c.real();
+        A(2 * k + 1, 2 * n + 1 + i) = c.imag();
+        p *= sig[k];
+      }
+      const cd r = F[k] * p * w;  // p = sigma^dd
+      rhs(2 * k) = r.real();
+      rhs(2 * k + 1) = r.imag();
+    }
+    Eigen::VectorXd colscale = A.colwise().norm();
+    for (int j = 0; j < unknowns; ++j) if (!(colscale(j) > 0)) colscale(j) = 1.0;
+    const Eigen::MatrixXd As = A * colscale.cwiseInverse().asDiagonal();
+    const Eigen::VectorXd sol = As.colPivHouseholderQr().solve(rhs).cwiseQuotient(colscale);
+    if (!sol.allFinite()) return std::nullopt;
+    for (int i = 0; i <= 2 * n; ++i) num[i] = sol(i);
+    for (int i = 0; i < dd; ++i) den[i] = sol(2 * n + 1 + i);
+    den[dd] = 1.0;
+    den_prev = den;
+    first = false;
+  }
+  // Poles: the real root nearest 0 is the rigid pole -b/m; the rest pair up.
+  std::vector<cd> poles = Roots(den), zeros = Roots(num);
+  if (num[2 * n] == 0.0 || poles.empty()) return std::nullopt;
+  size_t ia = poles.size();
+  for (size_t i = 0; i < poles.size(); ++i) {
+    if (std::abs(poles[i].imag()) > 1e-9 * std::abs(poles[i])) continue;
+    if (ia == poles.size() || std::abs(poles[i]) < std::abs(poles[ia])) ia = i;
+  }
+  if (ia == poles.size()) return std::nullopt;
+  const double a = -poles[ia].real() * w0;
+  poles.erase(poles.begin() + ia);
+  auto qp = Quadratics(poles), qz = Quadratics(zeros);
+  if (static_cast<int>(qp.size()) != n || static_cast<int>(qz.size()) != n) return std::nullopt;
+  Plant p;
+  p.m = 1.0;
+  p.b = std::max(std::abs(a), 1e-3);
+  for (int i = 0; i < n; ++i) {
+    p.modes.push_back({qp[i].first * w0, std::max(std::abs(qp[i].second), 1e-6) * w0, qz[i].first * w0,
+                       std::max(std::abs(qz[i].second), 1e-6) * w0});
+  }
+  CanonicalOrder(&p, nullptr);
+  // 1 / m by weighted least squares on H = G_1 / m (G_1: this shape with m = 1).
+  double num_m = 0, den_m = 0;
+  for (size_t k = 0; k < nb; ++k) {
+    const double w = kTwoPi * frf.f_hz[k];
+    const cd g1 = ContinuousResponse(p, w) * std::polar(1.0, -w * T * (delay + 0.5));
+    const double q = wt[k] * w;
+    num_m += q * q * (std::conj(g1) * frf.H[k]).real();
+    den_m += q * q * std::norm(g1);
+  }
+  const double inv_m = num_m / den_m;
+  if (!(inv_m > 0) || !std::isfinite(inv_m)) return std::nullopt;
+  p.m = 1.0 / inv_m;
+  p.b *= p.m;
+  std::string why;
+  if (!p.IsValid(&why)) return std::nullopt;
+  return p;
 }
 
 std::vector<Plant> AutomaticStarts(const ident::FrequencyResponse& frf, int n, int delay, int max_starts) {
@@ -332,7 +479,14 @@ std::vector<Plant> AutomaticStarts(const ident::FrequencyResponse& frf, int n, i
     return p;
   };
   const std::vector<double> wp = pick(peaks, -1), wz = pick(notches, -1);
-  for (double zeta : {0.1, 0.03, 0.3}) starts.push_back(make(wp, wz, zeta));
+  starts.push_back(make(wp, wz, 0.1));
+  // Second: the linear rational (Sanathanan-Koerner) fit converted to eq. (1),
+  // which does not depend on spotting peaks that closely spaced or interlaced
+  // modes hide. It takes the place of the last peak-swap start.
+  if (max_starts > 1) {
+    if (std::optional<Plant> sk = LinearRationalStart(frf, n, delay)) starts.push_back(*sk);
+  }
+  for (double zeta : {0.03, 0.3}) starts.push_back(make(wp, wz, zeta));
   for (int s = n - 1; s >= 0 && static_cast<int>(starts.size()) < max_starts + 2; --s) {
     starts.push_back(make(pick(peaks, s), wz, 0.1));
     starts.push_back(make(wp, pick(notches, s), 0.1));
@@ -416,71 +570,160 @@ SingleFit Solve(const Bins& bins, int n, std::vector<double>& xs, const FitOptio
 
 }  // namespace
 
-FitResult FitModel(const ident::FrequencyResponse& frf, const FitOptions& o) {
-  std::string why;
-  if (!o.IsValid(&why)) throw InputError(why);
-  if (frf.f_hz.empty()) throw InputError("the frequency response has no bins");
-  if (!(frf.sample_rate_hz > 0.0)) throw InputError("the frequency response has no sample rate");
-  const int n = o.num_modes;
-  const int p = 2 + 4 * n;
-  FitResult res;
-  res.num_parameters = p;
-  if (frf.num_averages == 1) {
-    res.warnings.push_back("the log gives a single Welch segment: coherence is then 1 and says nothing, "
-                           "and the standard errors are not meaningful; use a longer log or a shorter window");
-  }
-  {
-    std::vector<double> c = frf.coherence;
-    std::nth_element(c.begin(), c.begin() + c.size() / 2, c.end());
-    if (c[c.size() / 2] < 0.5) {
-      res.warnings.push_back("coherence is below 0.5 over most of the band: the response is dominated by "
-                             "noise or nonlinearity; the fit may be poor");
-    }
-  }
-  std::vector<int> delays;
-  if (o.auto_delay) for (int d = 0; d <= o.max_auto_delay; ++d) delays.push_back(d);
-  else delays.push_back(o.delay_samples);
+namespace {
 
-  // Which bins are usable does not depend on the delay.
-  const size_t usable = MakeBins(frf, 0, o.relative_std_floor).z.size();
+constexpr double kHz = 2.0 * std::numbers::pi;
+
+// The bins of frf where used[k] != 0, with every per-bin vector kept aligned.
+ident::FrequencyResponse Restrict(const ident::FrequencyResponse& frf, const std::vector<char>& used) {
+  ident::FrequencyResponse r = frf;
+  r.f_hz.clear(); r.H.clear(); r.coherence.clear(); r.H_std.clear(); r.S_uu.clear(); r.S_yy.clear(); r.S_uy.clear();
+  for (size_t k = 0; k < frf.f_hz.size(); ++k) {
+    if (!used[k]) continue;
+    r.f_hz.push_back(frf.f_hz[k]);
+    r.H.push_back(frf.H[k]);
+    r.coherence.push_back(k < frf.coherence.size() ? frf.coherence[k] : 1.0);
+    r.H_std.push_back(frf.H_std[k]);
+    if (k < frf.S_uu.size()) r.S_uu.push_back(frf.S_uu[k]);
+    if (k < frf.S_yy.size()) r.S_yy.push_back(frf.S_yy[k]);
+    if (k < frf.S_uy.size()) r.S_uy.push_back(frf.S_uy[k]);
+  }
+  return r;
+}
+
+// Delay suggested by the phase slope of the upper half of the band (by
+// frequency): above the rigid pole and the sections the phase of eq. (1) is
+// flat (-180 deg; each section's pole and zero cancel in phase), so the slope
+// is -(D + 1/2) T, the 1/2 being the ZOH's half sample. Coherence-weighted
+// least squares on the unwrapped phase. NaN when it cannot be read.
+double PhaseSlopeDelay(const ident::FrequencyResponse& r) {
+  const size_t n = r.f_hz.size();
+  if (n < 8) return std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> ph(n);
+  ph[0] = std::arg(r.H[0]);
+  for (size_t k = 1; k < n; ++k) {
+    double p = std::arg(r.H[k]);
+    p += 2 * std::numbers::pi * std::round((ph[k - 1] - p) / (2 * std::numbers::pi));
+    ph[k] = p;
+  }
+  const double f_mid = 0.5 * (r.f_hz.front() + r.f_hz.back());
+  double sw = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (size_t k = 0; k < n; ++k) {
+    if (r.f_hz[k] < f_mid) continue;
+    const double w = std::max(r.coherence[k], 1e-3), x = kHz * r.f_hz[k];
+    sw += w; sx += w * x; sy += w * ph[k]; sxx += w * x * x; sxy += w * x * ph[k];
+  }
+  const double den = sw * sxx - sx * sx;
+  if (!(den > 0)) return std::numeric_limits<double>::quiet_NaN();
+  const double slope = (sw * sxy - sx * sy) / den;
+  return -slope * r.sample_rate_hz - 0.5;
+}
+
+// What one order's fit needs beyond FitResult: the per-bin weighted
+// residuals of the final fit, for the quality tests.
+struct Fixed {
+  FitResult res;
+  std::vector<double> f_hz;
+  std::vector<cd> r;  // (H - G) / s per used bin
+};
+
+// Fits n sections to the used bins `sub` for each delay of `delays` (or of the
+// automatic search), from the automatic starts and `extra` starts.
+Fixed FitFixed(const ident::FrequencyResponse& sub, const FitOptions& o, int n, const std::vector<Plant>& extra) {
+  const int p = 2 + 4 * n;
+  Fixed out;
+  FitResult& res = out.res;
+  res.num_parameters = p;
+  const size_t usable = MakeBins(sub, 0, o.relative_std_floor).z.size();
   if (static_cast<int>(2 * usable) <= p) {
     throw InputError("the response has " + std::to_string(usable) + " usable bins, too few for " +
                      std::to_string(p) + " parameters; widen --fmin/--fmax or use fewer --modes");
   }
   int best_delay = -1;
   SingleFit best;
-  for (int d : delays) {
+  // Every screened start at the best delay, for the runners-up below.
+  std::vector<std::pair<SingleFit, int>> screened;
+  std::vector<double> tried_cost;  // by delay
+  auto try_delay = [&](int d) {
+    if (d < 0 || (d < static_cast<int>(tried_cost.size()) && std::isfinite(tried_cost[d]))) return;
     std::vector<Plant> starts;
-    if (o.init) starts.push_back(*o.init);
-    for (Plant& s : AutomaticStarts(frf, n, d, o.max_starts)) starts.push_back(s);
+    if (o.init && static_cast<int>(o.init->modes.size()) == n) starts.push_back(*o.init);
+    for (const Plant& s : extra) starts.push_back(s);
+    for (Plant& s : AutomaticStarts(sub, n, d, o.max_starts)) starts.push_back(s);
     // Screen every start with a few iterations on every 6th bin; only the
     // best goes on to convergence on all bins below (most of the time would
     // otherwise go into starts that lose).
     FitOptions screen = o;
     screen.max_iterations = std::min(o.max_iterations, 8);
-    const Bins coarse = MakeBins(frf, d, o.relative_std_floor, usable > 600 ? 6 : 1);
+    const Bins coarse = MakeBins(sub, d, o.relative_std_floor, usable > 600 ? 6 : 1);
+    double best_here = std::numeric_limits<double>::infinity();
     for (const Plant& s : starts) {
       ++res.starts_tried;
       std::vector<double> xs = ToLog(s);
       ceres::Problem screen_problem;
       const SingleFit f = Solve(coarse, n, xs, screen, screen_problem);
       res.iterations += f.iterations;
+      best_here = std::min(best_here, f.cost);
+      if (std::isfinite(f.cost)) screened.push_back({f, d});
       if (f.cost < best.cost) {
         best = f;
         best_delay = d;
       }
     }
+    if (static_cast<int>(tried_cost.size()) <= d) tried_cost.resize(d + 1, std::numeric_limits<double>::quiet_NaN());
+    tried_cost[d] = std::isfinite(best_here) ? best_here : 1e300;
+  };
+  if (!o.auto_delay) {
+    try_delay(o.delay_samples);
+  } else {
+    const double suggested = PhaseSlopeDelay(sub);
+    const int d0 = std::isfinite(suggested) ? std::clamp(static_cast<int>(std::lround(suggested)), 0, o.max_auto_delay) : 0;
+    const int lo = std::max(0, d0 - 2), hi = std::min(o.max_auto_delay, d0 + 2);
+    for (int d = lo; d <= hi; ++d) try_delay(d);
+    // Extend while the best is at an end of the range that is not a limit.
+    for (int d = hi + 1; d <= o.max_auto_delay && best_delay == d - 1; ++d) try_delay(d);
+    for (int d = lo - 1; d >= 0 && best_delay == d + 1; --d) try_delay(d);
+    int tlo = 0;
+    while (tlo < static_cast<int>(tried_cost.size()) && !std::isfinite(tried_cost[tlo])) ++tlo;
+    std::ostringstream why;
+    why << "delay " << best_delay << " samples: the lowest screened cost among " << tlo << ".."
+        << tried_cost.size() - 1 << " (phase slope of the upper band suggested ";
+    if (std::isfinite(suggested)) why << std::setprecision(3) << suggested; else why << "nothing";
+    why << "; searched up to " << o.max_auto_delay << ")";
+    res.delay_choice = why.str();
   }
   if (best_delay < 0 || !std::isfinite(best.cost)) {
     res.status = FitStatus::kNoConvergence;
     res.message = "no start produced a usable fit";
-    return res;
+    return out;
   }
-  // Converge from the best screened point, holding the problem for the covariance.
-  const Bins bins = MakeBins(frf, best_delay, o.relative_std_floor);
-  ceres::Problem problem;
-  std::vector<double> x = best.x;
-  const SingleFit fin = Solve(bins, n, x, o, problem);
+  // Converge from the best screened point and from the runners-up whose
+  // screened cost is within o.runner_up_cost_ratio of it (at most
+  // o.max_converged_starts in all): eight iterations on a sixth of the bins do
+  // not always rank nearby basins right (closely spaced modes). The problem of
+  // the winner is kept for the covariance.
+  std::sort(screened.begin(), screened.end(), [](const auto& a, const auto& b) { return a.first.cost < b.first.cost; });
+  std::vector<std::unique_ptr<ceres::Problem>> problems;
+  std::vector<std::unique_ptr<std::vector<double>>> xs_final;
+  std::vector<std::unique_ptr<Bins>> bins_final;
+  SingleFit fin;
+  int win = -1;
+  for (size_t i = 0; i < screened.size() && static_cast<int>(problems.size()) < o.max_converged_starts; ++i) {
+    if (i > 0 && screened[i].first.cost > o.runner_up_cost_ratio * screened[0].first.cost) break;
+    bins_final.push_back(std::make_unique<Bins>(MakeBins(sub, screened[i].second, o.relative_std_floor)));
+    problems.push_back(std::make_unique<ceres::Problem>());
+    xs_final.push_back(std::make_unique<std::vector<double>>(screened[i].first.x));
+    const SingleFit f = Solve(*bins_final.back(), n, *xs_final.back(), o, *problems.back());
+    res.iterations += f.iterations;
+    if (win < 0 || (f.converged && !fin.converged) || (f.converged == fin.converged && f.cost < fin.cost)) {
+      fin = f;
+      win = static_cast<int>(problems.size()) - 1;
+      best_delay = screened[i].second;
+    }
+  }
+  const Bins& bins = *bins_final[win];
+  ceres::Problem& problem = *problems[win];
+  std::vector<double>& x = *xs_final[win];
   res.iterations += fin.iterations;
   res.status = fin.converged ? FitStatus::kConverged : FitStatus::kNoConvergence;
   res.message = fin.message;
@@ -490,7 +733,7 @@ FitResult FitModel(const ident::FrequencyResponse& frf, const FitOptions& o) {
   res.plant.delay_samples = best_delay;
   const int dof = res.num_residuals - p;
   res.chi2_per_dof = 2.0 * res.cost / dof;
-  res.std_scale = res.chi2_per_dof * std::max(1.0, frf.bin_correlation);
+  res.std_scale = res.chi2_per_dof * std::max(1.0, sub.bin_correlation);
 
   // Standard errors: Ceres covariance in log space, scaled, then the delta
   // method to (m, b, w, c, v, d).
@@ -529,15 +772,6 @@ FitResult FitModel(const ident::FrequencyResponse& frf, const FitOptions& o) {
                              "some parameters are not identifiable from this response; std set to inf");
     }
   }
-  // Bounds reached?
-  for (int i = 0; i < n; ++i) {
-    const double zc = std::exp(x[3 + 4 * i]), zd = std::exp(x[5 + 4 * i]);
-    if (zc > 0.999 * o.max_pole_damping_ratio || zc < 1.001 * o.min_damping_ratio ||
-        zd > 0.999 * o.max_zero_damping_ratio || zd < 1.001 * o.min_damping_ratio) {
-      res.warnings.push_back("section " + std::to_string(i) + " has a damping ratio at its bound: "
-                             "the data may not support " + std::to_string(n) + " modes");
-    }
-  }
   // Diagnostics in the measured units.
   {
     ZohModalForm<double> f;
@@ -554,11 +788,13 @@ FitResult FitModel(const ident::FrequencyResponse& frf, const FitOptions& o) {
       const cd model = cd(g.re, g.im) * bins.delay[k];
       err2 += std::norm(bins.H[k] - model);
       var2 += std::norm(bins.H[k] - mean);
-      const double wr = std::abs(bins.H[k] - model) * bins.weight[k];
-      if (wr > worst) { worst = wr; worst_k = k; }
+      const cd wr = (bins.H[k] - model) * bins.weight[k];
+      out.r.push_back(wr);
+      out.f_hz.push_back(std::arg(bins.z[k]) / (kHz * bins.period_s));
+      if (std::abs(wr) > worst) { worst = std::abs(wr); worst_k = k; }
     }
     res.nrmse_fit_percent = 100.0 * (1.0 - std::sqrt(err2 / var2));
-    res.worst_misfit_hz = std::arg(bins.z[worst_k]) / (2.0 * std::numbers::pi * bins.period_s);
+    res.worst_misfit_hz = out.f_hz[worst_k];
   }
   const Plant before_order = res.plant;
   CanonicalOrder(&res.plant, &res.std_errors);
@@ -583,14 +819,351 @@ FitResult FitModel(const ident::FrequencyResponse& frf, const FitOptions& o) {
     res.log_covariance.assign(C.data(), C.data() + p * p);  // symmetric: row- = column-major
   }
   if (res.status != FitStatus::kConverged) res.message = "the solver did not converge: " + res.message;
+  return out;
+}
+
+// Starts for n + 1 sections from an n-section fit: its sections kept, a new
+// one placed where the weighted misfit peaks (the unmodelled mode's
+// resonance/antiresonance pair sits there), as a pole above a zero and as a
+// zero above a pole, at the three largest misfit peaks; and each section
+// split in two.
+std::vector<Plant> GrowStarts(const Fixed& prev) {
+  std::vector<Plant> out;
+  const size_t nb = prev.r.size();
+  if (nb < 8) return out;
+  const int h = std::max<int>(2, static_cast<int>(nb / 100));
+  std::vector<double> sm(nb);
+  for (size_t k = 0; k < nb; ++k) {
+    double a = 0; int c = 0;
+    for (long j = static_cast<long>(k) - h; j <= static_cast<long>(k) + h; ++j) {
+      if (j < 0 || j >= static_cast<long>(nb)) continue;
+      a += std::norm(prev.r[j]); ++c;
+    }
+    sm[k] = a / c;
+  }
+  const std::vector<Extremum> peaks = Peaks(sm);
+  for (size_t i = 0; i < peaks.size() && i < 3; ++i) {
+    const double w = kHz * prev.f_hz[peaks[i].index];
+    for (const auto& [fp, fz] : {std::pair{1.08, 0.92}, std::pair{1.0, 0.8}, std::pair{1.25, 1.0}}) {
+      Plant p = prev.res.plant;
+      p.modes.push_back({w * fp, 2 * 0.05 * w * fp, w * fz, 2 * 0.05 * w * fz});
+      CanonicalOrder(&p, nullptr);
+      out.push_back(p);
+    }
+  }
+  // Each section split in two, 8 % apart (two close modes that the smaller
+  // fit merged into one).
+  for (size_t i = 0; i < prev.res.plant.modes.size(); ++i) {
+    Plant p = prev.res.plant;
+    const Mode m = p.modes[i];
+    p.modes[i] = {m.omega * 0.92, m.c * 0.5, m.v * 0.92, m.d * 0.5};
+    p.modes.push_back({m.omega * 1.08, m.c * 0.5, m.v * 1.08, m.d * 0.5});
+    CanonicalOrder(&p, nullptr);
+    out.push_back(p);
+  }
+  return out;
+}
+
+// BIC on the weighted residual: chi2 / (kappa s2) + p ln(N / kappa), with
+// kappa the bins' correlation (N / kappa independent residuals) and s2 the
+// noise level that the per-bin std misses, read from the largest model (as
+// Mallows' Cp does): the lowest chi2/dof of all orders tried, at least 1.
+double Bic(const FitResult& r, double kappa, double s2) {
+  kappa = std::max(1.0, kappa);
+  return 2.0 * r.cost / (kappa * std::max(1.0, s2)) + r.num_parameters * std::log(r.num_residuals / kappa);
+}
+
+std::string Fmt(const char* fmt, double a, double b = 0, double c = 0, double d = 0) {
+  char s[300];
+  std::snprintf(s, sizeof s, fmt, a, b, c, d);
+  return s;
+}
+
+// chi2/dof above which the model does not explain the response: 1.5 (on
+// correct models with >= 8 averages chi2/dof is 1.0-1.4, the per-bin std
+// being estimated from the same averages) plus 4 standard deviations of
+// chi2/dof for correlated bins, 4 sqrt(2 kappa / dof).
+double Chi2Limit(const FitResult& r, double kappa) {
+  const int dof = std::max(1, r.num_residuals - r.num_parameters);
+  return 1.5 + 4.0 * std::sqrt(2.0 * std::max(1.0, kappa) / dof);
+}
+
+// The quality tests (see FitResult::quality).
+void JudgeQuality(const Fixed& fx, const ident::FrequencyResponse& sub, const FitOptions& o, FitResult* res) {
+  auto add = [&](std::string code, std::string msg, std::string advice) {
+    res->reasons.push_back({std::move(code), std::move(msg), std::move(advice)});
+  };
+  const double kappa = std::max(1.0, sub.bin_correlation);
+  const double chi_limit = Chi2Limit(*res, sub.bin_correlation);
+  if (res->chi2_per_dof > chi_limit) {
+    add("chi2_per_dof", Fmt("chi2/dof %.3g is above %.3g: the model does not explain the response within its std",
+                            res->chi2_per_dof, chi_limit),
+        "try more modes (--modes auto), --delay-samples auto, or a band where the device is linear (--fmin/--fmax)");
+  }
+  // Runs test on every 3rd bin (Hann bins 3 apart are uncorrelated).
+  const int stride = kappa > 1.2 ? 3 : 1;
+  double z_min = 0;
+  for (int part = 0; part < 2; ++part) {
+    int n1 = 0, n2 = 0, runs = 0, last = 0;
+    for (size_t k = 0; k < fx.r.size(); k += stride) {
+      const double v = part == 0 ? fx.r[k].real() : fx.r[k].imag();
+      const int s = v >= 0 ? 1 : -1;
+      (s > 0 ? n1 : n2)++;
+      if (s != last) ++runs;
+      last = s;
+    }
+    const double nn = n1 + n2;
+    if (n1 < 2 || n2 < 2) { z_min = std::min(z_min, -10.0); continue; }
+    const double mu = 2.0 * n1 * n2 / nn + 1.0;
+    const double var = (mu - 1.0) * (mu - 2.0) / (nn - 1.0);
+    if (var > 0) z_min = std::min(z_min, (runs - mu) / std::sqrt(var));
+  }
+  res->runs_z = z_min;
+  if (z_min < -4.0) {
+    add("residual_runs", Fmt("the residual has long runs of one sign (runs test z = %.3g < -4): systematic misfit", z_min),
+        "the model misses a feature of the response: more modes (--modes auto), a delay (--delay-samples auto)");
+  }
+  // Misfit concentrated in one octave.
+  if (!fx.r.empty()) {
+    const double f0 = fx.f_hz.front();
+    const int nbands = std::max(1, static_cast<int>(std::ceil(std::log2(fx.f_hz.back() / f0 + 1e-12))));
+    std::vector<double> s2(nbands + 1, 0.0);
+    std::vector<int> cnt(nbands + 1, 0);
+    double tot = 0;
+    for (size_t k = 0; k < fx.r.size(); ++k) {
+      const int b = std::clamp(static_cast<int>(std::floor(std::log2(fx.f_hz[k] / f0))), 0, nbands);
+      s2[b] += std::norm(fx.r[k]);
+      cnt[b] += 1;
+      tot += std::norm(fx.r[k]);
+    }
+    int worst = -1;
+    double worst_chi = 0, rest_chi = 0;
+    for (int b = 0; b <= nbands; ++b) {
+      if (cnt[b] < 8 || cnt[b] == static_cast<int>(fx.r.size())) continue;
+      const double c = s2[b] / (2.0 * cnt[b]);
+      const double rest = (tot - s2[b]) / (2.0 * (fx.r.size() - cnt[b]));
+      if (c > 4.0 && c > 3.0 * rest && c > worst_chi) { worst = b; worst_chi = c; rest_chi = rest; }
+    }
+    if (worst >= 0) {
+      const double a = f0 * std::exp2(worst), b = std::min(f0 * std::exp2(worst + 1), fx.f_hz.back());
+      res->misfit_band_hz = {a, b};
+      add("misfit_band", Fmt("the misfit is concentrated in %.4g-%.4g Hz (chi2/dof %.3g there, %.3g elsewhere)", a, b,
+                             worst_chi, rest_chi),
+          "a mode there is missing or wrong: more modes, or leave that band out (--fmin/--fmax)");
+    }
+  }
+  if (sub.num_averages < o.min_averages) {
+    add("few_averages", "the response averages " + std::to_string(sub.num_averages) +
+                            " Welch segment(s): its per-bin std, hence the weights and the standard errors, mean little",
+        "record a longer log or use a shorter --window-length");
+  }
+  for (const std::string& s : SpuriousSections(*res, o)) {
+    const bool bound = s.find("bound") != std::string::npos;
+    add(bound ? "parameter_at_bound" : "spurious_section", s,
+        bound ? "the data may not support this many modes: fewer modes (--modes auto)"
+              : "fewer modes (--modes auto) or a wider band");
+  }
+}
+
+}  // namespace
+
+std::string ToString(FitQuality q) {
+  switch (q) {
+    case FitQuality::kNotJudged: return "not judged";
+    case FitQuality::kGood: return "good";
+    case FitQuality::kPoor: return "poor";
+  }
+  return "?";
+}
+
+std::vector<std::string> SpuriousSections(const FitResult& r, const FitOptions& o) {
+  std::vector<std::string> out;
+  const Plant& p = r.plant;
+  const double nyq_w = std::numbers::pi * r.band_sample_rate_hz;
+  for (size_t i = 0; i < p.modes.size(); ++i) {
+    const std::string name = "section " + std::to_string(i + 1);
+    const Mode& md = p.modes[i];
+    // Nearest zero to this pole.
+    size_t j = 0;
+    for (size_t q = 1; q < p.modes.size(); ++q) {
+      if (std::abs(std::log(p.modes[q].v / md.omega)) < std::abs(std::log(p.modes[j].v / md.omega))) j = q;
+    }
+    const Mode& mz = p.modes[j];
+    const cd s(0.0, md.omega);
+    const cd ratio = (s * s + mz.d * s + mz.v * mz.v) / (s * s + md.c * s + md.omega * md.omega);
+    // Cancelled: the pair changes G by less than 5 % at the pole, or by less
+    // than 50 % with the two frequencies within 2 % and within two standard
+    // deviations of each other (a lightly damped pair that only fits noise).
+    bool same_frequency = false;
+    if (r.std_errors.modes.size() == p.modes.size()) {
+      const double sw = r.std_errors.modes[i].omega, sv = r.std_errors.modes[j].v;
+      same_frequency = std::abs(ratio - 1.0) < 0.5 && std::abs(md.omega - mz.v) < 0.02 * md.omega &&
+                       std::abs(md.omega - mz.v) < 2.0 * std::sqrt(sw * sw + sv * sv);
+    }
+    if (std::abs(ratio - 1.0) < 0.05 || same_frequency) {
+      out.push_back(name + Fmt(": its pole at %.4g Hz is cancelled by the zero at %.4g Hz", md.omega / kHz, mz.v / kHz));
+    }
+    const double zc = md.c / (2 * md.omega), zd = md.d / (2 * md.v);
+    if (zc > 0.999 * o.max_pole_damping_ratio || zc < 1.001 * o.min_damping_ratio) {
+      out.push_back(name + Fmt(": the pole damping ratio %.3g is at its bound", zc));
+    }
+    if (zd > 0.999 * o.max_zero_damping_ratio || zd < 1.001 * o.min_damping_ratio) {
+      out.push_back(name + Fmt(": the zero damping ratio %.3g is at its bound", zd));
+    }
+    if (nyq_w > 0 && (md.omega > 0.999 * o.max_frequency_fraction * nyq_w || md.v > 0.999 * o.max_frequency_fraction * nyq_w)) {
+      out.push_back(name + ": a frequency is at its bound (near Nyquist)");
+    }
+    if (r.std_errors.modes.size() == p.modes.size()) {
+      const Mode& e = r.std_errors.modes[i];
+      if (!(e.omega < md.omega && e.c < md.c && e.v < md.v && e.d < md.d)) {
+        out.push_back(name + ": a parameter's std is larger than its value (or unknown)");
+      }
+    }
+    if (r.band.num_used > 0) {
+      const double lo = kHz * r.band.f_lo_hz / 1.05, hi = kHz * r.band.f_hi_hz * 1.05;
+      if (md.omega < lo || md.omega > hi || md.v < lo || md.v > hi) {
+        out.push_back(name + Fmt(": pole %.4g Hz or zero %.4g Hz is outside the used band", md.omega / kHz, md.v / kHz));
+      }
+    }
+  }
+  return out;
+}
+
+FitResult FitModel(const ident::FrequencyResponse& frf, const FitOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) throw InputError(why);
+  if (frf.f_hz.empty()) throw InputError("the frequency response has no bins");
+  if (!(frf.sample_rate_hz > 0.0)) throw InputError("the frequency response has no sample rate");
+  if (frf.num_averages < o.min_averages && !o.allow_few_averages) {
+    int w = 16;
+    while (w * 2 <= frf.window_length / 4) w *= 2;
+    throw InputError("the response averages " + std::to_string(frf.num_averages) + " Welch segment(s) of " +
+                     std::to_string(frf.window_length) + " samples; with fewer than " + std::to_string(o.min_averages) +
+                     " its per-bin std, hence the fit's weights, chi2 and standard errors, mean nothing. Options: "
+                     "record a longer log (at least " + std::to_string(2 * frf.window_length) +
+                     " samples at this window), use a shorter window (e.g. --window-length " + std::to_string(w) +
+                     ", at the cost of frequency resolution), or --allow-short to fit anyway (judged poor)");
+  }
+  const ident::ExcitedBand band = ident::SelectExcitedBand(frf, o.band);
+  const ident::FrequencyResponse sub = Restrict(frf, band.used);
+  FitResult res;
+  Fixed chosen;
+  if (!o.auto_modes) {
+    chosen = FitFixed(sub, o, o.num_modes, {});
+    // A fit with a spurious section may sit in a wrong minimum where two
+    // closely spaced modes merge and the spare section parks anywhere: fit
+    // one section fewer, grow it back where its misfit peaks, and keep the
+    // better of the two. Only then, so the usual fit costs nothing more.
+    chosen.res.band = band;
+    chosen.res.band_sample_rate_hz = frf.sample_rate_hz;
+    const bool suspect = chosen.res.status != FitStatus::kConverged || !SpuriousSections(chosen.res, o).empty() ||
+                         chosen.res.chi2_per_dof > Chi2Limit(chosen.res, sub.bin_correlation);
+    if (o.num_modes >= 1 && o.retry_spurious && suspect) {
+      FitOptions lower = o;
+      lower.auto_delay = false;
+      lower.delay_samples = chosen.res.plant.delay_samples;
+      lower.init.reset();
+      lower.max_converged_starts = std::max(o.max_converged_starts, 8);
+      lower.runner_up_cost_ratio = std::max(o.runner_up_cost_ratio, 10.0);
+      const Fixed prev = FitFixed(sub, lower, o.num_modes - 1, {});
+      if (prev.res.status == FitStatus::kConverged) {
+        Fixed again = FitFixed(sub, lower, o.num_modes, GrowStarts(prev));
+        again.res.starts_tried += chosen.res.starts_tried + prev.res.starts_tried;
+        again.res.iterations += chosen.res.iterations + prev.res.iterations;
+        again.res.delay_choice = chosen.res.delay_choice;
+        if (again.res.status == FitStatus::kConverged &&
+            (chosen.res.status != FitStatus::kConverged || again.res.cost < chosen.res.cost)) {
+          chosen = std::move(again);
+        }
+      }
+    }
+    res = chosen.res;
+  } else {
+    std::vector<Fixed> fits;
+    std::vector<OrderTrial> table;
+    const double kappa = std::max(1.0, sub.bin_correlation);
+    int pick = -1;
+    for (int n = 0; n <= o.max_modes; ++n) {
+      if (2 * band.num_used <= 2 + 4 * n) break;
+      std::vector<Plant> extra;
+      if (n > 0 && fits.back().res.status == FitStatus::kConverged) extra = GrowStarts(fits.back());
+      fits.push_back(FitFixed(sub, o, n, extra));
+      Fixed& fx = fits.back();
+      fx.res.band = band;
+      fx.res.band_sample_rate_hz = frf.sample_rate_hz;
+      OrderTrial t;
+      t.num_modes = n;
+      t.converged = fx.res.status == FitStatus::kConverged;
+      t.chi2_per_dof = fx.res.chi2_per_dof;
+      t.delay_samples = fx.res.plant.delay_samples;
+      for (const Mode& md : fx.res.plant.modes) t.pole_hz.push_back(md.omega / kHz);
+      for (double f : t.pole_hz) {
+        bool persists = false;
+        if (n > 0) for (double g : table.back().pole_hz) persists |= std::abs(f / g - 1) < 0.02;
+        t.persists.push_back(persists);
+      }
+      t.spurious = SpuriousSections(fx.res, o);
+      if (!t.converged) t.spurious.push_back("the solver did not converge");
+      table.push_back(t);
+    }
+    double s2 = std::numeric_limits<double>::infinity();
+    for (const Fixed& fx : fits) if (fx.res.status == FitStatus::kConverged) s2 = std::min(s2, fx.res.chi2_per_dof);
+    if (!std::isfinite(s2)) s2 = 1.0;
+    for (size_t i = 0; i < table.size(); ++i) {
+      table[i].bic = Bic(fits[i].res, kappa, s2);
+      if (table[i].spurious.empty() && (pick < 0 || table[i].bic < table[pick].bic)) pick = static_cast<int>(i);
+    }
+    if (pick < 0) pick = 0;
+    chosen = fits[pick];
+    res = chosen.res;
+    res.order_table = table;
+    std::ostringstream os;
+    os << pick << " modes: the lowest BIC (" << std::setprecision(6) << table[pick].bic
+       << ") among the orders 0.." << table.size() - 1 << " without a spurious section";
+    for (const OrderTrial& t : table) {
+      if (t.num_modes > pick && !t.spurious.empty()) {
+        os << "; " << t.num_modes << " rejected (" << t.spurious.front() << ")";
+        break;
+      }
+    }
+    res.order_choice = os.str();
+  }
+  res.band = band;
+  res.band_sample_rate_hz = frf.sample_rate_hz;
+  if (frf.num_averages == 1) {
+    res.warnings.push_back("the log gives a single Welch segment: coherence is then 1 and says nothing, "
+                           "and the standard errors are not meaningful; use a longer log or a shorter window");
+  }
+  {
+    std::vector<double> c = sub.coherence;
+    std::nth_element(c.begin(), c.begin() + c.size() / 2, c.end());
+    if (c[c.size() / 2] < 0.5) {
+      res.warnings.push_back("coherence is below 0.5 over most of the band: the response is dominated by "
+                             "noise or nonlinearity; the fit may be poor");
+    }
+  }
+  if (res.status == FitStatus::kConverged) {
+    JudgeQuality(chosen, sub, o, &res);
+    if (o.auto_modes && res.plant.modes.size() == static_cast<size_t>(o.max_modes) && o.max_modes > 0) {
+      res.reasons.push_back({"order_search_at_limit",
+                             "the order search chose its maximum, " + std::to_string(o.max_modes) + " modes",
+                             "raise --max-modes, or narrow the band to the modes that matter"});
+    }
+    if (o.auto_delay && res.plant.delay_samples >= o.max_auto_delay) {
+      res.reasons.push_back({"delay_search_at_limit",
+                             "the delay search chose its maximum, " + std::to_string(o.max_auto_delay) + " samples",
+                             "check the log's timing (a constant input-output offset), or give --delay-samples"});
+    }
+    res.quality = res.reasons.empty() ? FitQuality::kGood : FitQuality::kPoor;
+  }
   return res;
 }
 
 std::string FitResult::BriefReport() const {
   std::ostringstream os;
   os << "fit " << ToString(status) << ": chi2/dof " << chi2_per_dof << ", fit " << nrmse_fit_percent
-     << "%, worst misfit at " << worst_misfit_hz << " Hz, " << starts_tried << " starts, " << iterations
-     << " iterations";
+     << "% (NRMSE of H; unweighted, so a large misfit where |H| is small hardly shows), worst misfit at "
+     << worst_misfit_hz << " Hz, " << starts_tried << " starts, " << iterations << " iterations";
   return os.str();
 }
 

@@ -20,10 +20,23 @@
 namespace zwidth::fit {
 
 struct FitOptions {
-  int num_modes = 2;              // resonance/antiresonance sections, >= 0
+  int num_modes = 2;              // resonance/antiresonance sections, >= 0, unless auto_modes
+  // Try 0..max_modes sections and keep the order with the lowest BIC among the
+  // orders without a spurious section (see FitResult::order_table).
+  bool auto_modes = false;
+  int max_modes = 4;              // in [0, 8]
   int delay_samples = 0;          // input delay [samples], >= 0, unless auto_delay
-  bool auto_delay = false;        // try 0..max_auto_delay and keep the best fit
-  int max_auto_delay = 4;         // >= 0
+  // Search delays around the one the phase slope of the upper band suggests
+  // (+-2, extended while the fit keeps improving) and keep the best fit.
+  bool auto_delay = false;
+  int max_auto_delay = 40;        // largest delay searched [samples], in [0, 1000]
+  // Bins used: the band [fmin_hz, fmax_hz], where the input has power and the
+  // coherence is usable (ident::SelectExcitedBand).
+  ident::BandOptions band;
+  // Responses averaging fewer Welch segments are refused (InputError): their
+  // per-bin std, hence the weights, chi2 and standard errors, mean nothing.
+  int min_averages = 3;                  // >= 1
+  bool allow_few_averages = false;       // fit anyway; the verdict is then "poor"
   double min_damping_ratio = 1e-4;       // lower bound of zeta_c and zeta_d, > 0
   double max_pole_damping_ratio = 0.95;  // upper bound of zeta_c, < 1 (underdamped)
   double max_zero_damping_ratio = 2.0;   // upper bound of zeta_d
@@ -32,6 +45,13 @@ struct FitOptions {
   int max_iterations = 200;              // per start, >= 1
   double function_tolerance = 1e-8;      // Ceres relative cost change, > 0
   int max_starts = 6;                    // automatic starts tried, >= 1
+  // Screened starts converged fully: the best, and runners-up whose screened
+  // cost is within runner_up_cost_ratio of the best's.
+  int max_converged_starts = 1;          // >= 1
+  double runner_up_cost_ratio = 3.0;     // >= 1
+  // When the fit has a spurious section (SpuriousSections), fit one section
+  // fewer, grow it back where the misfit peaks, and keep the lower cost.
+  bool retry_spurious = true;
   std::optional<Plant> init;             // a user's starting point (tried first)
 
   bool IsValid(std::string* why) const;
@@ -43,6 +63,35 @@ enum class FitStatus {
   kNoConvergence  // the solver stopped without converging: do not use the numbers
 };
 std::string ToString(FitStatus s);
+
+// Is the converged fit usable? Judged from the tests listed in FitResult.
+enum class FitQuality {
+  kNotJudged,  // sentinel (no converged fit)
+  kGood,       // no test failed
+  kPoor        // at least one test failed: see reasons; do not trust the Z-width
+};
+std::string ToString(FitQuality q);
+
+struct QualityReason {
+  // Machine-readable: chi2_per_dof, residual_runs, misfit_band, few_averages,
+  // parameter_at_bound, spurious_section, order_search_at_limit,
+  // delay_search_at_limit.
+  std::string code;
+  std::string message;  // what was seen, with the numbers
+  std::string advice;   // what to try
+};
+
+// One row of the order search (the stabilisation table).
+struct OrderTrial {
+  int num_modes = 0;
+  bool converged = false;
+  double chi2_per_dof = 0.0;
+  double bic = 0.0;                   // chi2 / (kappa s2) + p ln(2 N / kappa): fit.cc, Bic()
+  std::vector<double> pole_hz;        // omega_i / 2 pi, ascending
+  std::vector<char> persists;         // pole i within 2% of a pole of the previous order
+  std::vector<std::string> spurious;  // reasons the order was rejected; empty if admissible
+  int delay_samples = 0;
+};
 
 struct FitResult {
   FitStatus status = FitStatus::kNotRun;
@@ -65,6 +114,22 @@ struct FitResult {
   int starts_tried = 0;
   int iterations = 0;
   std::vector<std::string> warnings;
+  // The bins used (ident::SelectExcitedBand); band.used has one entry per bin.
+  ident::ExcitedBand band;
+  // Verdict: poor when any of these fails (thresholds in fit.cc, QualityTests):
+  //   chi2/dof above 1.5 + 4 sqrt(2 kappa / dof) (1.0-1.4 on correct models
+  //   with >= 8 averages, see the tests), residual runs test z < -4 on every 3rd bin
+  //   (bins 3 apart are uncorrelated for Hann), one octave band with
+  //   chi2/dof > 4 and > 3x the rest, fewer than min_averages segments,
+  //   damping at a bound, a spurious section, a search ended at its limit.
+  FitQuality quality = FitQuality::kNotJudged;
+  std::vector<QualityReason> reasons;
+  double runs_z = 0.0;                  // runs test statistic (min over real, imaginary parts)
+  std::vector<double> misfit_band_hz;   // {lo, hi} of the flagged octave, else empty
+  double band_sample_rate_hz = 0.0;     // of the response fitted
+  std::vector<OrderTrial> order_table;  // filled when auto_modes
+  std::string order_choice;             // why this order (auto_modes)
+  std::string delay_choice;             // why this delay (auto_delay)
   std::string BriefReport() const;
 };
 
@@ -75,6 +140,20 @@ FitResult FitModel(const ident::FrequencyResponse& frf, const FitOptions& option
 // The automatic starting points tried by FitModel (exposed for tests).
 std::vector<Plant> AutomaticStarts(const ident::FrequencyResponse& frf, int num_modes,
                                    int delay_samples, int max_starts);
+
+// Reasons the fitted sections may be spurious: a pole that its nearest zero
+// cancels (|N/D - 1| < 0.05 at s = j omega, or < 0.5 with the two frequencies
+// within 2 % and within two std of each other), a damping ratio at its bound, a
+// std larger than the value, a section outside the used band. Sections are
+// named as printed: canonical order, from 1.
+std::vector<std::string> SpuriousSections(const FitResult& r, const FitOptions& o);
+
+// A start from a linear rational fit (Sanathanan & Koerner 1963: `iterations`
+// reweighted linear least-squares passes of N(s) - s H(s) D'(s), the delay and
+// the ZOH's half sample taken out), factored into eq. (1). nullopt when the
+// rational fit has real poles or zeros that do not pair into n sections.
+std::optional<Plant> LinearRationalStart(const ident::FrequencyResponse& frf, int num_modes, int delay_samples,
+                                         int iterations = 6);
 
 // Sorts pole pairs by omega and zero pairs by v (G is unchanged); permutes
 // std_errors alike when given.

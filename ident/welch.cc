@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -296,6 +297,60 @@ FrequencyResponse WelchEstimator::Finish(double fs) const {
   }
   if (!any_power) throw InputError("the input has no power in the band: constant input?");
   return r;
+}
+
+bool BandOptions::IsValid(std::string* why) const {
+  auto bad = [&](const std::string& m) { if (why) *why = m; return false; };
+  if (!(std::isfinite(fmin_hz) && fmin_hz >= 0.0)) return bad("fmin_hz (--fmin) must be finite and >= 0");
+  if (!(fmax_hz > fmin_hz)) return bad("fmax_hz (--fmax) must be > fmin_hz (--fmin)");
+  if (!(min_input_power_ratio >= 0.0 && min_input_power_ratio < 1.0)) {
+    return bad("min_input_power_ratio (--min-input-power) must be in [0, 1)");
+  }
+  if (!(min_coherence >= 0.0 && min_coherence < 1.0)) return bad("min_coherence (--min-coherence) must be in [0, 1)");
+  return true;
+}
+
+ExcitedBand SelectExcitedBand(const FrequencyResponse& frf, const BandOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) throw InputError(why);
+  const size_t n = frf.f_hz.size();
+  ExcitedBand b;
+  b.used.assign(n, 0);
+  std::vector<double> inside;
+  for (size_t k = 0; k < n; ++k) {
+    if (frf.f_hz[k] >= o.fmin_hz && frf.f_hz[k] <= o.fmax_hz && k < frf.S_uu.size()) inside.push_back(frf.S_uu[k]);
+  }
+  b.input_power_known = false;
+  for (double s : inside) b.input_power_known |= s > 0.0;
+  if (b.input_power_known) {
+    const size_t q = std::min(inside.size() - 1, static_cast<size_t>(0.99 * inside.size()));
+    std::nth_element(inside.begin(), inside.begin() + q, inside.end());
+    b.reference_input_psd = inside[q];
+  }
+  for (size_t k = 0; k < n; ++k) {
+    const double f = frf.f_hz[k];
+    if (!(f >= o.fmin_hz && f <= o.fmax_hz)) { ++b.num_outside; continue; }
+    if (b.input_power_known && !(frf.S_uu[k] >= o.min_input_power_ratio * b.reference_input_psd)) {
+      ++b.num_low_input;
+      continue;
+    }
+    if (k < frf.coherence.size() && frf.coherence[k] < o.min_coherence) { ++b.num_low_coherence; continue; }
+    b.used[k] = 1;
+    if (b.num_used++ == 0) b.f_lo_hz = f;
+    b.f_hi_hz = f;
+  }
+  return b;
+}
+
+std::string ExcitedBand::Describe() const {
+  char s[400];
+  std::snprintf(s, sizeof s, "used %d of %zu bins, %.4g-%.4g Hz", num_used, used.size(), f_lo_hz, f_hi_hz);
+  std::string out = s;
+  if (num_outside) out += "; " + std::to_string(num_outside) + " outside --fmin/--fmax";
+  if (num_low_input) out += "; " + std::to_string(num_low_input) + " where the input carries too little power";
+  if (num_low_coherence) out += "; " + std::to_string(num_low_coherence) + " with too low coherence";
+  if (!input_power_known) out += "; the response has no input PSD (S_uu): input power not checked";
+  return out;
 }
 
 FrequencyResponse EstimateFrequencyResponse(const std::vector<double>& input,

@@ -7,6 +7,7 @@
 
 #include <complex>
 #include <cstddef>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -34,7 +35,10 @@ struct WelchOptions {
   Detrend detrend = Detrend::kLinear;
   Estimator estimator = Estimator::kH1;
   double fmin_hz = 0.7;              // band kept in the result [Hz], >= 0
-  double fmax_hz = 300.0;            // clipped below Nyquist
+  // Highest bin kept [Hz], > fmin_hz; clipped below Nyquist. The default keeps
+  // every bin up to Nyquist: which of them a fit uses is decided by the input's
+  // power there (SelectExcitedBand), so it follows the excitation.
+  double fmax_hz = std::numeric_limits<double>::infinity();
 
   // The overlap in samples: floor(overlap * window_length).
   int overlap_samples() const;
@@ -59,6 +63,9 @@ struct FrequencyResponse {
   std::vector<double> H_std;
   std::vector<double> S_uu, S_yy;       // one-sided PSDs [unit^2/Hz]
   std::vector<std::complex<double>> S_uy;
+  // Per bin, 1 where a fit used it (FitResult::band.used), set by the caller
+  // before writing the response; empty when no fit was made.
+  std::vector<char> used_by_fit;
 };
 
 // Streaming estimator: memory is a few windows whatever the log length.
@@ -94,6 +101,37 @@ class WelchEstimator {
   size_t buf_begin_ = 0;   // global index of buf_u_[0]
   int segments_ = 0;
 };
+
+// Which bins of a response carry information about the device: inside
+// [fmin_hz, fmax_hz], where the input has power and where the coherence is
+// usable. A bin is "excited" when S_uu_k >= min_input_power_ratio * S_ref, with
+// S_ref the input PSD's 99th percentile over the bins of [fmin_hz, fmax_hz] (a
+// maximum that one spike cannot set). Where the input has no power the
+// "response" is sensor noise, or the feedback loop's own path, even when the
+// coherence stays high there.
+struct BandOptions {
+  double fmin_hz = 0.0;                           // lowest frequency used [Hz], >= 0
+  double fmax_hz = std::numeric_limits<double>::infinity();  // highest [Hz], > fmin_hz
+  double min_input_power_ratio = 1e-2;  // S_uu threshold relative to S_ref (-20 dB), in [0, 1)
+  double min_coherence = 0.05;          // bins with lower coherence are left out, in [0, 1)
+
+  bool IsValid(std::string* why) const;
+};
+
+struct ExcitedBand {
+  std::vector<char> used;      // per bin of the response: 1 when a fit uses it
+  int num_used = 0;
+  int num_outside = 0;         // outside [fmin_hz, fmax_hz]
+  int num_low_input = 0;       // input power below the threshold
+  int num_low_coherence = 0;   // coherence below min_coherence (counted once)
+  bool input_power_known = true;  // false when the response has no S_uu (all 0)
+  double f_lo_hz = 0.0, f_hi_hz = 0.0;  // lowest and highest used bin; 0 when none
+  double reference_input_psd = 0.0;     // S_ref
+  // "used 0.7-300 Hz (1227 of 2048 bins); left out: 820 with input power 20 dB
+  // below its reference (above 300.2 Hz) ...".
+  std::string Describe() const;
+};
+ExcitedBand SelectExcitedBand(const FrequencyResponse& frf, const BandOptions& options);
 
 // Whole-signal convenience.
 FrequencyResponse EstimateFrequencyResponse(const std::vector<double>& input,

@@ -23,13 +23,17 @@ void WriteCsv(const std::string& tmp, const ident::FrequencyResponse& r) {
   std::FILE* f = std::fopen(tmp.c_str(), "wb");
   if (!f) throw InputError("cannot create '" + tmp + "'");
   std::fputs("f_hz,H_re,H_im,coherence,H_std,H_mag,H_phase_deg,S_uu,S_yy,sample_rate_hz,"
-             "num_averages,effective_averages,bin_correlation\n", f);
+             "num_averages,effective_averages,bin_correlation", f);
+  const bool used = r.used_by_fit.size() == r.f_hz.size();  // the fit's bins, when known
+  std::fputs(used ? ",used_by_fit\n" : "\n", f);
   for (size_t k = 0; k < r.f_hz.size(); ++k) {
-    std::fprintf(f, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%.17g,%.17g\n",
+    std::fprintf(f, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%.17g,%.17g",
                  r.f_hz[k], r.H[k].real(), r.H[k].imag(), r.coherence[k], r.H_std[k],
                  std::abs(r.H[k]), std::arg(r.H[k]) * 180.0 / std::numbers::pi, r.S_uu[k],
                  r.S_yy[k], r.sample_rate_hz, r.num_averages, r.effective_averages,
                  r.bin_correlation);
+    if (used) std::fprintf(f, ",%d", r.used_by_fit[k] ? 1 : 0);
+    std::fputc('\n', f);
   }
   const bool ok = std::ferror(f) == 0;
   if (std::fclose(f) != 0 || !ok) throw InputError("failed writing '" + tmp + "'");
@@ -51,6 +55,7 @@ void WriteH5(const std::string& tmp, const ident::FrequencyResponse& r) {
     for (hsize_t k = 0; k < n; ++k) { re[k] = r.H[k].real(); im[k] = r.H[k].imag(); }
     put("f_hz", r.f_hz); put("H_re", re); put("H_im", im);
     put("coherence", r.coherence); put("H_std", r.H_std); put("S_uu", r.S_uu); put("S_yy", r.S_yy);
+    if (r.used_by_fit.size() == n) put("used_by_fit", std::vector<double>(r.used_by_fit.begin(), r.used_by_fit.end()));
     H5::Group root = file.openGroup("/");
     auto attr = [&](const char* name, double v) {
       H5::Attribute a = root.createAttribute(name, H5::PredType::IEEE_F64LE, H5::DataSpace(H5S_SCALAR));
