@@ -253,30 +253,13 @@ void AddStabilityCommands(CLI::App& app) {
     nlohmann::json out = {{"delay_samples", cf->delay}, {"period_s", T}, {"objects", nlohmann::json::array()}};
     int unstable = 0;
     for (const auto& o : objs) {
-      const stability::CriticalPoint cp = z.At(o.B);
-      const std::vector<stability::KInterval> iv = z.StableIntervals(o.B);
-      // Stable exactly when K lies inside one of the stable intervals at this B
-      // (K = 0 counts as 0+).
-      int inside = -1, nearest = -1;
-      double best = std::numeric_limits<double>::infinity();
-      for (size_t i = 0; i < iv.size(); ++i) {
-        const bool in = (o.K > iv[i].K_lo || (o.K == 0.0 && iv[i].K_lo == 0.0)) && o.K < iv[i].K_hi;
-        if (in) inside = static_cast<int>(i);
-        const double dist = o.K <= iv[i].K_lo ? iv[i].K_lo - o.K : o.K - iv[i].K_hi;
-        if (dist < best) { best = dist; nearest = static_cast<int>(i); }
-      }
-      const bool stable = inside >= 0;
+      const io::ObjectVerdict v = io::CheckObject(z, o);
+      const bool stable = v.stable;
+      const int inside = v.interval, nearest = v.nearest_interval;
+      const std::vector<stability::KInterval>& iv = v.intervals;
+      const stability::CriticalPoint& cp = v.critical;
       if (!stable) ++unstable;
-      const double ratio = cp.K_cr > 0.0 ? o.K / cp.K_cr : std::numeric_limits<double>::infinity();
-      nlohmann::json e = {{"name", o.name}, {"K", o.K}, {"B", o.B}, {"stable", stable},
-                          {"K_cr", io::NumberOrNull(cp.K_cr)},
-                          {"f_cr_hz", io::NumberOrNull(cp.f_cr_hz)},
-                          {"K_over_K_cr", io::NumberOrNull(ratio)},
-                          {"unstable_at_any_K", iv.empty()},
-                          {"intervals", io::IntervalsToJson(iv)},
-                          {"interval", stable ? nlohmann::json(inside) : nlohmann::json(nullptr)},
-                          {"nearest_interval", nearest >= 0 ? nlohmann::json(nearest) : nlohmann::json(nullptr)}};
-      out["objects"].push_back(e);
+      out["objects"].push_back(v.ToJson(o));
       if (!cf->json) {
         std::string where;
         char buf[160];

@@ -1,5 +1,6 @@
 #include "io/stability_files.h"
 
+#include <limits>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -113,6 +114,34 @@ std::vector<SceneObject> ReadScene(const std::string& path) {
   }
   if (out.empty()) throw InputError(path + ": the scene has no objects");
   return out;
+}
+
+ObjectVerdict CheckObject(const stability::ZWidth& z, const SceneObject& o) {
+  ObjectVerdict v;
+  v.critical = z.At(o.B);
+  v.intervals = z.StableIntervals(o.B);
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < v.intervals.size(); ++i) {
+    const stability::KInterval& iv = v.intervals[i];
+    const bool in = (o.K > iv.K_lo || (o.K == 0.0 && iv.K_lo == 0.0)) && o.K < iv.K_hi;
+    if (in) v.interval = static_cast<int>(i);
+    const double dist = o.K <= iv.K_lo ? iv.K_lo - o.K : o.K - iv.K_hi;
+    if (dist < best) { best = dist; v.nearest_interval = static_cast<int>(i); }
+  }
+  v.stable = v.interval >= 0;
+  return v;
+}
+
+nlohmann::json ObjectVerdict::ToJson(const SceneObject& o) const {
+  const double ratio = critical.K_cr > 0.0 ? o.K / critical.K_cr : std::numeric_limits<double>::infinity();
+  return {{"name", o.name}, {"K", o.K}, {"B", o.B}, {"stable", stable},
+          {"K_cr", NumberOrNull(critical.K_cr)},
+          {"f_cr_hz", NumberOrNull(critical.f_cr_hz)},
+          {"K_over_K_cr", NumberOrNull(ratio)},
+          {"unstable_at_any_K", intervals.empty()},
+          {"intervals", IntervalsToJson(intervals)},
+          {"interval", stable ? nlohmann::json(interval) : nlohmann::json(nullptr)},
+          {"nearest_interval", nearest_interval >= 0 ? nlohmann::json(nearest_interval) : nlohmann::json(nullptr)}};
 }
 
 }  // namespace zwidth::io

@@ -40,13 +40,26 @@ nlohmann::json SummaryToJson(const stability::DelaySummary& s,
                              const stability::SummaryStd* std = nullptr);
 // [{"K_lo": .., "K_hi": .. (null = +inf), "f_lo_hz", "f_hi_hz", "verified"}]
 nlohmann::json IntervalsToJson(const std::vector<stability::KInterval>& intervals);
-nlohmann::json NumberOrNull(double v);
 
 struct SceneObject {
   std::string name;
   double K = 0.0;  // N m/rad, >= 0
   double B = 0.0;  // N m s/rad, >= 0
 };
+
+// The verdict of `zwidth check` for one scene object: stable exactly when K
+// lies inside one of the stable K-intervals at its B (K = 0 counts as 0+).
+struct ObjectVerdict {
+  bool stable = false;
+  int interval = -1;          // index of the interval holding K, -1 when unstable
+  int nearest_interval = -1;  // the interval nearest to K (-1 when none exists)
+  stability::CriticalPoint critical;
+  std::vector<stability::KInterval> intervals;
+  nlohmann::json ToJson(const SceneObject& o) const;  // the object's entry of `check --json`
+};
+ObjectVerdict CheckObject(const stability::ZWidth& z, const SceneObject& o);
+nlohmann::json NumberOrNull(double v);
+
 std::vector<SceneObject> ReadScene(const std::string& path);
 
 }  // namespace zwidth::io

@@ -38,15 +38,6 @@ void ForEachB(const DoubleArray& B, F&& f) {
 
 bool IsScalar(const py::object& o) { return py::array::ensure(o).ndim() == 0; }
 
-// The CLI's `check` verdict for one object (apps/cmd_stability.cc).
-nlohmann::json CheckObject(const stability::ZWidth& z, const io::SceneObject& o) {
-  const stability::CriticalPoint cp = z.At(o.B);
-  const bool stable = cp.K_cr > 0.0 && o.K < cp.K_cr;
-  const double ratio = cp.K_cr > 0.0 ? o.K / cp.K_cr : std::numeric_limits<double>::infinity();
-  return {{"name", o.name}, {"K", o.K}, {"B", o.B}, {"stable", stable}, {"K_cr", io::NumberOrNull(cp.K_cr)},
-          {"f_cr_hz", io::NumberOrNull(cp.f_cr_hz)}, {"K_over_K_cr", io::NumberOrNull(ratio)},
-          {"unstable_at_any_K", cp.unstable_at_zero_k}};
-}
 
 std::vector<io::SceneObject> SceneFrom(const py::object& scene) {
   if (py::isinstance<py::str>(scene) || py::hasattr(scene, "__fspath__")) {
@@ -304,7 +295,7 @@ Raises ComputationError when the loop neither oscillates nor diverges.)doc");
           {
             py::gil_scoped_release release;
             const stability::ZWidth z(model.plant, T, delay_samples);
-            for (const auto& o : objs) out["objects"].push_back(CheckObject(z, o));
+            for (const auto& o : objs) out["objects"].push_back(io::CheckObject(z, o).ToJson(o));
           }
           return JsonToPython(out);
         },
