@@ -17,6 +17,7 @@
 #include "io/stability_files.h"
 #include "model/error.h"
 #include "model/state_space.h"
+#include "stability/haptic_loop.h"
 #include "stability/uncertainty.h"
 #include "stability/zwidth.h"
 
@@ -56,6 +57,7 @@ void AddRunCommand(CLI::App& app) {
     EstimateFlags est;
     fit::FitOptions o;
     stability::BGridOptions grid;
+    double report_filter_hz = 50.0;
   };
   auto f = std::make_shared<RunFlags>();
   CLI::App* cmd = app.add_subcommand("run", "estimate, fit, compare, Z-width boundary and an HTML report");
@@ -67,6 +69,9 @@ void AddRunCommand(CLI::App& app) {
   cmd->add_option("--delay-samples", f->delay, "model input delay [samples] or 'auto'")->capture_default_str();
   cmd->add_option("--b-step", f->grid.b_step, "B step of the boundary [N m s/rad] (wins over --b-points)");
   cmd->add_option("--b-points", f->grid.b_points, "B values of the boundary, 0 to 1.05 x the largest stable B")
+      ->capture_default_str();
+  cmd->add_option("--report-filter-hz", f->report_filter_hz,
+                  "the report's loop figure: region also with a first-order velocity low-pass at this cut-off [Hz]")
       ->capture_default_str();
   AddEstimateFlags(cmd, &f->est);
   cmd->callback([f] {
@@ -115,6 +120,8 @@ void AddRunCommand(CLI::App& app) {
     }
     const std::vector<double> bgrid =
         stability::MakeBGrid(f->grid, b_max, model.plant.m / T, static_cast<int>(f->delays.size()));
+    std::vector<stability::Passivity> passivity;  // Colgate and Schenkel, the paper's loop
+    for (const auto& z : zs) passivity.emplace_back(model.plant.b, T, z.total_delay(), stability::LoopOptions{});
     const int nB = static_cast<int>(bgrid.size());
     std::vector<io::BoundaryRow> rows;
     rows.reserve(zs.size() * bgrid.size());
@@ -123,6 +130,7 @@ void AddRunCommand(CLI::App& app) {
       std::vector<stability::CriticalPoint> pts;
       for (double B : bgrid) {
         rows.push_back({f->delays[i], zs[i].At(B), zs[i].StableIntervals(B)});
+        rows.back().K_passive = passivity[i].At(B).K_hi;
         pts.push_back(rows.back().point);
         if (!rows.back().point.AgreesWithMargin()) ++disagree;
       }
@@ -218,6 +226,37 @@ void AddRunCommand(CLI::App& app) {
         }
         io::WriteTextAtomically((fig / "region_model.dat").string(), o.str());
       }
+      // The loop figure: the region without and with the report's velocity
+      // filter, and the passivity boundary K_P(B) of each, on a grid to
+      // 1.05 x the larger B_max.
+      double k_clip_loop = k_clip;  // K_hi = +inf drawn at k_clip
+      {
+        stability::LoopOptions lf;
+        stability::SetLowPassFilter(f->report_filter_hz, T, &lf);
+        std::ostringstream o, q;
+        o.precision(10);
+        q.precision(10);
+        for (size_t i = 0; i < f->delays.size(); ++i) {
+          const stability::ZWidth zf(model.plant, T, f->delays[i], lf);
+          const stability::Passivity pf(model.plant.b, T, zf.total_delay(), lf);
+          const double bm = std::max(sums[i].B_max, zf.Summarize().B_max);
+          const double top = std::isfinite(bm) && bm > 0 ? 1.05 * bm : bgrid.back();
+          for (int k = 0; k < 300; ++k) {
+            const double B = top * k / 299.0;
+            for (int which = 0; which < 2; ++which) {
+              for (const auto& iv : (which ? zf : zs[i]).StableIntervals(B)) {
+                o << B << " " << which << " " << iv.K_lo << " " << std::min(iv.K_hi, k_clip) << "\n";
+                if (std::isfinite(iv.K_hi)) k_clip_loop = std::max(k_clip_loop, 1.05 * iv.K_hi);
+              }
+            }
+            q << B << " " << passivity[i].At(B).K_hi << " " << pf.At(B).K_hi << "\n";
+          }
+          o << "nan nan nan nan\n\n\n";
+          q << "\n\n";
+        }
+        io::WriteTextAtomically((fig / "loop_region.dat").string(), o.str());
+        io::WriteTextAtomically((fig / "loop_passive.dat").string(), q.str());
+      }
       std::ostringstream t2;
       const bool table1 = fs::equivalent(ref_path, DefaultReferencePath());
       if (table1) {
@@ -260,6 +299,16 @@ void AddRunCommand(CLI::App& app) {
            << "  plot 'region_model.dat' index i-1 u 1:2:(0):($3-$2) w vectors nohead lc rgb '#9ecae1' t 'stable', "
            << "'kcr_model.dat' index i-1 u 1:($2-2*$4):($2+2*$4) w filledcurves fs transparent solid 0.35 "
            << "lc rgb '#d62728' t 'K_{CR} +- 2 sigma', '' index i-1 u 1:2 w l lw 2 lc rgb '#08306b' t 'K_{CR}(B)'\n"
+           << "}\nunset multiplot\nset yrange [*:*]\nunset title\n";
+        gp << "set output 'loop." << ext << "'\nset multiplot layout " << f->delays.size()
+           << ",1 title 'Stable region without and with a " << f->report_filter_hz
+           << " Hz velocity low-pass; passivity boundary K_P(B) (Colgate-Schenkel)'\n"
+           << "set xlabel 'B [N m s/rad]'\nset ylabel 'K [N m/rad]'\nset yrange [0:" << k_clip_loop << "]\n"
+           << "do for [i=1:words(delays)] {\n"
+           << "  set title 'loop delay '.word(delays,i).' samples'\n"
+           << "  plot 'loop_region.dat' index i-1 u 1:($2==1?$3:1/0):(0):($4-$3) w vectors nohead lc rgb '#fdae6b' t 'stable, filtered', "
+           << "'' index i-1 u 1:($2==0?$3:1/0):(0):($4-$3) w vectors nohead lc rgb '#6baed6' t 'stable, raw difference', "
+           << "'loop_passive.dat' index i-1 u 1:2 w l lw 2 lc rgb 'black' t 'K_P, raw', '' index i-1 u 1:3 w l lw 2 dt 2 lc rgb '#7f2704' t 'K_P, filtered'\n"
            << "}\nunset multiplot\nset yrange [*:*]\nunset title\n";
         gp << "set output 'rigid." << ext << "'\nset title 'With the vibration modes and without (rigid body only) - Fig. 7'\n"
            << "set xlabel 'B [N m s/rad]'\nset ylabel 'K_{CR} [N m/rad]'\n"
@@ -322,8 +371,17 @@ void AddRunCommand(CLI::App& app) {
         << "K interval per B.</p>\n";
     }
     if (have_figures) {
-      for (const char* name : {"bode", "coherence", "kcr", "region", "rigid"}) {
+      for (const char* name : {"bode", "coherence", "kcr", "region", "loop", "rigid"}) {
         h << "<p><img src='figures/" << name << ".svg' alt='" << name << "'></p>\n";
+        if (std::string(name) == "loop") {
+          h << "<p>Blue: the (B, K) the device renders stably with the raw backward difference; orange: with a "
+            << f->report_filter_hz << " Hz first-order velocity low-pass. Lines: the passivity boundary K_P(B) "
+            << "(Colgate and Schenkel, with the model's damping b = " << model.plant.b << "): below it the wall stays "
+            << "passive, so it stays stable against any passive hand, which the stable region alone does not promise "
+            << "(it assumes nobody holds the device). Passivity is bounded by the physical damping b (for the rigid "
+            << "body without delay or filter: b > K T/2 + |B|), so on a lightly damped device its region hugs the "
+            << "origin: rendering beyond it relies on the stable region and on the hand being no worse than assumed.</p>\n";
+        }
       }
     } else {
       h << "<p>Figures need gnuplot (Debian package <code>gnuplot-nox</code>): install it and run "

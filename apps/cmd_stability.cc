@@ -231,6 +231,76 @@ void AddStabilityCommands(CLI::App& app) {
                 disagree, grid.size() * zs.size());
   });
 
+  // ---- filter-sweep
+  struct SweepFlags {
+    std::string model, out;
+    int delay = -1;
+    double period = kNotGiven;
+    double f_min = 5.0, f_max = kNotGiven;
+    int points = 40;
+    std::string measure = "kcr-max";
+    double area_b_max = kNotGiven;
+    std::vector<std::string> hands;
+  };
+  auto sf = std::make_shared<SweepFlags>();
+  CLI::App* sw = app.add_subcommand("filter-sweep", "sweep the cut-off of a first-order velocity low-pass and report "
+                                    "the one that maximises the Z-width by a stated measure");
+  sw->add_option("model", sf->model, "model JSON")->required();
+  sw->add_option("--delay", sf->delay, "loop delay [samples]")->required();
+  sw->add_option("--period", sf->period, "sample period T [s] (default: the model's, else 0.001)");
+  sw->add_option("--f-min", sf->f_min, "lowest cut-off [Hz]")->capture_default_str();
+  sw->add_option("--f-max", sf->f_max, "highest cut-off [Hz] (default: Nyquist/2)");
+  sw->add_option("--points", sf->points, "cut-offs, log-spaced, in [2, 10000]")->capture_default_str();
+  sw->add_option("--measure", sf->measure, "kcr-max (K_CR^max) or area (area of the stable (B, K) set for "
+                 "0 <= B <= --area-b-max, K_hi = inf counted to the largest finite K of the sweep)")->capture_default_str();
+  sw->add_option("--area-b-max", sf->area_b_max, "upper B of the area measure [N m s/rad] (default: B_max without filter)");
+  sw->add_option("--hand", sf->hands, "the user's hand M,B,K (SI) kept in the loop while sweeping");
+  sw->add_option("-o,--output", sf->out, "CSV cutoff_hz,measure");
+  sw->callback([sf] {
+    if (!sf->out.empty()) io::CheckOutputFolder(sf->out);
+    const io::ModelFile mf = io::ReadModelJson(sf->model);
+    CheckDelay(sf->delay, "--delay");
+    const double T = ResolvePeriod(sf->period, mf);
+    const double f_max = std::isnan(sf->f_max) ? 0.25 / T : sf->f_max;
+    if (!(sf->f_min > 0.0 && f_max > sf->f_min && f_max < 0.5 / T)) {
+      throw InputError("--f-min/--f-max: need 0 < f-min < f-max < Nyquist (" + std::to_string(0.5 / T) + " Hz)");
+    }
+    if (sf->points < 2 || sf->points > 10000) throw InputError("--points must be in [2, 10000]");
+    if (sf->hands.size() > 1) throw InputError("filter-sweep takes one --hand");
+    stability::LoopOptions loop;
+    if (!sf->hands.empty()) loop.hand = stability::ParseHand(sf->hands[0]);
+    stability::CutoffSweepOptions o;
+    o.measure = stability::SweepMeasureFromString(sf->measure);
+    for (int i = 0; i < sf->points; ++i) {
+      o.cutoffs_hz.push_back(sf->f_min * std::pow(f_max / sf->f_min, double(i) / (sf->points - 1)));
+    }
+    if (o.measure == stability::SweepMeasure::kArea) {
+      const stability::ZWidth z0(mf.plant, T, sf->delay, loop);
+      const stability::DelaySummary s0 = z0.Summarize();
+      o.area_B_max = std::isnan(sf->area_b_max) ? s0.B_max : sf->area_b_max;
+      if (!(o.area_B_max > 0.0 && std::isfinite(o.area_B_max))) {
+        throw InputError("--area-b-max: give a finite B > 0 (the loop without filter has no finite B_max > 0)");
+      }
+      o.area_K_clip = 4.0 * std::max(s0.K_cr_max, s0.K_cr_at_zero_B);
+    }
+    const stability::CutoffSweepResult r = stability::SweepCutoff(mf.plant, T, sf->delay, loop, o);
+    if (!sf->out.empty()) {
+      std::string csv = "cutoff_hz,measure\n";
+      char line[80];
+      for (size_t i = 0; i < r.cutoffs_hz.size(); ++i) {
+        std::snprintf(line, sizeof line, "%.9g,%.12g\n", r.cutoffs_hz[i], r.measure[i]);
+        csv += line;
+      }
+      io::WriteTextAtomically(sf->out, csv);
+    }
+    if (r.best < 0) throw ComputationError("no cut-off gave a finite measure");
+    std::printf("measure %s (%s); delay %d, T = %g s, %zu cut-offs from %g to %g Hz\n", sf->measure.c_str(),
+                o.measure == stability::SweepMeasure::kKcrMax ? "K_CR^max [N m/rad]" : "area [N m/rad x N m s/rad]",
+                sf->delay, T, r.cutoffs_hz.size(), r.cutoffs_hz.front(), r.cutoffs_hz.back());
+    std::printf("best cut-off %.5g Hz: %.6g (lowest %.5g Hz: %.6g; highest %.5g Hz: %.6g)\n", r.cutoffs_hz[r.best],
+                r.measure[r.best], r.cutoffs_hz.front(), r.measure.front(), r.cutoffs_hz.back(), r.measure.back());
+  });
+
   // ---- relay
   struct RelayFlags {
     std::string model, trace;
