@@ -128,12 +128,13 @@ void AddStabilityCommands(CLI::App& app) {
     }
     const std::vector<double> grid = stability::MakeBGrid(bf->grid, largest, mf.plant.m / T,
                                                           static_cast<int>(bf->delays.size()));
-    // The delta method and Monte Carlo differentiate the paper's loop only.
-    const bool has_cov = !mf.log_covariance.empty() && plain;
-    if (!mf.log_covariance.empty() && !plain) {
-      std::fprintf(stderr, "note: the std columns are not computed with a velocity filter or a hand\n");
+    // The delta method and Monte Carlo for one loop (with its filter and hand).
+    const bool has_cov = !mf.log_covariance.empty() && loops.size() == 1;
+    if (!mf.log_covariance.empty() && !has_cov) {
+      std::fprintf(stderr, "note: the std columns are not computed with several hands\n");
     }
-    if (bf->monte_carlo > 0 && !plain) throw InputError("--monte-carlo works without --velocity-filter-* and --hand");
+    if (bf->monte_carlo > 0 && loops.size() > 1) throw InputError("--monte-carlo takes at most one --hand");
+    (void)plain;
     std::vector<io::BoundaryRow> rows;
     rows.reserve(grid.size() * zs.size());
     int disagree = 0;
@@ -153,9 +154,9 @@ void AddStabilityCommands(CLI::App& app) {
         rows.push_back(std::move(r));
       }
       if (has_cov) {
-        const std::vector<double> sd = stability::KcrStd(mf.plant, mf.log_covariance, T, bf->delays[i], pts);
+        const std::vector<double> sd = stability::KcrStd(mf.plant, mf.log_covariance, T, bf->delays[i], pts, {}, loops[0]);
         for (size_t k = 0; k < grid.size(); ++k) rows[i * grid.size() + k].K_cr_std = sd[k];
-        stds[i] = stability::SummaryStdDelta(mf.plant, mf.log_covariance, T, bf->delays[i], sums[i]);
+        stds[i] = stability::SummaryStdDelta(mf.plant, mf.log_covariance, T, bf->delays[i], sums[i], {}, loops[0]);
       }
     }
     io::WriteBoundaryCsv(bf->out, rows);
@@ -181,7 +182,7 @@ void AddStabilityCommands(CLI::App& app) {
       if (bf->monte_carlo > 0) {
         std::fprintf(stderr, "Monte Carlo, d = %d: %d samples...\n", bf->delays[i], bf->monte_carlo);
         const stability::MonteCarloResult mc = stability::SummaryMonteCarlo(
-            mf.plant, mf.log_covariance, T, bf->delays[i], bf->monte_carlo, bf->seed);
+            mf.plant, mf.log_covariance, T, bf->delays[i], bf->monte_carlo, bf->seed, loops[0]);
         e["monte_carlo"] = {{"samples", mc.samples}, {"seed", bf->seed},
                             {"std", io::SummaryToJson(stability::DelaySummary{}, &mc.std)["std"]},
                             {"mean", io::SummaryToJson(stability::DelaySummary{}, &mc.mean)["std"]}};

@@ -18,6 +18,7 @@
 
 #include "model/error.h"
 #include "stability/haptic_loop.h"
+#include "stability/uncertainty.h"
 #include "tests/brute_force.h"
 
 namespace zwidth::stability {
@@ -242,6 +243,44 @@ TEST(HapticLoop, IntersectionOfHandsIsStableForEveryHand) {
       if (!edge) EXPECT_EQ(in, every) << "B=" << B << " K=" << K;
     }
   }
+}
+
+TEST(HapticLoop, KcrStdWithFilterAndHandMatchesFiniteDifferencesOfKcr) {
+  // Implicit differentiation (stability/uncertainty.h) against K_CR(B)
+  // recomputed on perturbed plants: J Sigma J^T with a seeded diagonal covariance.
+  std::mt19937_64 rng(21);
+  int compared = 0;
+  for (int k = 0; k < 3; ++k) {
+    const Plant p = RandomDevice(rng, 1 + k);
+    LoopOptions l;
+    SetLowPassFilter(40.0 + 30.0 * k, 1e-3, &l);
+    if (k > 0) l.hand = HandOf(k, p);
+    const int d = 2 + 2 * k, np = NumLogParameters(p);
+    std::vector<double> cov(np * np, 0.0), var(np);
+    std::uniform_real_distribution<double> u(1e-5, 1e-3);
+    for (int i = 0; i < np; ++i) cov[i * np + i] = var[i] = u(rng);
+    const ZWidth z(p, 1e-3, d, l);
+    const DelaySummary s = z.Summarize();
+    std::vector<CriticalPoint> pts;
+    for (double f : {0.0, 0.3, 0.6}) pts.push_back(z.At(f * s.B_max_from_zero));
+    const std::vector<double> sd = KcrStd(p, cov, 1e-3, d, pts, {}, l);
+    for (size_t j = 0; j < pts.size(); ++j) {
+      if (!(pts[j].K_cr > 0 && std::isfinite(pts[j].K_cr))) continue;
+      double v = 0.0;
+      for (int i = 0; i < np; ++i) {
+        std::vector<double> dx(np, 0.0);
+        dx[i] = 1e-5;
+        const double kp = ZWidth(PerturbLog(p, dx), 1e-3, d, l).At(pts[j].B).K_cr;
+        dx[i] = -1e-5;
+        const double km = ZWidth(PerturbLog(p, dx), 1e-3, d, l).At(pts[j].B).K_cr;
+        const double g = (kp - km) / 2e-5;
+        v += g * g * var[i];
+      }
+      EXPECT_NEAR(sd[j], std::sqrt(v), 1e-4 * std::sqrt(v)) << "k=" << k << " B=" << pts[j].B;
+      ++compared;
+    }
+  }
+  EXPECT_GE(compared, 6);
 }
 
 // ---- Passivity
