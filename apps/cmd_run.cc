@@ -12,6 +12,7 @@
 
 #include "apps/common.h"
 #include "apps/fit_support.h"
+#include "apps/loop_flags.h"
 #include "io/atomic_file.h"
 #include "io/frf_file.h"
 #include "io/stability_files.h"
@@ -58,6 +59,7 @@ void AddRunCommand(CLI::App& app) {
     fit::FitOptions o;
     stability::BGridOptions grid;
     double report_filter_hz = 50.0;
+    LoopFlags loop;
   };
   auto f = std::make_shared<RunFlags>();
   CLI::App* cmd = app.add_subcommand("run", "estimate, fit, compare, Z-width boundary and an HTML report");
@@ -73,6 +75,7 @@ void AddRunCommand(CLI::App& app) {
   cmd->add_option("--report-filter-hz", f->report_filter_hz,
                   "the report's loop figure: region also with a first-order velocity low-pass at this cut-off [Hz]")
       ->capture_default_str();
+  AddLoopFlags(cmd, &f->loop);
   AddEstimateFlags(cmd, &f->est);
   cmd->callback([f] {
     ResolveDelayFlag(f->delay, &f->o);
@@ -99,6 +102,8 @@ void AddRunCommand(CLI::App& app) {
     const io::ModelFile model = FitToModelFile(frf, f->o, f->log, &fr);
     t_total += timer.Lap("fit");
     const double T = 1.0 / frf.sample_rate_hz;
+    if (f->loop.hands.size() > 1) throw InputError("run takes one --hand (boundary takes several)");
+    const stability::LoopOptions loop = ResolveLoops(f->loop, T)[0];
     // The model's Z-width per delay, computed once for the summary, the
     // comparison, the boundary rows and the figures.
     std::vector<stability::ZWidth> zs;
@@ -110,10 +115,10 @@ void AddRunCommand(CLI::App& app) {
     std::vector<stability::SummaryStd> stds(f->delays.size());
     for (size_t i = 0; i < f->delays.size(); ++i) {
       const int d = f->delays[i];
-      zs.emplace_back(model.plant, T, d);
+      zs.emplace_back(model.plant, T, d, loop);
       sums.push_back(zs.back().Summarize());
       if (std::isfinite(sums.back().B_max)) b_max = std::max(b_max, sums.back().B_max);
-      if (has_cov) stds[i] = stability::SummaryStdDelta(model.plant, model.log_covariance, T, d, sums.back());
+      if (has_cov) stds[i] = stability::SummaryStdDelta(model.plant, model.log_covariance, T, d, sums.back(), {}, loop);
       nlohmann::json e = io::SummaryToJson(sums.back(), has_cov ? &stds[i] : nullptr);
       e["delay_samples"] = d;
       summary["boundary"].push_back(e);
@@ -121,7 +126,7 @@ void AddRunCommand(CLI::App& app) {
     const std::vector<double> bgrid =
         stability::MakeBGrid(f->grid, b_max, model.plant.m / T, static_cast<int>(f->delays.size()));
     std::vector<stability::Passivity> passivity;  // Colgate and Schenkel, the paper's loop
-    for (const auto& z : zs) passivity.emplace_back(model.plant.b, T, z.total_delay(), stability::LoopOptions{});
+    for (const auto& z : zs) passivity.emplace_back(model.plant.b, T, z.total_delay(), loop);
     const int nB = static_cast<int>(bgrid.size());
     std::vector<io::BoundaryRow> rows;
     rows.reserve(zs.size() * bgrid.size());
@@ -135,7 +140,7 @@ void AddRunCommand(CLI::App& app) {
         if (!rows.back().point.AgreesWithMargin()) ++disagree;
       }
       if (has_cov) {
-        const std::vector<double> sd = stability::KcrStd(model.plant, model.log_covariance, T, f->delays[i], pts);
+        const std::vector<double> sd = stability::KcrStd(model.plant, model.log_covariance, T, f->delays[i], pts, {}, loop);
         for (int k = 0; k < nB; ++k) rows[i * nB + k].K_cr_std = sd[k];
       }
     }
@@ -144,7 +149,8 @@ void AddRunCommand(CLI::App& app) {
     summary["margin_disagreements"] = disagree;
     t_total += timer.Lap("boundary");
     std::string cmp_text;
-    summary["comparison"] = CompareModels(model, ref, f->delays, T, &cmp_text, &sums);
+    summary["comparison"] = CompareModels(model, ref, f->delays, T, &cmp_text,
+                                          IsPlainLoop(loop) ? &sums : nullptr);  // the paper's loop for both
     t_total += timer.Lap("compare (reference Z-width)");
     Plant rigid = model.plant;
     rigid.modes.clear();
@@ -231,25 +237,26 @@ void AddRunCommand(CLI::App& app) {
       // 1.05 x the larger B_max.
       double k_clip_loop = k_clip;  // K_hi = +inf drawn at k_clip
       {
-        stability::LoopOptions lf;
+        stability::LoopOptions lf, lr;  // the loop's hand, with the report's filter / no filter
+        lf.hand = lr.hand = loop.hand;
         stability::SetLowPassFilter(f->report_filter_hz, T, &lf);
         std::ostringstream o, q;
         o.precision(10);
         q.precision(10);
         for (size_t i = 0; i < f->delays.size(); ++i) {
-          const stability::ZWidth zf(model.plant, T, f->delays[i], lf);
-          const stability::Passivity pf(model.plant.b, T, zf.total_delay(), lf);
-          const double bm = std::max(sums[i].B_max, zf.Summarize().B_max);
+          const stability::ZWidth zf(model.plant, T, f->delays[i], lf), zr(model.plant, T, f->delays[i], lr);
+          const stability::Passivity pf(model.plant.b, T, zf.total_delay(), lf), pr(model.plant.b, T, zr.total_delay(), lr);
+          const double bm = std::max(zr.Summarize().B_max, zf.Summarize().B_max);
           const double top = std::isfinite(bm) && bm > 0 ? 1.05 * bm : bgrid.back();
           for (int k = 0; k < 300; ++k) {
             const double B = top * k / 299.0;
             for (int which = 0; which < 2; ++which) {
-              for (const auto& iv : (which ? zf : zs[i]).StableIntervals(B)) {
+              for (const auto& iv : (which ? zf : zr).StableIntervals(B)) {
                 o << B << " " << which << " " << iv.K_lo << " " << std::min(iv.K_hi, k_clip) << "\n";
                 if (std::isfinite(iv.K_hi)) k_clip_loop = std::max(k_clip_loop, 1.05 * iv.K_hi);
               }
             }
-            q << B << " " << passivity[i].At(B).K_hi << " " << pf.At(B).K_hi << "\n";
+            q << B << " " << pr.At(B).K_hi << " " << pf.At(B).K_hi << "\n";
           }
           o << "nan nan nan nan\n\n\n";
           q << "\n\n";
