@@ -13,6 +13,7 @@
 
 #include "apps/common.h"
 #include "apps/fit_support.h"
+#include "apps/loop_flags.h"
 #include "io/atomic_file.h"
 #include "io/frf_file.h"
 #include "io/reference_models.h"
@@ -20,6 +21,7 @@
 #include "io/stability_files.h"
 #include "model/error.h"
 #include "model/state_space.h"
+#include "stability/haptic_loop.h"
 #include "stability/uncertainty.h"
 #include "stability/zwidth.h"
 
@@ -46,6 +48,8 @@ void AddRunCommand(CLI::App& app) {
     FitFlags fit;
     stability::BGridOptions grid;
     bool force = false;
+    double report_filter_hz = 50.0;
+    LoopFlags loop;
   };
   auto f = std::make_shared<RunFlags>();
   CLI::App* cmd = app.add_subcommand("run", "estimate, fit, compare, Z-width boundary and an HTML report");
@@ -59,6 +63,10 @@ void AddRunCommand(CLI::App& app) {
   cmd->add_option("--b-step", f->grid.b_step, "B step of the boundary [N m s/rad] (wins over --b-points)");
   cmd->add_option("--b-points", f->grid.b_points, "B values of the boundary, 0 to 1.05 x the largest stable B")
       ->capture_default_str();
+  cmd->add_option("--report-filter-hz", f->report_filter_hz,
+                  "the report's loop figure: region also with a first-order velocity low-pass at this cut-off [Hz]")
+      ->capture_default_str();
+  AddLoopFlags(cmd, &f->loop);
   AddEstimateFlags(cmd, &f->est);
   AddUnitsFlag(cmd, &f->units);
   cmd->callback([f] {
@@ -89,6 +97,8 @@ void AddRunCommand(CLI::App& app) {
     frf.used_by_fit = fr.band.used;
     t_total += timer.Lap("fit");
     const double T = 1.0 / frf.sample_rate_hz;
+    if (f->loop.hands.size() > 1) throw InputError("run takes one --hand (boundary takes several)");
+    const stability::LoopOptions loop = ResolveLoops(f->loop, T)[0];
     // The model's Z-width per delay, computed once for the summary, the
     // comparison, the boundary rows and the figures.
     std::vector<stability::ZWidth> zs;
@@ -100,16 +110,18 @@ void AddRunCommand(CLI::App& app) {
     std::vector<stability::SummaryStd> stds(f->delays.size());
     for (size_t i = 0; i < f->delays.size(); ++i) {
       const int d = f->delays[i];
-      zs.emplace_back(model.plant, T, d);
+      zs.emplace_back(model.plant, T, d, loop);
       sums.push_back(zs.back().Summarize());
       if (std::isfinite(sums.back().B_max)) b_max = std::max(b_max, sums.back().B_max);
-      if (has_cov) stds[i] = stability::SummaryStdDelta(model.plant, model.log_covariance, T, d, sums.back());
+      if (has_cov) stds[i] = stability::SummaryStdDelta(model.plant, model.log_covariance, T, d, sums.back(), {}, loop);
       nlohmann::json e = io::SummaryToJson(sums.back(), has_cov ? &stds[i] : nullptr);
       e["delay_samples"] = d;
       summary["boundary"].push_back(e);
     }
     const std::vector<double> bgrid =
         stability::MakeBGrid(f->grid, b_max, model.plant.m / T, static_cast<int>(f->delays.size()));
+    std::vector<stability::Passivity> passivity;  // Colgate and Schenkel, the paper's loop
+    for (const auto& z : zs) passivity.emplace_back(model.plant.b, T, z.total_delay(), loop);
     const int nB = static_cast<int>(bgrid.size());
     std::vector<io::BoundaryRow> rows;
     rows.reserve(zs.size() * bgrid.size());
@@ -118,11 +130,12 @@ void AddRunCommand(CLI::App& app) {
       std::vector<stability::CriticalPoint> pts;
       for (double B : bgrid) {
         rows.push_back({f->delays[i], zs[i].At(B), zs[i].StableIntervals(B)});
+        rows.back().K_passive = passivity[i].At(B).K_hi;
         pts.push_back(rows.back().point);
         if (!rows.back().point.AgreesWithMargin()) ++disagree;
       }
       if (has_cov) {
-        const std::vector<double> sd = stability::KcrStd(model.plant, model.log_covariance, T, f->delays[i], pts);
+        const std::vector<double> sd = stability::KcrStd(model.plant, model.log_covariance, T, f->delays[i], pts, {}, loop);
         for (int k = 0; k < nB; ++k) rows[i * nB + k].K_cr_std = sd[k];
       }
     }
@@ -131,8 +144,8 @@ void AddRunCommand(CLI::App& app) {
     summary["margin_disagreements"] = disagree;
     t_total += timer.Lap("boundary");
     std::string cmp_text;
-    if (have_ref) {
-      summary["comparison"] = CompareModels(model, ref, f->delays, T, &cmp_text, &sums, linear);
+    if (have_ref) {  // the paper's loop for both
+      summary["comparison"] = CompareModels(model, ref, f->delays, T, &cmp_text, IsPlainLoop(loop) ? &sums : nullptr, linear);
       t_total += timer.Lap("compare (reference Z-width)");
     }
     Plant rigid = model.plant;
@@ -227,6 +240,38 @@ void AddRunCommand(CLI::App& app) {
         }
         io::WriteTextAtomically((fig / "region_model.dat").string(), o.str());
       }
+      // The loop figure: the region without and with the report's velocity
+      // filter, and the passivity boundary K_P(B) of each, on a grid to
+      // 1.05 x the larger B_max.
+      double k_clip_loop = k_clip;  // K_hi = +inf drawn at k_clip
+      {
+        stability::LoopOptions lf, lr;  // the loop's hand, with the report's filter / no filter
+        lf.hand = lr.hand = loop.hand;
+        stability::SetLowPassFilter(f->report_filter_hz, T, &lf);
+        std::ostringstream o, q;
+        o.precision(10);
+        q.precision(10);
+        for (size_t i = 0; i < f->delays.size(); ++i) {
+          const stability::ZWidth zf(model.plant, T, f->delays[i], lf), zr(model.plant, T, f->delays[i], lr);
+          const stability::Passivity pf(model.plant.b, T, zf.total_delay(), lf), pr(model.plant.b, T, zr.total_delay(), lr);
+          const double bm = std::max(zr.Summarize().B_max, zf.Summarize().B_max);
+          const double top = std::isfinite(bm) && bm > 0 ? 1.05 * bm : bgrid.back();
+          for (int k = 0; k < 300; ++k) {
+            const double B = top * k / 299.0;
+            for (int which = 0; which < 2; ++which) {
+              for (const auto& iv : (which ? zf : zr).StableIntervals(B)) {
+                o << B << " " << which << " " << iv.K_lo << " " << std::min(iv.K_hi, k_clip) << "\n";
+                if (std::isfinite(iv.K_hi)) k_clip_loop = std::max(k_clip_loop, 1.05 * iv.K_hi);
+              }
+            }
+            q << B << " " << pr.At(B).K_hi << " " << pf.At(B).K_hi << "\n";
+          }
+          o << "nan nan nan nan\n\n\n";
+          q << "\n\n";
+        }
+        io::WriteTextAtomically((fig / "loop_region.dat").string(), o.str());
+        io::WriteTextAtomically((fig / "loop_passive.dat").string(), q.str());
+      }
       // Table II (the paper's relay points), drawn only beside Table I.
       if (table1) {
         std::ostringstream t2;
@@ -272,6 +317,16 @@ void AddRunCommand(CLI::App& app) {
            << "  plot 'region_model.dat' index i-1 u 1:2:(0):($3-$2) w vectors nohead lc rgb '#9ecae1' t 'stable', "
            << "'kcr_model.dat' index i-1 u 1:($2-2*$4):($2+2*$4) w filledcurves fs transparent solid 0.35 "
            << "lc rgb '#d62728' t 'K_{CR} +- 2 sigma', '' index i-1 u 1:2 w l lw 2 lc rgb '#08306b' t 'K_{CR}(B)'\n"
+           << "}\nunset multiplot\nset yrange [*:*]\nunset title\n";
+        gp << "set output 'loop." << ext << "'\nset multiplot layout " << f->delays.size()
+           << ",1 title 'Stable region without and with a " << f->report_filter_hz
+           << " Hz velocity low-pass; passivity boundary K_P(B) (Colgate-Schenkel)'\n"
+           << "set xlabel 'B [N m s/rad]'\nset ylabel 'K [N m/rad]'\nset yrange [0:" << k_clip_loop << "]\n"
+           << "do for [i=1:words(delays)] {\n"
+           << "  set title 'loop delay '.word(delays,i).' samples'\n"
+           << "  plot 'loop_region.dat' index i-1 u 1:($2==1?$3:1/0):(0):($4-$3) w vectors nohead lc rgb '#fdae6b' t 'stable, filtered', "
+           << "'' index i-1 u 1:($2==0?$3:1/0):(0):($4-$3) w vectors nohead lc rgb '#6baed6' t 'stable, raw difference', "
+           << "'loop_passive.dat' index i-1 u 1:2 w l lw 2 lc rgb 'black' t 'K_P, raw', '' index i-1 u 1:3 w l lw 2 dt 2 lc rgb '#7f2704' t 'K_P, filtered'\n"
            << "}\nunset multiplot\nset yrange [*:*]\nunset title\n";
         gp << "set output 'rigid." << ext << "'\nset title 'With the vibration modes and without (rigid body only) - Fig. 7'\n"
            << "set xlabel 'B [" << (linear ? "N s/m" : "N m s/rad") << "]'\nset ylabel 'K_{CR} [" << (linear ? "N/m" : "N m/rad") << "]'\n"
@@ -340,8 +395,17 @@ void AddRunCommand(CLI::App& app) {
         << "K interval per B.</p>\n";
     }
     if (have_figures) {
-      for (const char* name : {"bode", "coherence", "kcr", "region", "rigid"}) {
+      for (const char* name : {"bode", "coherence", "kcr", "region", "loop", "rigid"}) {
         h << "<p><img src='figures/" << name << ".svg' alt='" << name << "'></p>\n";
+        if (std::string(name) == "loop") {
+          h << "<p>Blue: the (B, K) the device renders stably with the raw backward difference; orange: with a "
+            << f->report_filter_hz << " Hz first-order velocity low-pass. Lines: the passivity boundary K_P(B) "
+            << "(Colgate and Schenkel, with the model's damping b = " << model.plant.b << "): below it the wall stays "
+            << "passive, so it stays stable against any passive hand, which the stable region alone does not promise "
+            << "(it assumes nobody holds the device). Passivity is bounded by the physical damping b (for the rigid "
+            << "body without delay or filter: b > K T/2 + |B|), so on a lightly damped device its region hugs the "
+            << "origin: rendering beyond it relies on the stable region and on the hand being no worse than assumed.</p>\n";
+        }
       }
     } else {
       h << "<p>Figures need gnuplot (Debian package <code>gnuplot-nox</code>): install it and run "

@@ -6,6 +6,8 @@
 #include <iostream>
 
 #include "apps/common.h"
+#include "apps/loop_flags.h"
+#include "stability/haptic_loop.h"
 #include "io/atomic_file.h"
 #include "io/model_json.h"
 #include "io/stability_files.h"
@@ -30,6 +32,36 @@ double ResolvePeriod(double flag, const io::ModelFile& mf) {
 
 namespace {
 
+// The largest B >= 0 with a passive K >= 0 (bisection on "the passive set is
+// empty", which grows with B for the positive part of the condition).
+double PassiveBMax(const stability::Passivity& pa, double b) {
+  if (pa.At(0.0).passive_set_empty) return 0.0;
+  double lo = 0.0, hi = b;
+  for (int i = 0; i < 60 && !pa.At(hi).passive_set_empty; ++i) { lo = hi; hi *= 2.0; }
+  if (!pa.At(hi).passive_set_empty) return std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 60; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (pa.At(mid).passive_set_empty ? hi : lo) = mid;
+  }
+  return lo;
+}
+
+nlohmann::json PassivitySummaryJson(const stability::Passivity& pa, double b) {
+  return {{"K_P_at_zero_B", io::NumberOrNull(pa.At(0.0).K_hi)}, {"B_P_max", io::NumberOrNull(PassiveBMax(pa, b))},
+          {"physical_damping_b", b},
+          {"meaning", "Colgate and Schenkel (1997): K < K_P(B) keeps the sampled wall passive; B_P_max: the largest "
+                      "B with a passive K"}};
+}
+
+nlohmann::json LoopJson(const std::vector<stability::LoopOptions>& loops) {
+  nlohmann::json j = {{"filter_b", loops[0].filter_b}, {"filter_a", loops[0].filter_a},
+                      {"hands", nlohmann::json::array()}};
+  for (const auto& l : loops) {
+    if (!l.hand.IsNone()) j["hands"].push_back({{"M", l.hand.M}, {"B", l.hand.B}, {"K", l.hand.K}});
+  }
+  return j;
+}
+
 void CheckDelay(int d, const char* flag) {
   if (d < 0) throw InputError(std::string(flag) + " = " + std::to_string(d) + ": delays must be >= 0 samples");
 }
@@ -45,6 +77,7 @@ void AddStabilityCommands(CLI::App& app) {
     stability::BGridOptions grid;
     int monte_carlo = 0;
     std::uint64_t seed = 1;
+    LoopFlags loop;
   };
   auto bf = std::make_shared<BoundaryFlags>();
   CLI::App* b = app.add_subcommand("boundary", "exact Z-width: stable K intervals per B, K_CR(B), summary, per delay");
@@ -60,6 +93,7 @@ void AddStabilityCommands(CLI::App& app) {
   b->add_option("--monte-carlo", bf->monte_carlo, "also sample the parameter covariance N times and report the "
                 "sample std beside the delta method's (0 = off)")->capture_default_str();
   b->add_option("--seed", bf->seed, "seed of --monte-carlo")->capture_default_str();
+  AddLoopFlags(b, &bf->loop);
   b->callback([bf] {
     io::CheckOutputFolder(bf->out, {bf->model});
     if (!bf->summary.empty()) io::CheckOutputFolder(bf->summary, {bf->model});
@@ -73,17 +107,34 @@ void AddStabilityCommands(CLI::App& app) {
     if (bf->monte_carlo > 0 && mf.log_covariance.empty()) {
       throw InputError("--monte-carlo needs a model with a \"covariance\" (a model written by zwidth fit)");
     }
-    std::vector<stability::ZWidth> zs;
+    const std::vector<stability::LoopOptions> loops = ResolveLoops(bf->loop, T);
+    const bool plain = loops.size() == 1 && IsPlainLoop(loops[0]);
+    std::vector<stability::ZWidth> zs;  // the first hand's loop per delay
+    std::vector<std::vector<stability::ZWidth>> zh(bf->delays.size());  // [delay][hand]
+    std::vector<std::vector<stability::DelaySummary>> hsums(bf->delays.size());
     std::vector<stability::DelaySummary> sums;
+    std::vector<stability::Passivity> pas;
     double largest = 0.0;
-    for (int d : bf->delays) {
-      zs.emplace_back(mf.plant, T, d);
-      sums.push_back(zs.back().Summarize());
-      if (std::isfinite(sums.back().B_max)) largest = std::max(largest, sums.back().B_max);
+    for (size_t i = 0; i < bf->delays.size(); ++i) {
+      const int d = bf->delays[i];
+      for (const stability::LoopOptions& l : loops) {
+        zh[i].emplace_back(mf.plant, T, d, l);
+        hsums[i].push_back(zh[i].back().Summarize());
+        if (std::isfinite(hsums[i].back().B_max)) largest = std::max(largest, hsums[i].back().B_max);
+      }
+      zs.push_back(zh[i][0]);
+      sums.push_back(hsums[i][0]);
+      pas.emplace_back(mf.plant.b, T, zs.back().total_delay(), loops[0]);
     }
     const std::vector<double> grid = stability::MakeBGrid(bf->grid, largest, mf.plant.m / T,
                                                           static_cast<int>(bf->delays.size()));
-    const bool has_cov = !mf.log_covariance.empty();
+    // The delta method and Monte Carlo for one loop (with its filter and hand).
+    const bool has_cov = !mf.log_covariance.empty() && loops.size() == 1;
+    if (!mf.log_covariance.empty() && !has_cov) {
+      std::fprintf(stderr, "note: the std columns are not computed with several hands\n");
+    }
+    if (bf->monte_carlo > 0 && loops.size() > 1) throw InputError("--monte-carlo takes at most one --hand");
+    (void)plain;
     std::vector<io::BoundaryRow> rows;
     rows.reserve(grid.size() * zs.size());
     int disagree = 0;
@@ -92,14 +143,20 @@ void AddStabilityCommands(CLI::App& app) {
       std::vector<stability::CriticalPoint> pts;
       for (double B : grid) {
         io::BoundaryRow r{bf->delays[i], zs[i].At(B), zs[i].StableIntervals(B)};
+        for (size_t h = 1; h < zh[i].size(); ++h) {  // the region stable for every hand
+          r.intervals = stability::IntersectIntervals(r.intervals, zh[i][h].StableIntervals(B));
+          const stability::CriticalPoint c = zh[i][h].At(B);
+          if (c.K_cr < r.point.K_cr) r.point = c;
+        }
+        r.K_passive = pas[i].At(B).K_hi;
         if (!r.point.AgreesWithMargin()) ++disagree;
         pts.push_back(r.point);
         rows.push_back(std::move(r));
       }
       if (has_cov) {
-        const std::vector<double> sd = stability::KcrStd(mf.plant, mf.log_covariance, T, bf->delays[i], pts);
+        const std::vector<double> sd = stability::KcrStd(mf.plant, mf.log_covariance, T, bf->delays[i], pts, {}, loops[0]);
         for (size_t k = 0; k < grid.size(); ++k) rows[i * grid.size() + k].K_cr_std = sd[k];
-        stds[i] = stability::SummaryStdDelta(mf.plant, mf.log_covariance, T, bf->delays[i], sums[i]);
+        stds[i] = stability::SummaryStdDelta(mf.plant, mf.log_covariance, T, bf->delays[i], sums[i], {}, loops[0]);
       }
     }
     io::WriteBoundaryCsv(bf->out, rows);
@@ -113,10 +170,19 @@ void AddStabilityCommands(CLI::App& app) {
       nlohmann::json e = io::SummaryToJson(sums[i], has_cov ? &stds[i] : nullptr);
       e["delay_samples"] = bf->delays[i];
       e["total_delay_samples"] = sums[i].delay_samples;
+      e["passivity"] = PassivitySummaryJson(pas[i], mf.plant.b);
+      if (loops.size() > 1) {
+        e["per_hand"] = nlohmann::json::array();
+        for (size_t h = 0; h < loops.size(); ++h) {
+          nlohmann::json eh = io::SummaryToJson(hsums[i][h]);
+          eh["hand"] = {{"M", loops[h].hand.M}, {"B", loops[h].hand.B}, {"K", loops[h].hand.K}};
+          e["per_hand"].push_back(eh);
+        }
+      }
       if (bf->monte_carlo > 0) {
         std::fprintf(stderr, "Monte Carlo, d = %d: %d samples...\n", bf->delays[i], bf->monte_carlo);
         const stability::MonteCarloResult mc = stability::SummaryMonteCarlo(
-            mf.plant, mf.log_covariance, T, bf->delays[i], bf->monte_carlo, bf->seed);
+            mf.plant, mf.log_covariance, T, bf->delays[i], bf->monte_carlo, bf->seed, loops[0]);
         e["monte_carlo"] = {{"samples", mc.samples}, {"seed", bf->seed},
                             {"std", io::SummaryToJson(stability::DelaySummary{}, &mc.std)["std"]},
                             {"mean", io::SummaryToJson(stability::DelaySummary{}, &mc.mean)["std"]}};
@@ -128,6 +194,7 @@ void AddStabilityCommands(CLI::App& app) {
       js["delays"].push_back(e);
     }
     js["margin_disagreements"] = disagree;
+    js["loop"] = LoopJson(loops);
     if (!bf->summary.empty()) io::WriteTextAtomically(bf->summary, js.dump(2) + "\n");
     std::printf("%-6s %12s %10s %10s %12s %10s %10s %12s %12s\n", "delay", "K_cr(B=0)", "f(B=0)", "B_t",
                 "K_cr^max", "f_before", "f_after", "B_max_0", "B_max");
@@ -145,9 +212,94 @@ void AddStabilityCommands(CLI::App& app) {
       }
     }
     std::printf("B_max_0: where the interval from K = 0+ closes; B_max: the largest B with some stable K > 0\n");
+    if (loops.size() > 1) {
+      for (size_t i = 0; i < sums.size(); ++i) {
+        for (size_t h = 0; h < loops.size(); ++h) {
+          const auto& s = hsums[i][h];
+          std::printf("  d = %d, hand M %g B %g K %g: K_cr(0) %.6g, K_cr^max %.6g, B_max %.6g\n", bf->delays[i],
+                      loops[h].hand.M, loops[h].hand.B, loops[h].hand.K, s.K_cr_at_zero_B, s.K_cr_max, s.B_max);
+        }
+      }
+      std::printf("the boundary CSV holds the region stable for every hand (intersection of the intervals)\n");
+    }
+    for (size_t i = 0; i < sums.size(); ++i) {
+      const stability::PassiveInterval p0 = pas[i].At(0.0);
+      std::printf("d = %d passivity (Colgate-Schenkel, b = %g): K_P(0) = %.6g; passive up to B = %.6g\n",
+                  bf->delays[i], mf.plant.b, p0.K_hi, PassiveBMax(pas[i], mf.plant.b));
+    }
     std::printf("%d of %zu B values: the margin() reading of eq. (4) differs from the exact K_CR "
                 "(mostly B past B_max_0, where margin() stays positive but K -> 0+ is unstable)\n",
                 disagree, grid.size() * zs.size());
+  });
+
+  // ---- filter-sweep
+  struct SweepFlags {
+    std::string model, out;
+    int delay = -1;
+    double period = kNotGiven;
+    double f_min = 5.0, f_max = kNotGiven;
+    int points = 40;
+    std::string measure = "kcr-max";
+    double area_b_max = kNotGiven;
+    std::vector<std::string> hands;
+  };
+  auto sf = std::make_shared<SweepFlags>();
+  CLI::App* sw = app.add_subcommand("filter-sweep", "sweep the cut-off of a first-order velocity low-pass and report "
+                                    "the one that maximises the Z-width by a stated measure");
+  sw->add_option("model", sf->model, "model JSON")->required();
+  sw->add_option("--delay", sf->delay, "loop delay [samples]")->required();
+  sw->add_option("--period", sf->period, "sample period T [s] (default: the model's, else 0.001)");
+  sw->add_option("--f-min", sf->f_min, "lowest cut-off [Hz]")->capture_default_str();
+  sw->add_option("--f-max", sf->f_max, "highest cut-off [Hz] (default: Nyquist/2)");
+  sw->add_option("--points", sf->points, "cut-offs, log-spaced, in [2, 10000]")->capture_default_str();
+  sw->add_option("--measure", sf->measure, "kcr-max (K_CR^max) or area (area of the stable (B, K) set for "
+                 "0 <= B <= --area-b-max, K_hi = inf counted to the largest finite K of the sweep)")->capture_default_str();
+  sw->add_option("--area-b-max", sf->area_b_max, "upper B of the area measure [N m s/rad] (default: B_max without filter)");
+  sw->add_option("--hand", sf->hands, "the user's hand M,B,K (SI) kept in the loop while sweeping");
+  sw->add_option("-o,--output", sf->out, "CSV cutoff_hz,measure");
+  sw->callback([sf] {
+    if (!sf->out.empty()) io::CheckOutputFolder(sf->out);
+    const io::ModelFile mf = io::ReadModelJson(sf->model);
+    CheckDelay(sf->delay, "--delay");
+    const double T = ResolvePeriod(sf->period, mf);
+    const double f_max = std::isnan(sf->f_max) ? 0.25 / T : sf->f_max;
+    if (!(sf->f_min > 0.0 && f_max > sf->f_min && f_max < 0.5 / T)) {
+      throw InputError("--f-min/--f-max: need 0 < f-min < f-max < Nyquist (" + std::to_string(0.5 / T) + " Hz)");
+    }
+    if (sf->points < 2 || sf->points > 10000) throw InputError("--points must be in [2, 10000]");
+    if (sf->hands.size() > 1) throw InputError("filter-sweep takes one --hand");
+    stability::LoopOptions loop;
+    if (!sf->hands.empty()) loop.hand = stability::ParseHand(sf->hands[0]);
+    stability::CutoffSweepOptions o;
+    o.measure = stability::SweepMeasureFromString(sf->measure);
+    for (int i = 0; i < sf->points; ++i) {
+      o.cutoffs_hz.push_back(sf->f_min * std::pow(f_max / sf->f_min, double(i) / (sf->points - 1)));
+    }
+    if (o.measure == stability::SweepMeasure::kArea) {
+      const stability::ZWidth z0(mf.plant, T, sf->delay, loop);
+      const stability::DelaySummary s0 = z0.Summarize();
+      o.area_B_max = std::isnan(sf->area_b_max) ? s0.B_max : sf->area_b_max;
+      if (!(o.area_B_max > 0.0 && std::isfinite(o.area_B_max))) {
+        throw InputError("--area-b-max: give a finite B > 0 (the loop without filter has no finite B_max > 0)");
+      }
+      o.area_K_clip = 4.0 * std::max(s0.K_cr_max, s0.K_cr_at_zero_B);
+    }
+    const stability::CutoffSweepResult r = stability::SweepCutoff(mf.plant, T, sf->delay, loop, o);
+    if (!sf->out.empty()) {
+      std::string csv = "cutoff_hz,measure\n";
+      char line[80];
+      for (size_t i = 0; i < r.cutoffs_hz.size(); ++i) {
+        std::snprintf(line, sizeof line, "%.9g,%.12g\n", r.cutoffs_hz[i], r.measure[i]);
+        csv += line;
+      }
+      io::WriteTextAtomically(sf->out, csv);
+    }
+    if (r.best < 0) throw ComputationError("no cut-off gave a finite measure");
+    std::printf("measure %s (%s); delay %d, T = %g s, %zu cut-offs from %g to %g Hz\n", sf->measure.c_str(),
+                o.measure == stability::SweepMeasure::kKcrMax ? "K_CR^max [N m/rad]" : "area [N m/rad x N m s/rad]",
+                sf->delay, T, r.cutoffs_hz.size(), r.cutoffs_hz.front(), r.cutoffs_hz.back());
+    std::printf("best cut-off %.5g Hz: %.6g (lowest %.5g Hz: %.6g; highest %.5g Hz: %.6g)\n", r.cutoffs_hz[r.best],
+                r.measure[r.best], r.cutoffs_hz.front(), r.measure.front(), r.cutoffs_hz.back(), r.measure.back());
   });
 
   // ---- relay
@@ -236,6 +388,7 @@ void AddStabilityCommands(CLI::App& app) {
     int delay = -1;
     double period = kNotGiven;
     bool json = false;
+    LoopFlags loop;
   };
   auto cf = std::make_shared<CheckFlags>();
   CLI::App* c = app.add_subcommand("check", "is each object of a haptic scene stable on this device?");
@@ -244,20 +397,28 @@ void AddStabilityCommands(CLI::App& app) {
   c->add_option("--delay", cf->delay, "loop delay [samples]")->required();
   c->add_option("--period", cf->period, "sample period T [s] (default: the model's, else 0.001)");
   c->add_flag("--json", cf->json, "print only JSON on standard output");
+  AddLoopFlags(c, &cf->loop);
   c->callback([cf] {
     const io::ModelFile mf = io::ReadModelJson(cf->model);
     CheckDelay(cf->delay, "--delay");
     const double T = ResolvePeriod(cf->period, mf);
     const std::vector<io::SceneObject> objs = io::ReadScene(cf->scene);
-    const stability::ZWidth z(mf.plant, T, cf->delay);
+    std::vector<stability::ZWidth> zs;  // one per hand: stable means stable for every hand
+    for (const stability::LoopOptions& l : ResolveLoops(cf->loop, T)) zs.emplace_back(mf.plant, T, cf->delay, l);
     nlohmann::json out = {{"delay_samples", cf->delay}, {"period_s", T}, {"objects", nlohmann::json::array()}};
     int unstable = 0;
     for (const auto& o : objs) {
-      const io::ObjectVerdict v = io::CheckObject(z, o);
+      stability::CriticalPoint cp = zs[0].At(o.B);
+      std::vector<stability::KInterval> iv = zs[0].StableIntervals(o.B);
+      for (size_t h = 1; h < zs.size(); ++h) {  // several hands: the region stable for all
+        iv = stability::IntersectIntervals(iv, zs[h].StableIntervals(o.B));
+        const stability::CriticalPoint c = zs[h].At(o.B);
+        if (c.K_cr < cp.K_cr) cp = c;
+      }
+      const io::ObjectVerdict v = io::Classify(o, cp, std::move(iv));
       const bool stable = v.stable;
       const int inside = v.interval, nearest = v.nearest_interval;
-      const std::vector<stability::KInterval>& iv = v.intervals;
-      const stability::CriticalPoint& cp = v.critical;
+      const std::vector<stability::KInterval>& iv_ = v.intervals;
       if (!stable) ++unstable;
       out["objects"].push_back(v.ToJson(o));
       if (!cf->json) {
@@ -265,7 +426,7 @@ void AddStabilityCommands(CLI::App& app) {
         char buf[160];
         const int k = stable ? inside : nearest;
         if (k >= 0) {
-          std::snprintf(buf, sizeof buf, "%s (%.6g, %.6g)", stable ? "in" : "nearest stable K", iv[k].K_lo, iv[k].K_hi);
+          std::snprintf(buf, sizeof buf, "%s (%.6g, %.6g)", stable ? "in" : "nearest stable K", iv_[k].K_lo, iv_[k].K_hi);
           where = buf;
         } else {
           where = "no K > 0 is stable at this B";

@@ -12,7 +12,10 @@
 #include "model/plant.h"
 #include "model/simulate.h"
 #include "model/state_space.h"
+#include "stability/haptic_loop.h"
 #include "stability/relay.h"
+#include "tests/brute_force.h"
+#include <unsupported/Eigen/MatrixFunctions>
 #include "stability/uncertainty.h"
 #include "stability/zwidth.h"
 
@@ -188,6 +191,83 @@ void BM_StableIntervals(benchmark::State& state) {
   state.counters["interval_count_mismatches"] = mismatched;
 }
 BENCHMARK(BM_StableIntervals)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+// Issue 16: the stable intervals on a 1000-point B grid (0 to 1.05 B_max) of
+// Table I at d = 4 with a 50 Hz velocity low-pass and a hand (M = 0.3 m,
+// B = b, K giving 2 Hz), construction included; error: every finite interval
+// end of 100 of the B values against a bisection (60 steps) of the brute
+// force's eigenvalues (tests/brute_force.h, the closed loop as one matrix).
+void BM_LoopBoundary(benchmark::State& state) {
+  const Plant p = PhantomTable1();
+  stability::LoopOptions l;
+  stability::SetLowPassFilter(50.0, 1e-3, &l);
+  const double w = 2 * std::numbers::pi * 2.0;
+  l.hand = {0.3 * p.m, p.b, w * w * 1.3 * p.m};
+  const int d = 4;
+  const double b_max = stability::ZWidth(p, 1e-3, d, l).Summarize().B_max;
+  std::vector<double> grid(1000);
+  for (int i = 0; i < 1000; ++i) grid[i] = 1.05 * b_max * i / 999.0;
+  for (auto _ : state) {
+    const stability::ZWidth z(p, 1e-3, d, l);
+    for (double B : grid) benchmark::DoNotOptimize(z.StableIntervals(B).size());
+  }
+  const StateSpace c = stability::ContinuousStateSpaceWithHand(p, l.hand);
+  const int n = static_cast<int>(c.A.rows());
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n + 1, n + 1);
+  M.topLeftCorner(n, n) = c.A * 1e-3;
+  M.topRightCorner(n, 1) = c.B * 1e-3;
+  const Eigen::MatrixXd E = M.exp();
+  const stability::LoopBruteForce bf(E.topLeftCorner(n, n), E.topRightCorner(n, 1), c.C, l.filter_b, l.filter_a,
+                                     d + p.delay_samples, 1e-3);
+  const stability::ZWidth z(p, 1e-3, d, l);
+  double err = 0;
+  int ends = 0;
+  for (int i = 0; i < 1000; i += 10) {
+    for (const auto& iv : z.StableIntervals(grid[i])) {
+      for (double k : {iv.K_lo, iv.K_hi}) {
+        if (!(k > 0 && std::isfinite(k))) continue;
+        double lo = 0.9 * k, hi = 1.1 * k;
+        const bool s_lo = bf.MaxRoot(lo, grid[i]) < 1;
+        for (int it = 0; it < 60; ++it) {
+          const double mid = 0.5 * (lo + hi);
+          ((bf.MaxRoot(mid, grid[i]) < 1) == s_lo ? lo : hi) = mid;
+        }
+        err = std::max(err, std::abs(0.5 * (lo + hi) / k - 1));
+        ++ends;
+      }
+    }
+  }
+  state.counters["max_rel_err_vs_brute_force"] = err;
+  state.counters["ends_checked"] = ends;
+}
+BENCHMARK(BM_LoopBoundary)->Unit(benchmark::kMillisecond);
+
+// The cut-off sweep: 20 log-spaced cut-offs 5-250 Hz, K_CR^max, Table I at
+// d = 2; error: K_CR(0) of the best cut-off against the brute force's bisection.
+void BM_CutoffSweep(benchmark::State& state) {
+  const Plant p = PhantomTable1();
+  stability::CutoffSweepOptions o;
+  for (int i = 0; i < 20; ++i) o.cutoffs_hz.push_back(5.0 * std::pow(50.0, i / 19.0));
+  stability::CutoffSweepResult r;
+  for (auto _ : state) {
+    r = stability::SweepCutoff(p, 1e-3, 2, stability::LoopOptions{}, o);
+    benchmark::DoNotOptimize(r.best);
+  }
+  stability::LoopOptions l;
+  stability::SetLowPassFilter(r.cutoffs_hz[r.best], 1e-3, &l);
+  const StateSpace dz = DiscretizeZoh(p, 1e-3);
+  const stability::LoopBruteForce bf(dz.A, dz.B, dz.C, l.filter_b, l.filter_a, 2 + p.delay_samples, 1e-3);
+  const double k = stability::ZWidth(p, 1e-3, 2, l).At(0.0).K_cr;
+  double lo = 0.9 * k, hi = 1.1 * k;
+  for (int it = 0; it < 60; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (bf.MaxRoot(mid, 0.0) < 1 ? lo : hi) = mid;
+  }
+  state.counters["best_cutoff_hz"] = r.cutoffs_hz[r.best];
+  state.counters["best_K_cr_max"] = r.measure[r.best];
+  state.counters["rel_err_K_cr0_vs_brute_force"] = std::abs(0.5 * (lo + hi) / k - 1);
+}
+BENCHMARK(BM_CutoffSweep)->Unit(benchmark::kMillisecond);
 
 // Delta-method std at d = 2 on Table I with a seeded covariance (1% relative
 // std): K_CR(B) on a 1000-point grid (implicit differentiation) plus the four

@@ -21,17 +21,17 @@ void WriteBoundaryCsv(const std::string& path, const std::vector<BoundaryRow>& r
     std::FILE* f = std::fopen(tmp.c_str(), "wb");
     if (!f) throw InputError("cannot create '" + tmp + "'");
     std::fputs("delay_samples,B,interval,num_intervals,K_lo,K_hi,f_lo_hz,f_hi_hz,interval_verified,"
-               "K_cr,K_cr_std,f_cr_hz,K_margin,f_margin_hz,unstable_at_zero_k,margin_agrees,verified\n", f);
+               "K_cr,K_cr_std,f_cr_hz,K_margin,f_margin_hz,unstable_at_zero_k,margin_agrees,verified,K_passive\n", f);
     const double nan = std::numeric_limits<double>::quiet_NaN();
     for (const BoundaryRow& r : rows) {
       const auto& p = r.point;
       const int n = static_cast<int>(r.intervals.size());
       for (int i = 0; i < std::max(n, 1); ++i) {
         const stability::KInterval iv = n ? r.intervals[i] : stability::KInterval{nan, nan, nan, nan, false};
-        std::fprintf(f, "%d,%.12g,%d,%d,%.15g,%.15g,%.15g,%.15g,%d,%.15g,%.6g,%.15g,%.15g,%.15g,%d,%d,%d\n",
+        std::fprintf(f, "%d,%.12g,%d,%d,%.15g,%.15g,%.15g,%.15g,%d,%.15g,%.6g,%.15g,%.15g,%.15g,%d,%d,%d,%.15g\n",
                      r.delay_samples, p.B, n ? i : -1, n, iv.K_lo, iv.K_hi, iv.f_lo_hz, iv.f_hi_hz,
                      iv.verified ? 1 : 0, p.K_cr, r.K_cr_std, p.f_cr_hz, p.K_margin, p.f_margin_hz,
-                     p.unstable_at_zero_k ? 1 : 0, p.AgreesWithMargin() ? 1 : 0, p.verified ? 1 : 0);
+                     p.unstable_at_zero_k ? 1 : 0, p.AgreesWithMargin() ? 1 : 0, p.verified ? 1 : 0, r.K_passive);
       }
     }
     const bool ok = std::ferror(f) == 0;
@@ -117,9 +117,14 @@ std::vector<SceneObject> ReadScene(const std::string& path) {
 }
 
 ObjectVerdict CheckObject(const stability::ZWidth& z, const SceneObject& o) {
+  return Classify(o, z.At(o.B), z.StableIntervals(o.B));
+}
+
+ObjectVerdict Classify(const SceneObject& o, const stability::CriticalPoint& critical,
+                       std::vector<stability::KInterval> intervals) {
   ObjectVerdict v;
-  v.critical = z.At(o.B);
-  v.intervals = z.StableIntervals(o.B);
+  v.critical = critical;
+  v.intervals = std::move(intervals);
   double best = std::numeric_limits<double>::infinity();
   for (size_t i = 0; i < v.intervals.size(); ++i) {
     const stability::KInterval& iv = v.intervals[i];

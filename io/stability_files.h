@@ -17,6 +17,8 @@ struct BoundaryRow {
   stability::CriticalPoint point;
   std::vector<stability::KInterval> intervals;  // the stable K intervals at point.B
   double K_cr_std = std::numeric_limits<double>::quiet_NaN();  // N m/rad; nan = no covariance
+  // Largest K of the passive set at B (Colgate and Schenkel; stability/haptic_loop.h) [N m/rad]; 0 = none passive.
+  double K_passive = std::numeric_limits<double>::quiet_NaN();
 };
 
 // One line per (delay, B, stable interval); a B with no stable K gets one line
@@ -30,6 +32,7 @@ struct BoundaryRow {
 //                                         its delta-method std (nan without a covariance), its frequency
 //   K_margin, f_margin_hz                 the paper's margin() reading of eq. (4)
 //   unstable_at_zero_k, margin_agrees, verified   as in CriticalPoint
+//   K_passive                             largest passive K at B (Colgate and Schenkel), 0 = none
 // The per-B columns from K_cr on repeat on every interval line of that B.
 // inf and nan are written as such.
 void WriteBoundaryCsv(const std::string& path, const std::vector<BoundaryRow>& rows);
@@ -57,6 +60,10 @@ struct ObjectVerdict {
   std::vector<stability::KInterval> intervals;
   nlohmann::json ToJson(const SceneObject& o) const;  // the object's entry of `check --json`
 };
+// Classifies o against the stable intervals at its B (and the K_CR there).
+ObjectVerdict Classify(const SceneObject& o, const stability::CriticalPoint& critical,
+                       std::vector<stability::KInterval> intervals);
+// The same on one loop: Classify(o, z.At(o.B), z.StableIntervals(o.B)).
 ObjectVerdict CheckObject(const stability::ZWidth& z, const SceneObject& o);
 nlohmann::json NumberOrNull(double v);
 

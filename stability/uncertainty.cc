@@ -1,5 +1,7 @@
 #include "stability/uncertainty.h"
 
+#include "stability/haptic_loop.h"
+
 #include <cmath>
 #include <complex>
 #include <limits>
@@ -89,21 +91,40 @@ void CheckLogCovariance(const Plant& plant, const std::vector<double>& cov) {
 }
 
 std::vector<double> KcrStd(const Plant& plant, const std::vector<double>& cov, double T, int delay,
-                           const std::vector<CriticalPoint>& points, const UncertaintyOptions& o) {
+                           const std::vector<CriticalPoint>& points, const UncertaintyOptions& o,
+                           const LoopOptions& loop) {
   std::string why;
   if (!o.IsValid(&why)) throw InputError("uncertainty options: " + why);
   const Eigen::MatrixXd S = CovMatrix(plant, cov);
   const int p = NumLogParameters(plant);
   const int D = delay + plant.delay_samples;
-  const DiscreteResponse g0(DiscretizeZoh(plant, T));
+  auto sampled = [&](const Plant& q) {
+    if (loop.hand.IsNone()) return DiscretizeZoh(q, T);
+    StateSpace d = DiscretizeZohStateSpace(ContinuousStateSpaceWithHand(q, loop.hand), T);
+    d.delay_samples = q.delay_samples;
+    return d;
+  };
+  const DiscreteResponse g0(sampled(plant));
   std::vector<DiscreteResponse> gp, gm;
   for (int i = 0; i < p; ++i) {
     std::vector<double> dx(p, 0.0);
     dx[i] = o.log_step;
-    gp.emplace_back(DiscretizeZoh(PerturbLog(plant, dx), T));
+    gp.emplace_back(sampled(PerturbLog(plant, dx)));
     dx[i] = -o.log_step;
-    gm.emplace_back(DiscretizeZoh(PerturbLog(plant, dx), T));
+    gm.emplace_back(sampled(PerturbLog(plant, dx)));
   }
+  // V(theta) = F(e^{j theta}) (1 - e^{-j theta}) / T.
+  auto V = [&](double th) {
+    const std::complex<double> zi = std::polar(1.0, -th);
+    std::complex<double> F = 1.0;
+    if (loop.HasFilter()) {
+      std::complex<double> nb = 0.0, na = 0.0;
+      for (size_t i = loop.filter_b.size(); i-- > 0;) nb = nb * zi + loop.filter_b[i];
+      for (size_t i = loop.filter_a.size(); i-- > 0;) na = na * zi + loop.filter_a[i];
+      F = nb / na;
+    }
+    return F * (1.0 - zi) / T;
+  };
   auto W = [&](const DiscreteResponse& g, double th) {
     return -std::polar(1.0, th * D) / g.AtZ(std::polar(1.0, th));
   };
@@ -113,18 +134,21 @@ std::vector<double> KcrStd(const Plant& plant, const std::vector<double>& cov, d
     if (c.K_cr == 0.0) { out[k] = 0.0; continue; }
     if (!std::isfinite(c.K_cr) || !std::isfinite(c.f_cr_hz)) continue;
     const double th = 2.0 * std::numbers::pi * c.f_cr_hz * T;
-    const double bt = c.B / T;
     Eigen::VectorXd grad(p);
     const bool at_pi = std::abs(th - std::numbers::pi) < 1e-12;
     const double h = 1e-6;
     const std::complex<double> Wth =
         at_pi ? 0.0 : (W(g0, th + h) - W(g0, th - h)) / (2.0 * h);
-    const double den = bt * std::cos(th) - Wth.imag();
+    // V_theta: exact for the raw difference (sin, cos), else central differences.
+    const std::complex<double> Vth = !loop.HasFilter()
+                                         ? std::complex<double>(std::sin(th), std::cos(th)) / T
+                                         : (at_pi ? 0.0 : (V(th + h) - V(th - h)) / (2.0 * h));
+    const double den = c.B * Vth.imag() - Wth.imag();
     for (int i = 0; i < p; ++i) {
       const std::complex<double> Wx = (W(gp[i], th) - W(gm[i], th)) / (2.0 * o.log_step);
       if (at_pi) { grad[i] = Wx.real(); continue; }
       const double dth = Wx.imag() / den;
-      grad[i] = Wx.real() + (Wth.real() - bt * std::sin(th)) * dth;
+      grad[i] = Wx.real() + (Wth.real() - c.B * Vth.real()) * dth;
     }
     out[k] = Quad(grad, S);
   }
@@ -132,7 +156,7 @@ std::vector<double> KcrStd(const Plant& plant, const std::vector<double>& cov, d
 }
 
 SummaryStd SummaryStdDelta(const Plant& plant, const std::vector<double>& cov, double T, int delay,
-                           const DelaySummary& nominal, const UncertaintyOptions& o) {
+                           const DelaySummary& nominal, const UncertaintyOptions& o, const LoopOptions& loop) {
   std::string why;
   if (!o.IsValid(&why)) throw InputError("uncertainty options: " + why);
   const Eigen::MatrixXd S = CovMatrix(plant, cov);
@@ -143,7 +167,7 @@ SummaryStd SummaryStdDelta(const Plant& plant, const std::vector<double>& cov, d
     for (int s = 0; s < 2; ++s) {
       std::vector<double> dx(p, 0.0);
       dx[i] = s == 0 ? o.log_step : -o.log_step;
-      q[s] = ZWidth(PerturbLog(plant, dx), T, delay).SummarizeNear(nominal);
+      q[s] = ZWidth(PerturbLog(plant, dx), T, delay, loop).SummarizeNear(nominal);
     }
     J(0, i) = (q[0].K_cr_at_zero_B - q[1].K_cr_at_zero_B) / (2 * o.log_step);
     J(1, i) = (q[0].B_t - q[1].B_t) / (2 * o.log_step);
@@ -159,7 +183,7 @@ SummaryStd SummaryStdDelta(const Plant& plant, const std::vector<double>& cov, d
 }
 
 MonteCarloResult SummaryMonteCarlo(const Plant& plant, const std::vector<double>& cov, double T, int delay,
-                                   int samples, std::uint64_t seed) {
+                                   int samples, std::uint64_t seed, const LoopOptions& loop) {
   if (samples < 2) throw InputError("--monte-carlo needs at least 2 samples");
   const Eigen::MatrixXd S = CovMatrix(plant, cov);
   const int p = NumLogParameters(plant);
@@ -174,7 +198,7 @@ MonteCarloResult SummaryMonteCarlo(const Plant& plant, const std::vector<double>
     for (int i = 0; i < p; ++i) u[i] = n01(rng);
     const Eigen::VectorXd dx = L * u;
     const DelaySummary s =
-        ZWidth(PerturbLog(plant, std::vector<double>(dx.data(), dx.data() + p)), T, delay).Summarize();
+        ZWidth(PerturbLog(plant, std::vector<double>(dx.data(), dx.data() + p)), T, delay, loop).Summarize();
     const double v[4] = {s.K_cr_at_zero_B, s.has_transition ? s.B_t : kNaN, s.K_cr_max, s.B_max};
     for (int q = 0; q < 4; ++q) {
       if (!std::isfinite(v[q])) continue;

@@ -22,6 +22,10 @@
 //   recomputed near its nominal value (ZWidth::SummarizeNear) for x +- log_step
 //   e_i, then var = J Sigma J^T. Valid where the quantity is a smooth function
 //   of x (not where, e.g., B_max jumps between two bands).
+// With a velocity filter and a hand (LoopOptions, stability/haptic_loop.h) the
+// same holds with V = F (1 - z^-1)/T in place of (1 - z^-1)/T: B Im V = Im W
+// fixes theta, dtheta/dx = Im W_x / (B Im V_theta - Im W_theta),
+// dK/dx = Re W_x + (Re W_theta - B Re V_theta) dtheta/dx; the hand stays fixed.
 // Monte Carlo samples x ~ N(x0, Sigma) (seeded) and recomputes Summarize().
 #pragma once
 
@@ -54,12 +58,12 @@ void CheckLogCovariance(const Plant& plant, const std::vector<double>& log_covar
 std::vector<double> KcrStd(const Plant& plant, const std::vector<double>& log_covariance,
                            double period_s, int delay_samples,
                            const std::vector<CriticalPoint>& points,
-                           const UncertaintyOptions& options = {});
+                           const UncertaintyOptions& options = {}, const LoopOptions& loop = {});
 
 // Std of K_CR(0), B_t, K_CR^max, B_max by the delta method (see above).
 SummaryStd SummaryStdDelta(const Plant& plant, const std::vector<double>& log_covariance,
                            double period_s, int delay_samples, const DelaySummary& nominal,
-                           const UncertaintyOptions& options = {});
+                           const UncertaintyOptions& options = {}, const LoopOptions& loop = {});
 
 struct MonteCarloResult {
   int samples = 0;   // drawn
@@ -69,6 +73,7 @@ struct MonteCarloResult {
 };
 // Throws InputError for samples < 2.
 MonteCarloResult SummaryMonteCarlo(const Plant& plant, const std::vector<double>& log_covariance,
-                                   double period_s, int delay_samples, int samples, std::uint64_t seed);
+                                   double period_s, int delay_samples, int samples, std::uint64_t seed,
+                                   const LoopOptions& loop = {});
 
 }  // namespace zwidth::stability

@@ -8,7 +8,9 @@
 #include <numbers>
 
 #include "model/error.h"
+#include "stability/haptic_loop.h"
 #include "stability/schur_cohn.h"
+#include <Eigen/Eigenvalues>
 
 namespace zwidth::stability {
 namespace internal {
@@ -86,8 +88,13 @@ bool CriticalPoint::AgreesWithMargin(double rel_tol) const {
 
 ZWidth::ZWidth(const Plant& plant, double period_s, int delay_samples,
                const BoundaryOptions& options)
+    : ZWidth(plant, period_s, delay_samples, LoopOptions{}, options) {}
+
+ZWidth::ZWidth(const Plant& plant, double period_s, int delay_samples, const LoopOptions& loop,
+               const BoundaryOptions& options)
     : period_s_(period_s),
       total_delay_(delay_samples + plant.delay_samples),
+      loop_(loop),
       options_(options),
       response_([&] {
         plant.Validate();
@@ -95,14 +102,29 @@ ZWidth::ZWidth(const Plant& plant, double period_s, int delay_samples,
           throw InputError("delay = " + std::to_string(delay_samples) + " samples: must be >= 0");
         }
         if (delay_samples > 100000) throw InputError("delay is over 100000 samples");
-        StateSpace d = DiscretizeZoh(plant, period_s);
+        std::string why;
+        if (!loop.IsValid(&why)) throw InputError("loop options: " + why);
+        StateSpace d = loop.hand.IsNone()
+                           ? DiscretizeZoh(plant, period_s)
+                           : DiscretizeZohStateSpace(ContinuousStateSpaceWithHand(plant, loop.hand), period_s);
         d.delay_samples = 0;  // the delay is handled explicitly here
         return d;
       }()) {
   std::string why;
   if (!options_.IsValid(&why)) throw InputError("boundary options: " + why);
   const double T = period_s_;
-  {
+  const bool hand = !loop_.hand.IsNone();
+  has_integrator_ = !(loop_.hand.K > 0.0);
+  has_filter_ = loop_.HasFilter();
+  if (has_filter_) {
+    // b_i z^-i and a_i z^-i times z^L: coefficient of z^{L - i}.
+    const size_t L = std::max(loop_.filter_b.size(), loop_.filter_a.size()) - 1;
+    fn_.assign(L + 1, 0.0);
+    fd_.assign(L + 1, 0.0);
+    for (size_t i = 0; i < loop_.filter_b.size(); ++i) fn_[L - i] = loop_.filter_b[i];
+    for (size_t i = 0; i < loop_.filter_a.size(); ++i) fd_[L - i] = loop_.filter_a[i];
+  }
+  if (!hand) {
     std::vector<double> sec;
     for (const Mode& md : plant.modes) sec.insert(sec.end(), {md.omega, md.c, md.v, md.d});
     use_modal_ = modal_.Build(plant.m, plant.b, sec.data(), static_cast<int>(plant.modes.size()), T);
@@ -117,19 +139,42 @@ ZWidth::ZWidth(const Plant& plant, double period_s, int delay_samples,
   }
   // Denominator from the exactly known discrete poles e^{pT}.
   den1_ = {1.0};
-  den1_ = PolyMul(den1_, {-std::exp(-plant.b / plant.m * T), 1.0});
-  for (const Mode& md : plant.modes) {
-    const double disc = md.c * md.c / 4.0 - md.omega * md.omega;
-    if (disc < 0.0) {
-      const double r = std::exp(-md.c * T / 2.0), wd = std::sqrt(-disc);
-      den1_ = PolyMul(den1_, {r * r, -2.0 * r * std::cos(wd * T), 1.0});
-    } else {
-      const double s = std::sqrt(disc);
-      den1_ = PolyMul(den1_, {-std::exp((-md.c / 2.0 + s) * T), 1.0});
-      den1_ = PolyMul(den1_, {-std::exp((-md.c / 2.0 - s) * T), 1.0});
+  std::vector<std::complex<double>> hand_poles;  // continuous poles with Im > 0 (hand only)
+  if (!hand) {
+    den1_ = PolyMul(den1_, {-std::exp(-plant.b / plant.m * T), 1.0});
+    for (const Mode& md : plant.modes) {
+      const double disc = md.c * md.c / 4.0 - md.omega * md.omega;
+      if (disc < 0.0) {
+        const double r = std::exp(-md.c * T / 2.0), wd = std::sqrt(-disc);
+        den1_ = PolyMul(den1_, {r * r, -2.0 * r * std::cos(wd * T), 1.0});
+      } else {
+        const double s = std::sqrt(disc);
+        den1_ = PolyMul(den1_, {-std::exp((-md.c / 2.0 + s) * T), 1.0});
+        den1_ = PolyMul(den1_, {-std::exp((-md.c / 2.0 - s) * T), 1.0});
+      }
+    }
+  } else {
+    // With the hand the poles are the eigenvalues of the continuous A_h (the
+    // ZOH maps each to e^{lambda T}). Without hand stiffness the position state
+    // is not fed back: A_h keeps an exact zero eigenvalue, the integrator.
+    Eigen::VectorXcd ev = ContinuousStateSpaceWithHand(plant, loop_.hand).A.eigenvalues();
+    int skip = -1;
+    if (has_integrator_) {
+      ev.cwiseAbs().minCoeff(&skip);
+    }
+    for (int i = 0; i < ev.size(); ++i) {
+      if (i == skip) continue;
+      const std::complex<double> l = ev(i);
+      if (l.imag() > 0.0) {
+        const double r = std::exp(l.real() * T);
+        den1_ = PolyMul(den1_, {r * r, -2.0 * r * std::cos(l.imag() * T), 1.0});
+        hand_poles.push_back(l);
+      } else if (l.imag() == 0.0) {
+        den1_ = PolyMul(den1_, {-std::exp(l.real() * T), 1.0});
+      }
     }
   }
-  den_ = PolyMul(den1_, {-1.0, 1.0});
+  den_ = has_integrator_ ? PolyMul(den1_, {-1.0, 1.0}) : den1_;
   // Numerator by interpolation at n rotated roots of unity (none is a pole).
   const int n = static_cast<int>(den_.size()) - 1;
   num_.assign(n, 0.0);
@@ -145,7 +190,7 @@ ZWidth::ZWidth(const Plant& plant, double period_s, int delay_samples,
   // theta grid: uniform, plus dense patches around every resonance and
   // antiresonance (width ~ damping * T), so that sharp modes are resolved.
   const int nu = std::max(options_.min_grid_points,
-                          options_.grid_points_per_delay * (total_delay_ + n + 1));
+                          options_.grid_points_per_delay * (total_delay_ + n + static_cast<int>(fd_.size())));
   std::vector<double> th;
   th.reserve(nu + 2600 * plant.modes.size());
   const double pi = std::numbers::pi;
@@ -162,7 +207,11 @@ ZWidth::ZWidth(const Plant& plant, double period_s, int delay_samples,
       if (t > th.front() && t < th.back()) th.push_back(t);
     }
   };
-  for (const Mode& md : plant.modes) { patch(md.omega, md.c); patch(md.v, md.d); }
+  for (const Mode& md : plant.modes) {
+    if (!hand) patch(md.omega, md.c);
+    patch(md.v, md.d);  // the hand leaves G's zeros where they are
+  }
+  for (const std::complex<double>& l : hand_poles) patch(std::abs(l), -2.0 * l.real());
   std::sort(th.begin(), th.end());
   th.erase(std::unique(th.begin(), th.end()), th.end());
   grid_theta_ = th;
@@ -192,6 +241,19 @@ ZWidth::ZWidth(const Plant& plant, double period_s, int delay_samples,
   const std::complex<double> gpi = response_.AtZ(-1.0);
   const double sgn = (total_delay_ % 2 == 0) ? 1.0 : -1.0;  // z^d at z = -1
   K_pi_at_zero_B_ = (-sgn / gpi).real();
+  V_pi_ = V(-1.0, 0.0).real();
+}
+
+std::complex<double> ZWidth::V(double c, double s) const {
+  const std::complex<double> zi(c, -s);  // z^-1 on the circle
+  std::complex<double> F = 1.0;
+  if (has_filter_) {
+    std::complex<double> nb = 0.0, na = 0.0;
+    for (size_t i = loop_.filter_b.size(); i-- > 0;) nb = nb * zi + loop_.filter_b[i];
+    for (size_t i = loop_.filter_a.size(); i-- > 0;) na = na * zi + loop_.filter_a[i];
+    F = nb / na;
+  }
+  return F * (1.0 - zi) / period_s_;
 }
 
 std::complex<double> ZWidth::Gd(std::complex<double> z) const {
@@ -210,6 +272,12 @@ void ZWidth::Point(double theta, double* B, double* K) const {
     zp *= zp;
   }
   const std::complex<double> W = -zd / Gd(z);
+  if (has_filter_) {
+    const std::complex<double> v = V(c, s);
+    *B = W.imag() / v.imag();
+    *K = W.real() - *B * v.real();
+    return;
+  }
   *B = period_s_ * W.imag() / s;
   *K = W.real() - W.imag() * (s / (1.0 + c));  // tan(theta / 2)
 }
@@ -244,29 +312,43 @@ std::vector<Crossing> ZWidth::Crossings(double B) const {
     if (!std::isfinite(k) || std::abs(b - B) > 1e-6 * (std::abs(B) + std::abs(lo) + std::abs(hi) + 1e-12)) continue;
     out.push_back({t, k});
   }
-  out.push_back({std::numbers::pi, K_pi_at_zero_B_ - 2.0 * B / period_s_});
+  out.push_back({std::numbers::pi, K_pi_at_zero_B_ - B * V_pi_});
   return out;
 }
 
 std::vector<double> ZWidth::CharacteristicPolynomial(double K, double B) const {
-  // z^{d+1} D(z) + (K z + (B/T)(z - 1)) N(z)
+  // z^{d+1} D(z) F_d(z) + (K z F_d(z) + (B/T)(z - 1) F_n(z)) N(z)
   const int d = total_delay_;
-  std::vector<double> p(d + 1 + den_.size(), 0.0);
-  for (size_t i = 0; i < den_.size(); ++i) p[i + d + 1] += den_[i];
-  const std::vector<double> ctrl = {-B / period_s_, K + B / period_s_};
+  if (!has_filter_) {
+    std::vector<double> p(d + 1 + den_.size(), 0.0);
+    for (size_t i = 0; i < den_.size(); ++i) p[i + d + 1] += den_[i];
+    const std::vector<double> ctrl = {-B / period_s_, K + B / period_s_};
+    const std::vector<double> cn = PolyMul(ctrl, num_);
+    for (size_t i = 0; i < cn.size(); ++i) p[i] += cn[i];
+    return p;
+  }
+  const std::vector<double> dfd = PolyMul(den_, fd_);
+  std::vector<double> p(d + 1 + dfd.size(), 0.0);
+  for (size_t i = 0; i < dfd.size(); ++i) p[i + d + 1] += dfd[i];
+  std::vector<double> ctrl(fd_.size() + 1, 0.0);  // K z F_d + (B/T)(z - 1) F_n
+  for (size_t i = 0; i < fd_.size(); ++i) ctrl[i + 1] += K * fd_[i];
+  for (size_t i = 0; i < fn_.size(); ++i) { ctrl[i + 1] += B / period_s_ * fn_[i]; ctrl[i] -= B / period_s_ * fn_[i]; }
   const std::vector<double> cn = PolyMul(ctrl, num_);
   for (size_t i = 0; i < cn.size(); ++i) p[i] += cn[i];
   return p;
 }
 
 bool ZWidth::IsStable(double K, double B) const {
-  if (K > 0.0) return AllRootsInsideUnitCircle(CharacteristicPolynomial(K, B));
+  if (K > 0.0 || !has_integrator_) return AllRootsInsideUnitCircle(CharacteristicPolynomial(K, B));
   if (K < 0.0) return false;  // the integrator pole leaves through z = 1
-  // K = 0+: the factor (z - 1) leaves z^{d+1} D1(z) + (B/T) N(z).
+  // K = 0+: the factor (z - 1) leaves z^{d+1} D1(z) F_d(z) + (B/T) F_n(z) N(z).
+  // (The root at z = 1 moves inside for K > 0 when b + B F(1) > 0.)
   const int d = total_delay_;
-  std::vector<double> q(d + 1 + den1_.size(), 0.0);
-  for (size_t i = 0; i < den1_.size(); ++i) q[i + d + 1] += den1_[i];
-  for (size_t i = 0; i < num_.size(); ++i) q[i] += B / period_s_ * num_[i];
+  const std::vector<double> dfd = PolyMul(den1_, fd_);
+  const std::vector<double> fnn = PolyMul(fn_, num_);
+  std::vector<double> q(std::max(d + 1 + dfd.size(), fnn.size()), 0.0);
+  for (size_t i = 0; i < dfd.size(); ++i) q[i + d + 1] += dfd[i];
+  for (size_t i = 0; i < fnn.size(); ++i) q[i] += B / period_s_ * fnn[i];
   return AllRootsInsideUnitCircle(q);
 }
 
@@ -417,7 +499,13 @@ double ZWidth::StableBBound() const {
       if (std::isfinite(b)) bound = std::max(bound, b);
     }
   }
-  if (K_pi_at_zero_B_ > 0.0) bound = std::max(bound, 0.5 * period_s_ * K_pi_at_zero_B_);
+  // The theta = pi line K = K_pi - B V_pi has K > 0 up to B = K_pi / V_pi when
+  // V_pi > 0; otherwise for every large B, and no bound is proven.
+  if (V_pi_ > 0.0) {
+    if (K_pi_at_zero_B_ > 0.0) bound = std::max(bound, K_pi_at_zero_B_ / V_pi_);
+  } else if (K_pi_at_zero_B_ > 0.0 || V_pi_ < 0.0) {
+    return std::numeric_limits<double>::infinity();
+  }
   return bound;
 }
 
@@ -439,7 +527,7 @@ DelaySummary ZWidth::Summarize() const {
       if (b > 0.0 && std::isfinite(b)) cand.push_back(b);
     }
   }
-  if (K_pi_at_zero_B_ > 0.0) cand.push_back(0.5 * period_s_ * K_pi_at_zero_B_);
+  if (V_pi_ != 0.0 && K_pi_at_zero_B_ / V_pi_ > 0.0) cand.push_back(K_pi_at_zero_B_ / V_pi_);
   std::sort(cand.begin(), cand.end());
   if (c0.unstable_at_zero_k) {
     s.B_max_from_zero = 0.0;

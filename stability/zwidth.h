@@ -25,6 +25,7 @@
 #include "model/plant.h"
 #include "model/state_space.h"
 #include "model/zoh_modal.h"
+#include "stability/loop_options.h"
 
 namespace zwidth::stability {
 
@@ -140,6 +141,15 @@ class ZWidth {
   // Throws InputError for an invalid plant, period or delay.
   ZWidth(const Plant& plant, double period_s, int delay_samples,
          const BoundaryOptions& options = {});
+  // The generalised loop of stability/haptic_loop.h: velocity filter F(z) and
+  // the user's hand. With W = -z^D / G_h and V = F(z)(1 - z^-1)/T the crossing
+  // condition on the circle is K + B V = W: B = Im W / Im V, K = Re W - B Re V
+  // (theta = pi: K = W(pi) - B V(pi), V(pi) = 2 F(-1)/T real). The
+  // characteristic polynomial, multiplied through by F's denominator, is
+  //   z^{D+1} D(z) F_d(z) + (K z F_d(z) + (B/T)(z - 1) F_n(z)) N(z).
+  // Throws InputError for invalid loop options.
+  ZWidth(const Plant& plant, double period_s, int delay_samples, const LoopOptions& loop,
+         const BoundaryOptions& options = {});
 
   CriticalPoint At(double B) const;
   std::vector<Crossing> Crossings(double B) const;
@@ -155,6 +165,7 @@ class ZWidth {
   SummaryStd SummarizeNear(const DelaySummary& nominal) const;
 
   int total_delay() const { return total_delay_; }
+  const LoopOptions& loop() const { return loop_; }
   double period_s() const { return period_s_; }
   // Closed-loop characteristic polynomial coefficients (z^0 first).
   std::vector<double> CharacteristicPolynomial(double K, double B) const;
@@ -172,8 +183,18 @@ class ZWidth {
   // state-space response (distinct underdamped modes), else the Hessenberg solve.
   std::complex<double> Gd(std::complex<double> z) const;
 
+  // V(theta) = F(e^{j theta})(1 - e^{-j theta})/T.
+  std::complex<double> V(double c, double s) const;
+
   double period_s_;
   int total_delay_;
+  LoopOptions loop_;
+  bool has_filter_ = false;
+  // Without a hand stiffness G has its integrator pole at z = 1 (K = 0 is a
+  // boundary, taken as 0+); with K_h > 0 it does not.
+  bool has_integrator_ = true;
+  std::vector<double> fn_ = {1.0}, fd_ = {1.0};  // F = fn/fd as polynomials in z, z^0 first
+  double V_pi_ = 0.0;  // V(pi) = 2 F(-1)/T
   BoundaryOptions options_;
   DiscreteResponse response_;
   ZohModalForm<double> modal_;

@@ -3,7 +3,10 @@
 #pragma once
 
 #include <cmath>
+#include <algorithm>
 #include <limits>
+#include <utility>
+#include <vector>
 
 #include <Eigen/Dense>
 
@@ -66,6 +69,64 @@ struct BruteForce {
     }
     return std::numeric_limits<double>::infinity();
   }
+};
+
+}  // namespace zwidth::stability
+
+namespace zwidth::stability {
+
+// Independent brute force for the haptic loop (haptic_loop_test): the closed
+// loop as one discrete state-space matrix, its eigenvalues by Eigen.
+// States: the sampled plant x (n), the previous output y_{k-1}, the velocity
+// filter in transposed direct form II (L states), and the delay line of the
+// wall force (D states). Per sample:
+//   y = C x,  w = (y - y_prev)/T,  v = b0 w + s_1,  s_i <- b_i w - a_i v + s_{i+1},
+//   f = K y + B v,  u = -f delayed D samples,  x <- Ad x + Bd u.
+struct LoopBruteForce {
+  Eigen::MatrixXd Ad;
+  Eigen::VectorXd Bd;
+  Eigen::RowVectorXd C;
+  std::vector<double> b, a;  // filter, padded to the same length L + 1
+  int D = 0;
+  double T = 0.0;
+  // discrete: a sampled plant without input delay; total_delay = loop + plant delay.
+  LoopBruteForce(const Eigen::MatrixXd& A_, const Eigen::VectorXd& B_, const Eigen::RowVectorXd& C_,
+                 std::vector<double> fb, std::vector<double> fa, int total_delay, double period)
+      : Ad(A_), Bd(B_), C(C_), b(std::move(fb)), a(std::move(fa)), D(total_delay), T(period) {
+    if (b.empty()) { b = {1.0}; a = {1.0}; }
+    const size_t L1 = std::max(b.size(), a.size());
+    b.resize(L1, 0.0);
+    a.resize(L1, 0.0);
+  }
+  Eigen::MatrixXd Matrix(double K, double B) const {
+    const int n = static_cast<int>(Ad.rows());
+    const int L = static_cast<int>(b.size()) - 1;
+    const int N = n + 1 + L + D;
+    const int iy = n, is = n + 1, ir = n + 1 + L;
+    Eigen::RowVectorXd y = Eigen::RowVectorXd::Zero(N), w, v, f;
+    y.head(n) = C;
+    w = y / T;
+    w(iy) -= 1.0 / T;
+    v = b[0] * w;
+    if (L > 0) v(is) += 1.0;
+    f = K * y + B * v;
+    Eigen::RowVectorXd u = D == 0 ? Eigen::RowVectorXd(-f) : Eigen::RowVectorXd::Zero(N);
+    if (D > 0) u(ir + D - 1) = -1.0;
+    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(N, N);
+    M.topLeftCorner(n, n) = Ad;
+    M.topRows(n) += Bd * u;
+    M.row(iy) = y;
+    for (int i = 1; i <= L; ++i) {
+      M.row(is + i - 1) = b[i] * w - a[i] * v;
+      if (i < L) M(is + i - 1, is + i) += 1.0;
+    }
+    if (D > 0) {
+      M.row(ir) = f;
+      for (int i = 1; i < D; ++i) M(ir + i, ir + i - 1) = 1.0;
+    }
+    return M;
+  }
+  double MaxRoot(double K, double B) const { return Matrix(K, B).eigenvalues().cwiseAbs().maxCoeff(); }
 };
 
 }  // namespace zwidth::stability

@@ -1,0 +1,335 @@
+#include "stability/haptic_loop.h"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <cstdio>
+#include <functional>
+#include <numbers>
+#include <sstream>
+
+#include <Eigen/Eigenvalues>
+#include <unsupported/Eigen/MatrixFunctions>
+
+#include "model/error.h"
+#include "stability/schur_cohn.h"
+
+namespace zwidth::stability {
+namespace internal {
+double GoldenExtremum(const std::function<double(double)>& f, double a, double b, double sign, double tol);
+}  // namespace internal
+
+namespace {
+
+bool AllFinite(const std::vector<double>& v) {
+  return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
+}
+
+std::vector<double> ParseNumbers(const std::string& list, const std::string& what) {
+  std::vector<double> out;
+  std::stringstream ss(list);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    const size_t a = item.find_first_not_of(" \t\r\n"), b = item.find_last_not_of(" \t\r\n");
+    if (a == std::string::npos) throw InputError(what + ": empty number in '" + list + "'");
+    const std::string t = item.substr(a, b - a + 1);
+    char* end = nullptr;
+    const double v = std::strtod(t.c_str(), &end);
+    if (end != t.c_str() + t.size() || !std::isfinite(v)) {
+      throw InputError(what + ": '" + t + "' is not a finite number");
+    }
+    out.push_back(v);
+  }
+  return out;
+}
+
+}  // namespace
+
+bool LoopOptions::IsValid(std::string* why) const {
+  auto bad = [&](const std::string& m) { if (why) *why = m; return false; };
+  if (filter_b.empty() != filter_a.empty()) return bad("filter_b and filter_a must both be given or both be empty");
+  if (!filter_b.empty()) {
+    if (filter_b.size() > 32) return bad("filter_b has more than 32 coefficients");
+    if (filter_a.size() > 32) return bad("filter_a has more than 32 coefficients");
+    if (!AllFinite(filter_b)) return bad("filter_b has a coefficient that is not finite");
+    if (!AllFinite(filter_a)) return bad("filter_a has a coefficient that is not finite");
+    if (filter_a[0] != 1.0) return bad("filter_a: a0 must be 1 (divide every coefficient by a0)");
+    // Poles: roots of z^m + a1 z^{m-1} + ... + am, i.e. the polynomial with
+    // z^0 coefficient am (reversed a).
+    std::vector<double> den(filter_a.rbegin(), filter_a.rend());
+    while (den.size() > 1 && den.front() == 0.0) den.erase(den.begin());  // poles at 0
+    if (den.size() > 1 && !AllRootsInsideUnitCircle(den)) {
+      return bad("filter_a: the filter has a pole on or outside the unit circle (it must be stable)");
+    }
+    double nb = 0.0, na = 0.0;
+    for (double v : filter_b) nb += v;
+    for (double v : filter_a) na += v;
+    if (!(nb / na > 0.0)) return bad("filter_b/filter_a: the DC gain F(1) must be > 0 (a velocity filter passes DC)");
+  }
+  if (!(std::isfinite(hand.M) && hand.M >= 0.0)) return bad("hand.M must be finite and >= 0");
+  if (!(std::isfinite(hand.B) && hand.B >= 0.0)) return bad("hand.B must be finite and >= 0");
+  if (!(std::isfinite(hand.K) && hand.K >= 0.0)) return bad("hand.K must be finite and >= 0");
+  return true;
+}
+
+void SetLowPassFilter(double cutoff_hz, double period_s, LoopOptions* loop) {
+  if (!(std::isfinite(cutoff_hz) && cutoff_hz > 0.0 && cutoff_hz < 0.5 / period_s)) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "--velocity-filter-hz = %g: must be > 0 and below the Nyquist frequency %g Hz",
+                  cutoff_hz, 0.5 / period_s);
+    throw InputError(buf);
+  }
+  const double a = std::exp(-2.0 * std::numbers::pi * cutoff_hz * period_s);
+  loop->filter_b = {1.0 - a};
+  loop->filter_a = {1.0, -a};
+}
+
+void ParseFilterCoefficients(const std::string& text, const std::string& what, LoopOptions* loop) {
+  const size_t semi = text.find(';');
+  const std::string hint = " (expected 'b:b0,b1,...;a:1,a1,...', powers of z^-1)";
+  if (semi == std::string::npos) throw InputError(what + ": no ';' between the b and a lists" + hint);
+  auto part = [&](std::string p, char key) {
+    const size_t a = p.find_first_not_of(" \t\r\n");
+    if (a == std::string::npos || p.size() < a + 2 || p[a] != key || p[a + 1] != ':') {
+      throw InputError(what + ": the " + std::string(1, key) + " list must start with '" + key + ":'" + hint);
+    }
+    return ParseNumbers(p.substr(a + 2), what);
+  };
+  LoopOptions l = *loop;
+  l.filter_b = part(text.substr(0, semi), 'b');
+  l.filter_a = part(text.substr(semi + 1), 'a');
+  std::string why;
+  if (!l.IsValid(&why)) throw InputError(what + ": " + why);
+  *loop = l;
+}
+
+Hand ParseHand(const std::string& text) {
+  const std::vector<double> v = ParseNumbers(text, "--hand");
+  if (v.size() != 3) throw InputError("--hand '" + text + "': expected three numbers M,B,K (SI, at the measured coordinate)");
+  Hand h{v[0], v[1], v[2]};
+  if (h.M < 0 || h.B < 0 || h.K < 0) throw InputError("--hand '" + text + "': M, B and K must be >= 0");
+  return h;
+}
+
+StateSpace ContinuousStateSpaceWithHand(const Plant& plant, const Hand& hand) {
+  StateSpace s = ContinuousStateSpace(plant);
+  const Eigen::RowVectorXd CA = s.C * s.A;
+  const Eigen::RowVectorXd CA2 = CA * s.A;
+  const double g = CA.dot(s.B);  // y'' = C A^2 x + g u (C B = 0)
+  const double den = 1.0 + hand.M * g;
+  const Eigen::RowVectorXd F = hand.M * CA2 + hand.B * CA + hand.K * s.C;
+  s.A -= s.B * F / den;
+  s.B /= den;
+  return s;
+}
+
+StateSpace DiscretizeZohStateSpace(const StateSpace& c, double period_s) {
+  if (!std::isfinite(period_s) || period_s <= 0.0) {
+    throw InputError("sample period = " + std::to_string(period_s) + " s: must be finite and > 0");
+  }
+  const int n = static_cast<int>(c.A.rows());
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n + 1, n + 1);
+  M.topLeftCorner(n, n) = c.A * period_s;
+  M.topRightCorner(n, 1) = c.B * period_s;
+  const Eigen::VectorXd s = zwidth::internal::BalancingScales(M);
+  const Eigen::MatrixXd Mb = s.cwiseInverse().asDiagonal() * M * s.asDiagonal();
+  const Eigen::MatrixXd E = s.asDiagonal() * Mb.exp() * s.cwiseInverse().asDiagonal();
+  StateSpace d;
+  d.A = E.topLeftCorner(n, n);
+  d.B = E.topRightCorner(n, 1);
+  d.C = c.C;
+  d.D = c.D;
+  d.period_s = period_s;
+  return d;
+}
+
+std::vector<KInterval> IntersectIntervals(const std::vector<KInterval>& a, const std::vector<KInterval>& b) {
+  std::vector<KInterval> out;
+  size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    KInterval r;
+    r.K_lo = std::max(a[i].K_lo, b[j].K_lo);
+    r.f_lo_hz = a[i].K_lo >= b[j].K_lo ? a[i].f_lo_hz : b[j].f_lo_hz;
+    r.K_hi = std::min(a[i].K_hi, b[j].K_hi);
+    r.f_hi_hz = a[i].K_hi <= b[j].K_hi ? a[i].f_hi_hz : b[j].f_hi_hz;
+    r.verified = a[i].verified && b[j].verified;
+    if (r.K_hi > r.K_lo) out.push_back(r);
+    (a[i].K_hi < b[j].K_hi ? i : j)++;
+  }
+  return out;
+}
+
+// ---- Passivity
+
+bool PassivityOptions::IsValid(std::string* why) const {
+  auto bad = [&](const char* m) { if (why) *why = m; return false; };
+  if (min_grid_points < 64) return bad("min_grid_points must be >= 64");
+  if (grid_points_per_delay < 8) return bad("grid_points_per_delay must be >= 8");
+  if (!(theta_tolerance > 0.0 && theta_tolerance < 1e-3)) return bad("theta_tolerance must be in (0, 1e-3)");
+  return true;
+}
+
+Passivity::Passivity(double b_phys, double period_s, int total_delay, const LoopOptions& loop,
+                     const PassivityOptions& options)
+    : b_(b_phys), T_(period_s), D_(total_delay), loop_(loop), options_(options) {
+  std::string why;
+  if (!options_.IsValid(&why)) throw InputError("passivity options: " + why);
+  if (!loop_.IsValid(&why)) throw InputError("loop options: " + why);
+  if (!(std::isfinite(b_) && b_ > 0.0)) throw InputError("passivity: the physical damping b must be > 0");
+  if (!(std::isfinite(T_) && T_ > 0.0)) throw InputError("passivity: the period must be > 0");
+  if (D_ < 0) throw InputError("passivity: the delay must be >= 0");
+  const int order = static_cast<int>(std::max(loop_.filter_a.size(), loop_.filter_b.size()));
+  const int n = std::max(options_.min_grid_points, options_.grid_points_per_delay * (2 * D_ + 2 + order));
+  th_.resize(n + 1);
+  P_.resize(n + 1);
+  R_.resize(n + 1);
+  for (int i = 0; i <= n; ++i) {
+    th_[i] = std::numbers::pi * i / n;
+    PR(th_[i], &P_[i], &R_[i]);
+  }
+}
+
+void Passivity::PR(double theta, double* P, double* R) const {
+  // P = (T/2) sin((2D+1) theta/2) / sin(theta/2), the Dirichlet kernel, with its limit 2D+1 at 0.
+  const double h = 0.5 * theta;
+  const double sh = std::sin(h);
+  *P = std::abs(sh) < 1e-300 ? 0.5 * T_ * (2 * D_ + 1) : 0.5 * T_ * std::sin((2 * D_ + 1) * h) / sh;
+  std::complex<double> F = 1.0;
+  if (loop_.HasFilter()) {
+    const std::complex<double> zi = std::polar(1.0, -theta);
+    std::complex<double> nb = 0.0, na = 0.0;
+    for (size_t i = loop_.filter_b.size(); i-- > 0;) nb = nb * zi + loop_.filter_b[i];
+    for (size_t i = loop_.filter_a.size(); i-- > 0;) na = na * zi + loop_.filter_a[i];
+    F = nb / na;
+  }
+  *R = (std::polar(1.0, -(D_ + 1) * theta) * F).real();
+}
+
+double Passivity::Rhs(double K, double B, double theta) const {
+  double P, R;
+  PR(theta, &P, &R);
+  return K * P - B * R;
+}
+
+PassiveInterval Passivity::At(double B) const {
+  PassiveInterval out;
+  const double inf = std::numeric_limits<double>::infinity();
+  // Ratio (b + B R)/P where P > 0 (an upper bound on K), where P < 0 a lower bound.
+  auto upper = [&](double t) {
+    double P, R;
+    PR(t, &P, &R);
+    return P > 0.0 ? (b_ + B * R) / P : inf;
+  };
+  const size_t n = th_.size();
+  double hi = inf, lo = -inf, th_hi = std::numeric_limits<double>::quiet_NaN();
+  bool zero_fail = false;
+  std::vector<double> u(n);
+  for (size_t i = 0; i < n; ++i) {
+    const double num = b_ + B * R_[i];
+    u[i] = P_[i] > 0.0 ? num / P_[i] : inf;
+    if (P_[i] < 0.0) lo = std::max(lo, num / P_[i]);
+    if (P_[i] == 0.0 && !(num > 0.0)) zero_fail = true;
+  }
+  // Refine every grid local minimum of the upper bound (golden section on the
+  // two neighbouring cells); endpoints 0 and pi are exact grid points.
+  for (size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(u[i])) continue;
+    const bool left = i == 0 || u[i] <= u[i - 1];
+    const bool right = i + 1 == n || u[i] <= u[i + 1];
+    if (!(left && right)) continue;
+    double t = th_[i], v = u[i];
+    if (i > 0 && i + 1 < n) {
+      const double tt = internal::GoldenExtremum(upper, th_[i - 1], th_[i + 1], -1.0, options_.theta_tolerance);
+      const double vv = upper(tt);
+      if (vv < v) { v = vv; t = tt; }
+    }
+    if (v < hi) { hi = v; th_hi = t; }
+  }
+  // Lower bounds refined the same way (maxima of (b + B R)/P where P < 0).
+  auto lower = [&](double t) {
+    double P, R;
+    PR(t, &P, &R);
+    return P < 0.0 ? (b_ + B * R) / P : -inf;
+  };
+  for (size_t i = 1; i + 1 < n; ++i) {
+    if (!(P_[i] < 0.0)) continue;
+    const double li = (b_ + B * R_[i]) / P_[i];
+    const double lm = P_[i - 1] < 0.0 ? (b_ + B * R_[i - 1]) / P_[i - 1] : -inf;
+    const double lp = P_[i + 1] < 0.0 ? (b_ + B * R_[i + 1]) / P_[i + 1] : -inf;
+    if (li >= lm && li >= lp) {
+      const double tt = internal::GoldenExtremum(lower, th_[i - 1], th_[i + 1], 1.0, options_.theta_tolerance);
+      lo = std::max(lo, lower(tt));
+    }
+  }
+  out.K_lo = std::max(0.0, lo);
+  out.theta_hi = th_hi;
+  if (zero_fail || !(hi > out.K_lo)) {
+    out.passive_set_empty = true;
+    out.K_hi = 0.0;
+    out.K_lo = 0.0;
+    return out;
+  }
+  out.K_hi = hi;
+  return out;
+}
+
+// ---- Cut-off sweep
+
+std::string ToString(SweepMeasure m) { return m == SweepMeasure::kKcrMax ? "kcr-max" : "area"; }
+
+SweepMeasure SweepMeasureFromString(const std::string& s) {
+  if (s == "kcr-max") return SweepMeasure::kKcrMax;
+  if (s == "area") return SweepMeasure::kArea;
+  throw InputError("measure '" + s + "': expected kcr-max or area");
+}
+
+bool CutoffSweepOptions::IsValid(double T, std::string* why) const {
+  auto bad = [&](const std::string& m) { if (why) *why = m; return false; };
+  if (cutoffs_hz.empty()) return bad("cutoffs_hz is empty");
+  for (double f : cutoffs_hz) {
+    if (!(f > 0.0 && f < 0.5 / T)) return bad("cutoffs_hz: each cut-off must be in (0, Nyquist)");
+  }
+  if (measure == SweepMeasure::kArea && !(area_B_max > 0.0 && std::isfinite(area_B_max))) {
+    return bad("area_B_max must be finite and > 0 for the area measure");
+  }
+  if (!(area_K_clip > 0.0)) return bad("area_K_clip must be > 0");
+  if (area_B_points < 2) return bad("area_B_points must be >= 2");
+  return true;
+}
+
+double StableArea(const ZWidth& z, double B_max, double K_clip, int points) {
+  double area = 0.0, prev = 0.0;
+  for (int i = 0; i < points; ++i) {
+    const double B = B_max * i / (points - 1);
+    double len = 0.0;
+    for (const KInterval& iv : z.StableIntervals(B)) len += std::min(iv.K_hi, K_clip) - std::min(iv.K_lo, K_clip);
+    if (i > 0) area += 0.5 * (len + prev) * (B_max / (points - 1));
+    prev = len;
+  }
+  return area;
+}
+
+CutoffSweepResult SweepCutoff(const Plant& plant, double T, int delay, const LoopOptions& loop,
+                              const CutoffSweepOptions& o) {
+  std::string why;
+  if (!o.IsValid(T, &why)) throw InputError("cut-off sweep: " + why);
+  CutoffSweepResult r;
+  for (double f : o.cutoffs_hz) {
+    LoopOptions l = loop;
+    SetLowPassFilter(f, T, &l);
+    const ZWidth z(plant, T, delay, l);
+    r.cutoffs_hz.push_back(f);
+    if (o.measure == SweepMeasure::kKcrMax) {
+      r.summaries.push_back(z.Summarize());
+      r.measure.push_back(r.summaries.back().K_cr_max);
+    } else {
+      r.summaries.push_back(DelaySummary{});
+      r.measure.push_back(StableArea(z, o.area_B_max, o.area_K_clip, o.area_B_points));
+    }
+    const double m = r.measure.back();
+    if (std::isfinite(m) && (r.best < 0 || m > r.measure[r.best])) r.best = static_cast<int>(r.measure.size()) - 1;
+  }
+  return r;
+}
+
+}  // namespace zwidth::stability

@@ -1,0 +1,380 @@
+// Issue 16: the haptic loop with a velocity filter and the user's hand, and
+// the passivity boundary, against independent references:
+// - the hand's state space against G / (1 + G Z_h) from the plant's formula;
+// - the stable intervals against eigenvalues of the closed loop built as one
+//   state-space matrix (tests/brute_force.h: LoopBruteForce), with its own ZOH
+//   (unbalanced matrix exponential of the augmented matrix);
+// - the passivity boundary against Colgate's closed form (rigid body, no delay
+//   or filter) and against a direct evaluation of Colgate and Schenkel's
+//   condition on a fine frequency grid.
+// Random devices: seeded (tests/stability_region_test.cc's recipe).
+#include <cmath>
+#include <complex>
+#include <cstdio>
+#include <random>
+
+#include <gtest/gtest.h>
+#include <unsupported/Eigen/MatrixFunctions>
+
+#include "model/error.h"
+#include "stability/haptic_loop.h"
+#include "stability/uncertainty.h"
+#include "tests/brute_force.h"
+
+namespace zwidth::stability {
+namespace {
+
+// A random plausible device: 0-3 modes between 30 and 400 Hz (T = 1 ms),
+// damping ratios 0.002-0.3, antiresonances within +-30% of their resonance.
+Plant RandomDevice(std::mt19937_64& rng, int modes) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Plant p;
+  p.m = std::pow(10.0, -3.5 + 2.5 * u(rng));
+  p.b = p.m * std::pow(10.0, 0.3 + 1.2 * u(rng));
+  for (int i = 0; i < modes; ++i) {
+    Mode md;
+    md.omega = 2 * M_PI * (30.0 + 370.0 * u(rng));
+    md.c = 2 * md.omega * std::pow(10.0, -2.7 + 2.2 * u(rng));
+    md.v = md.omega * (0.7 + 0.6 * u(rng));
+    md.d = 2 * md.v * std::pow(10.0, -2.7 + 2.2 * u(rng));
+    p.modes.push_back(md);
+  }
+  return p;
+}
+
+// Hands scaled to the device (a hand on a small device is heavy for it):
+// 0 none; 1 light grasp (M = 0.3 m, B = b, hand-arm resonance 2 Hz with the
+// device's mass); 2 firm (M = 2 m, B = 5 b, 6 Hz).
+Hand HandOf(int level, const Plant& p) {
+  if (level == 0) return {};
+  const double M = level == 1 ? 0.3 * p.m : 2.0 * p.m;
+  const double f = level == 1 ? 2.0 : 6.0;
+  const double w = 2 * M_PI * f;
+  return {M, (level == 1 ? 1.0 : 5.0) * p.b, w * w * (p.m + M)};
+}
+
+// The sampled plant (with hand) for the brute force: its own ZOH, e^{[[A, B], [0, 0]] T}
+// without balancing.
+LoopBruteForce MakeBrute(const Plant& p, const LoopOptions& loop, int delay, double T) {
+  const StateSpace c = ContinuousStateSpaceWithHand(p, loop.hand);
+  const int n = static_cast<int>(c.A.rows());
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n + 1, n + 1);
+  M.topLeftCorner(n, n) = c.A * T;
+  M.topRightCorner(n, 1) = c.B * T;
+  const Eigen::MatrixXd E = M.exp();
+  return LoopBruteForce(E.topLeftCorner(n, n), E.topRightCorner(n, 1), c.C, loop.filter_b, loop.filter_a,
+                        delay + p.delay_samples, T);
+}
+
+TEST(HapticLoop, HandStateSpaceIsGOverOnePlusGZ) {
+  std::mt19937_64 rng(16);
+  for (int k = 0; k < 8; ++k) {
+    const Plant p = RandomDevice(rng, k % 4);
+    const Hand h = HandOf(1 + k % 2, p);
+    const StateSpace s = ContinuousStateSpaceWithHand(p, h);
+    const int n = static_cast<int>(s.A.rows());
+    for (double w : {0.3, 7.0, 60.0, 500.0, 2500.0}) {
+      const std::complex<double> jw(0.0, w);
+      const std::complex<double> g = ContinuousResponse(p, w);
+      const std::complex<double> want = g / (1.0 + g * (h.M * jw * jw + h.B * jw + h.K));
+      const Eigen::MatrixXcd R = jw * Eigen::MatrixXcd::Identity(n, n) - s.A.cast<std::complex<double>>();
+      const std::complex<double> got =
+          (s.C.cast<std::complex<double>>() * R.partialPivLu().solve(s.B.cast<std::complex<double>>()))(0);
+      EXPECT_LT(std::abs(got - want), 1e-9 * std::abs(want)) << "k=" << k << " w=" << w;
+    }
+  }
+}
+
+TEST(HapticLoop, DefaultOptionsAreValidAndBadOnesNameTheirField) {
+  std::string why;
+  EXPECT_TRUE(LoopOptions{}.IsValid(&why));
+  EXPECT_TRUE(PassivityOptions{}.IsValid(&why));
+  LoopOptions l;
+  l.filter_b = {0.5};
+  l.filter_a = {1.0, -1.2};  // pole at 1.2
+  EXPECT_FALSE(l.IsValid(&why));
+  EXPECT_NE(why.find("filter_a"), std::string::npos);
+  l.filter_a = {2.0, -0.5};
+  EXPECT_FALSE(l.IsValid(&why));
+  EXPECT_NE(why.find("a0"), std::string::npos);
+  l = {};
+  l.hand.K = -1.0;
+  EXPECT_FALSE(l.IsValid(&why));
+  EXPECT_NE(why.find("hand.K"), std::string::npos);
+  EXPECT_THROW(ParseFilterCoefficients("b:1;a:1,x", "--velocity-filter-coeffs", &l), InputError);
+  EXPECT_THROW(ParseFilterCoefficients("0.5;1,-0.5", "--velocity-filter-coeffs", &l), InputError);
+  EXPECT_THROW(ParseHand("1,2"), InputError);
+  l = {};
+  EXPECT_THROW(SetLowPassFilter(600.0, 1e-3, &l), InputError);
+  ParseFilterCoefficients("b:0.25, 0.25 ; a:1,-0.5", "x", &l);
+  EXPECT_EQ(l.filter_b.size(), 2u);
+  EXPECT_EQ(l.filter_a[1], -0.5);
+}
+
+TEST(HapticLoop, WithoutFilterOrHandItIsThePapersLoop) {
+  std::mt19937_64 rng(3);
+  for (int k = 0; k < 4; ++k) {
+    const Plant p = RandomDevice(rng, k);
+    const ZWidth a(p, 1e-3, 3), b(p, 1e-3, 3, LoopOptions{});
+    // F = b0/(a0) = 1 written as a filter goes through the filtered code path.
+    LoopOptions one;
+    one.filter_b = {1.0};
+    one.filter_a = {1.0};
+    const ZWidth c(p, 1e-3, 3, one);
+    const DelaySummary sa = a.Summarize(), sb = b.Summarize(), sc = c.Summarize();
+    EXPECT_EQ(sa.K_cr_at_zero_B, sb.K_cr_at_zero_B);
+    EXPECT_EQ(sa.B_max, sb.B_max);
+    EXPECT_NEAR(sc.K_cr_max, sa.K_cr_max, 1e-8 * sa.K_cr_max);
+    EXPECT_NEAR(sc.B_max, sa.B_max, 1e-6 * sa.B_max);
+  }
+}
+
+struct Tally {
+  long points = 0, stable = 0, near_boundary = 0, disagree = 0;
+};
+
+// As stability_region_test's Classify: K on a geometric scan plus points inside
+// and 1e-4 around every interval end, on 60 values of B; a disagreement counts
+// only where the brute force's verdict holds at K, B (1 +- 1e-6).
+Tally Classify(const Plant& p, int delay, const LoopOptions& loop, int min_points) {
+  const double T = 1e-3;
+  const ZWidth z(p, T, delay, loop);
+  const LoopBruteForce bf = MakeBrute(p, loop, delay, T);
+  const DelaySummary s = z.Summarize();
+  Tally t;
+  const double b_top = 1.3 * (std::isfinite(s.B_max) && s.B_max > 0 ? s.B_max : p.m / T);
+  const int nb = 60;
+  auto stable_bf = [&](double K, double B) { return bf.MaxRoot(K, B) < 1.0; };
+  for (int i = 0; i < nb; ++i) {
+    const double B = b_top * i / (nb - 1);
+    const std::vector<KInterval> iv = z.StableIntervals(B);
+    double k_top = 0.0;
+    for (const KInterval& v : iv) k_top = std::max(k_top, std::isfinite(v.K_hi) ? v.K_hi : v.K_lo);
+    for (const Crossing& x : z.Crossings(B)) if (x.K > 0 && std::isfinite(x.K)) k_top = std::max(k_top, x.K);
+    if (!(k_top > 0.0)) k_top = 100.0 * p.m / (T * T);
+    std::vector<double> ks;
+    const int nk = min_points / nb + 1;
+    for (int j = 0; j < nk; ++j) ks.push_back(k_top * 2.0 * std::pow(1e-4, 1.0 - double(j) / (nk - 1)));
+    for (const KInterval& v : iv) {
+      const double lo = v.K_lo > 0 ? v.K_lo : 1e-3 * v.K_hi, hi = std::isfinite(v.K_hi) ? v.K_hi : 10 * lo;
+      for (int j = 1; j <= 10; ++j) ks.push_back(lo * std::pow(hi / lo, j / 11.0));
+      if (v.K_lo > 0) { ks.push_back(v.K_lo * (1 + 1e-4)); ks.push_back(v.K_lo * (1 - 1e-4)); }
+      if (std::isfinite(v.K_hi)) { ks.push_back(v.K_hi * (1 - 1e-4)); ks.push_back(v.K_hi * (1 + 1e-4)); }
+    }
+    for (double K : ks) {
+      bool mine = false;
+      for (const KInterval& v : iv) mine = mine || (K > v.K_lo && K < v.K_hi);
+      const bool ref = stable_bf(K, B);
+      ++t.points;
+      t.stable += mine;
+      if (mine == ref) continue;
+      const bool flips = stable_bf(K * (1 + 1e-6), B) != ref || stable_bf(K * (1 - 1e-6), B) != ref ||
+                         stable_bf(K, B * (1 + 1e-6)) != ref || stable_bf(K, B * (1 - 1e-6)) != ref;
+      if (flips) { ++t.near_boundary; continue; }
+      ++t.disagree;
+      ADD_FAILURE() << "d=" << delay << " B=" << B << " K=" << K << " intervals say " << mine
+                    << ", eigenvalues (max |z| " << bf.MaxRoot(K, B) << ") say " << ref;
+      if (t.disagree > 5) return t;
+    }
+  }
+  return t;
+}
+
+TEST(HapticLoop, StableIntervalsAgreeWithClosedLoopEigenvaluesWithFilterAndHand) {
+  std::mt19937_64 rng(1997);
+  std::uniform_int_distribution<int> delay(0, 20);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  long total = 0, stable = 0, near = 0;
+  for (int k = 0; k < 16; ++k) {
+    const Plant p = RandomDevice(rng, k % 4);
+    const int d = k == 0 ? 0 : k == 1 ? 20 : delay(rng);
+    LoopOptions loop;
+    const double T = 1e-3;
+    const double fc = 5.0 * std::pow(250.0 / 5.0, u(rng));  // 5 Hz .. Nyquist/2, log-uniform
+    if (k % 4 == 3) {
+      // Two first-order sections in series (a general IIR of order 2).
+      const double a1 = std::exp(-2 * M_PI * fc * T), a2 = std::exp(-2 * M_PI * 2 * fc * T);
+      loop.filter_b = {(1 - a1) * (1 - a2)};
+      loop.filter_a = {1.0, -(a1 + a2), a1 * a2};
+    } else if (k % 4 == 2) {
+      // Average of two samples, then a low-pass: a zero at z = -1.
+      const double a = std::exp(-2 * M_PI * fc * T);
+      loop.filter_b = {(1 - a) / 2, (1 - a) / 2};
+      loop.filter_a = {1.0, -a};
+    } else if (k % 4 == 1) {
+      SetLowPassFilter(fc, T, &loop);
+    }
+    loop.hand = HandOf(k % 3, p);
+    const Tally t = Classify(p, d, loop, 3000);
+    EXPECT_EQ(t.disagree, 0) << p.modes.size() << " modes, d = " << d << ", fc = " << fc << ", hand " << k % 3;
+    EXPECT_GT(t.points - t.stable, 100) << k;
+    total += t.points;
+    stable += t.stable;
+    near += t.near_boundary;
+  }
+  EXPECT_GT(stable, total / 10);
+  std::printf("%ld points, %ld stable, %ld within 1e-6 of a boundary\n", total, stable, near);
+}
+
+TEST(HapticLoop, IntersectionOfHandsIsStableForEveryHand) {
+  std::mt19937_64 rng(8);
+  const Plant p = RandomDevice(rng, 2);
+  std::vector<ZWidth> zs;
+  for (int h = 0; h < 3; ++h) {
+    LoopOptions l;
+    l.hand = HandOf(h, p);
+    SetLowPassFilter(50.0, 1e-3, &l);
+    zs.emplace_back(p, 1e-3, 4, l);
+  }
+  const double Bm = zs[0].Summarize().B_max;
+  for (int i = 0; i < 40; ++i) {
+    const double B = 1.2 * Bm * i / 39;
+    std::vector<KInterval> all = zs[0].StableIntervals(B);
+    for (int h = 1; h < 3; ++h) all = IntersectIntervals(all, zs[h].StableIntervals(B));
+    for (int j = 0; j < 200; ++j) {
+      const double K = 1e-2 * std::pow(1e6, j / 199.0) * p.m / 1e-6 * 1e-3;
+      bool in = false;
+      for (const KInterval& v : all) in = in || (K > v.K_lo && K < v.K_hi);
+      bool every = true;
+      for (const ZWidth& z : zs) every = every && z.IsStable(K, B);
+      const bool edge = zs[0].IsStable(K * (1 + 1e-9), B) != zs[0].IsStable(K * (1 - 1e-9), B) ||
+                        zs[1].IsStable(K * (1 + 1e-9), B) != zs[1].IsStable(K * (1 - 1e-9), B) ||
+                        zs[2].IsStable(K * (1 + 1e-9), B) != zs[2].IsStable(K * (1 - 1e-9), B);
+      if (!edge) EXPECT_EQ(in, every) << "B=" << B << " K=" << K;
+    }
+  }
+}
+
+TEST(HapticLoop, KcrStdWithFilterAndHandMatchesFiniteDifferencesOfKcr) {
+  // Implicit differentiation (stability/uncertainty.h) against K_CR(B)
+  // recomputed on perturbed plants: J Sigma J^T with a seeded diagonal covariance.
+  std::mt19937_64 rng(21);
+  int compared = 0;
+  for (int k = 0; k < 3; ++k) {
+    const Plant p = RandomDevice(rng, 1 + k);
+    LoopOptions l;
+    SetLowPassFilter(40.0 + 30.0 * k, 1e-3, &l);
+    if (k > 0) l.hand = HandOf(k, p);
+    const int d = 2 + 2 * k, np = NumLogParameters(p);
+    std::vector<double> cov(np * np, 0.0), var(np);
+    std::uniform_real_distribution<double> u(1e-5, 1e-3);
+    for (int i = 0; i < np; ++i) cov[i * np + i] = var[i] = u(rng);
+    const ZWidth z(p, 1e-3, d, l);
+    const DelaySummary s = z.Summarize();
+    std::vector<CriticalPoint> pts;
+    for (double f : {0.0, 0.3, 0.6}) pts.push_back(z.At(f * s.B_max_from_zero));
+    const std::vector<double> sd = KcrStd(p, cov, 1e-3, d, pts, {}, l);
+    for (size_t j = 0; j < pts.size(); ++j) {
+      if (!(pts[j].K_cr > 0 && std::isfinite(pts[j].K_cr))) continue;
+      double v = 0.0;
+      for (int i = 0; i < np; ++i) {
+        std::vector<double> dx(np, 0.0);
+        dx[i] = 1e-5;
+        const double kp = ZWidth(PerturbLog(p, dx), 1e-3, d, l).At(pts[j].B).K_cr;
+        dx[i] = -1e-5;
+        const double km = ZWidth(PerturbLog(p, dx), 1e-3, d, l).At(pts[j].B).K_cr;
+        const double g = (kp - km) / 2e-5;
+        v += g * g * var[i];
+      }
+      EXPECT_NEAR(sd[j], std::sqrt(v), 1e-4 * std::sqrt(v)) << "k=" << k << " B=" << pts[j].B;
+      ++compared;
+    }
+  }
+  EXPECT_GE(compared, 6);
+}
+
+// ---- Passivity
+
+TEST(Passivity, RigidBodyWithoutDelayOrFilterIsColgatesClosedForm) {
+  const double b = 0.004, T = 1e-3;
+  const Passivity pa(b, T, 0, LoopOptions{});
+  for (double B : {0.0, 0.001, 0.0025, 0.0039}) {
+    const PassiveInterval r = pa.At(B);
+    EXPECT_NEAR(r.K_hi, 2.0 * (b - B) / T, 1e-12 * b / T) << B;  // b > K T/2 + |B|
+    EXPECT_EQ(r.K_lo, 0.0);
+  }
+  EXPECT_TRUE(pa.At(0.0041).passive_set_empty);
+}
+
+// Colgate and Schenkel's condition evaluated directly, term by term, with H
+// from its coefficients: max over theta of (T/2)/(1 - cos theta) Re{(1 - e^{-j theta}) H}.
+double ColgateMaxRhs(double K, double B, double T, int D, const LoopOptions& l, int n) {
+  double best = -1e300;
+  for (int i = 1; i <= n; ++i) {
+    const double th = M_PI * i / n;
+    const std::complex<double> z = std::exp(std::complex<double>(0.0, th));
+    std::complex<double> F = 1.0;
+    if (l.HasFilter()) {
+      std::complex<double> nb = 0.0, na = 0.0;
+      for (size_t k = 0; k < l.filter_b.size(); ++k) nb += l.filter_b[k] * std::polar(1.0, -th * k);
+      for (size_t k = 0; k < l.filter_a.size(); ++k) na += l.filter_a[k] * std::polar(1.0, -th * k);
+      F = nb / na;
+    }
+    const std::complex<double> H = std::polar(1.0, -th * D) * (K + B * F * (1.0 - 1.0 / z) / T);
+    best = std::max(best, T / 2 / (1 - std::cos(th)) * ((1.0 - 1.0 / z) * H).real());
+  }
+  return best;
+}
+
+TEST(Passivity, BoundaryMatchesADirectEvaluationWithDelayAndFilter) {
+  std::mt19937_64 rng(1997);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double T = 1e-3;
+  int checked = 0;
+  for (int k = 0; k < 24; ++k) {
+    const double b = std::pow(10.0, -3.0 + 2.0 * u(rng));
+    const int D = k % 12 == 0 ? 0 : static_cast<int>(20 * u(rng));
+    LoopOptions l;
+    if (k % 3 == 1) SetLowPassFilter(5.0 * std::pow(50.0, u(rng)), T, &l);
+    if (k % 3 == 2) { l.filter_b = {0.1, 0.1}; l.filter_a = {1.0, -0.8}; }
+    const Passivity pa(b, T, D, l);
+    const double B = b * 0.5 * u(rng);
+    const PassiveInterval r = pa.At(B);
+    if (r.passive_set_empty) {
+      EXPECT_GT(ColgateMaxRhs(1e-9, B, T, D, l, 200000), b) << k;
+      continue;
+    }
+    ASSERT_TRUE(std::isfinite(r.K_hi)) << k;
+    EXPECT_LT(ColgateMaxRhs(r.K_hi * (1 - 1e-4), B, T, D, l, 200000), b) << k << " D=" << D;
+    EXPECT_GT(ColgateMaxRhs(r.K_hi * (1 + 1e-4), B, T, D, l, 200000), b) << k << " D=" << D;
+    ++checked;
+  }
+  EXPECT_GT(checked, 12);
+}
+
+TEST(Passivity, RigidBodyPassiveWallIsStable) {
+  // Passivity of the sampled rigid body with its wall implies a stable loop:
+  // K_P(B) <= K_CR(B) at every B where both exist.
+  Plant p;
+  p.m = 1e-3;
+  p.b = 4e-3;
+  for (int d : {0, 2, 8}) {
+    LoopOptions l;
+    SetLowPassFilter(50.0, 1e-3, &l);
+    const ZWidth z(p, 1e-3, d, l);
+    const Passivity pa(p.b, 1e-3, d, l);
+    for (double B : {0.0, 0.001, 0.002, 0.003}) {
+      const PassiveInterval r = pa.At(B);
+      if (r.passive_set_empty) continue;
+      EXPECT_LE(r.K_hi, z.At(B).K_cr * (1 + 1e-9)) << "d=" << d << " B=" << B;
+    }
+  }
+}
+
+TEST(CutoffSweep, BestCutoffHasTheLargestMeasure) {
+  std::mt19937_64 rng(4);
+  const Plant p = RandomDevice(rng, 1);
+  CutoffSweepOptions o;
+  for (int i = 0; i < 8; ++i) o.cutoffs_hz.push_back(5.0 * std::pow(40.0, i / 7.0));
+  const CutoffSweepResult r = SweepCutoff(p, 1e-3, 2, LoopOptions{}, o);
+  ASSERT_GE(r.best, 0);
+  for (int i = 0; i < 8; ++i) {
+    LoopOptions l;
+    SetLowPassFilter(o.cutoffs_hz[i], 1e-3, &l);
+    EXPECT_EQ(r.measure[i], ZWidth(p, 1e-3, 2, l).Summarize().K_cr_max);
+    EXPECT_LE(r.measure[i], r.measure[r.best]);
+  }
+}
+
+}  // namespace
+}  // namespace zwidth::stability
