@@ -1,9 +1,11 @@
 #include <cstdio>
+#include <filesystem>
 #include <sstream>
 
 #include "apps/common.h"
 #include "io/atomic_file.h"
 #include "io/frf_file.h"
+#include "model/error.h"
 
 namespace zwidth::app {
 
@@ -22,7 +24,16 @@ void AddEstimateCommand(CLI::App& app) {
   AddEstimateFlags(cmd, &f->est);
   cmd->callback([f] {
     io::CheckOutputFolder(f->out, f->logs);
-    if (!f->coherences.empty()) io::CheckOutputFolder(f->coherences, f->logs);
+    if (!f->coherences.empty()) {
+      std::vector<std::string> inputs = f->logs;
+      inputs.push_back(f->out);  // an existing file named twice
+      io::CheckOutputFolder(f->coherences, inputs);
+      std::error_code e1, e2;
+      if (std::filesystem::weakly_canonical(f->coherences, e1) == std::filesystem::weakly_canonical(f->out, e2) &&
+          !e1 && !e2) {
+        throw InputError("--coherences-output '" + f->coherences + "' is also -o: give two different files");
+      }
+    }
     const LogsEstimate e = EstimateFromLogs(f->logs, f->est);
     const ident::FrequencyResponse& r = e.response.frf;
     io::WriteFrequencyResponse(f->out, r);

@@ -95,8 +95,10 @@ void AddStabilityCommands(CLI::App& app) {
   b->add_option("--seed", bf->seed, "seed of --monte-carlo")->capture_default_str();
   AddLoopFlags(b, &bf->loop);
   b->callback([bf] {
-    io::CheckOutputFolder(bf->out, {bf->model});
-    if (!bf->summary.empty()) io::CheckOutputFolder(bf->summary, {bf->model});
+    // The inputs: the model and a velocity filter file (text "b:..;a:.." is no file and matches nothing).
+    const std::vector<std::string> inputs = {bf->model, bf->loop.filter_coeffs};
+    io::CheckOutputFolder(bf->out, inputs);
+    if (!bf->summary.empty()) io::CheckOutputFolder(bf->summary, inputs);
     const io::ModelFile mf = io::ReadModelJson(bf->model);
     const double T = ResolvePeriod(bf->period, mf);
     if (bf->delays.empty()) throw InputError("--delays is empty");
@@ -258,7 +260,7 @@ void AddStabilityCommands(CLI::App& app) {
   sw->add_option("--hand", sf->hands, "the user's hand M,B,K (SI) kept in the loop while sweeping");
   sw->add_option("-o,--output", sf->out, "CSV cutoff_hz,measure");
   sw->callback([sf] {
-    if (!sf->out.empty()) io::CheckOutputFolder(sf->out);
+    if (!sf->out.empty()) io::CheckOutputFolder(sf->out, {sf->model});
     const io::ModelFile mf = io::ReadModelJson(sf->model);
     CheckDelay(sf->delay, "--delay");
     const double T = ResolvePeriod(sf->period, mf);
@@ -320,7 +322,7 @@ void AddStabilityCommands(CLI::App& app) {
   r->add_flag("--json", rf->json, "print only JSON on standard output");
   r->add_option("-o,--output", rf->trace, "trace CSV (t, relay, damping, command, position)");
   r->callback([rf] {
-    if (!rf->trace.empty()) io::CheckOutputFolder(rf->trace);
+    if (!rf->trace.empty()) io::CheckOutputFolder(rf->trace, {rf->model});
     const io::ModelFile mf = io::ReadModelJson(rf->model);
     rf->o.period_s = ResolvePeriod(rf->period, mf);
     CheckDelay(rf->o.delay_samples, "--delay");

@@ -4,6 +4,9 @@
 #include <fstream>
 #include <sstream>
 
+#include <sys/stat.h>
+
+#include "io/atomic_file.h"
 #include "model/error.h"
 
 namespace zwidth::app {
@@ -31,14 +34,24 @@ std::vector<stability::LoopOptions> ResolveLoops(const LoopFlags& f, double T) {
     if (a != std::string::npos && c.compare(a, 2, "b:") == 0) {
       stability::ParseFilterCoefficients(c, "--velocity-filter-coeffs", &base);
     } else {
+      // A regular file only (a FIFO would block, /dev/zero never ends), read
+      // at most 64 kB + 1 bytes; noted as an input, so no output replaces it.
+      struct stat st;
+      if (::stat(c.c_str(), &st) != 0) {
+        throw InputError("--velocity-filter-coeffs '" + c + "': not 'b:..;a:..' and no such readable file");
+      }
+      io::CheckInputFile(c, "velocity filter file");
       std::ifstream in(c, std::ios::binary);
       if (!in) {
         throw InputError("--velocity-filter-coeffs '" + c + "': not 'b:..;a:..' and no such readable file");
       }
-      std::ostringstream ss;
-      ss << in.rdbuf();
-      std::string text = ss.str();
-      if (text.size() > 65536) throw InputError("--velocity-filter-coeffs '" + c + "': file over 64 kB");
+      constexpr std::streamsize kMaxFilterFileBytes = 65536;
+      std::string text(kMaxFilterFileBytes + 1, '\0');
+      in.read(text.data(), kMaxFilterFileBytes + 1);
+      text.resize(static_cast<size_t>(in.gcount()));
+      if (text.size() > static_cast<size_t>(kMaxFilterFileBytes)) {
+        throw InputError("--velocity-filter-coeffs '" + c + "': file over 64 kB");
+      }
       for (char& ch : text) if (ch == '\n' || ch == '\r') ch = ' ';
       stability::ParseFilterCoefficients(text, "--velocity-filter-coeffs file '" + c + "'", &base);
     }

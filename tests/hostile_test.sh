@@ -42,6 +42,11 @@ expect out-dev-null "/dev/null' is a character device, not a regular file" -- "$
 check dev-null-intact '[ -c /dev/null ]'
 expect out-dev-full "/dev/full' is a character device" -- "$ZW" fit "$T/frf.csv" -o /dev/full
 check dev-full-intact '[ -c /dev/full ]'
+expect excite-out-dev-null "/dev/null' is a character device" -- "$ZW" excite -o /dev/null
+expect filter-sweep-out-dev-null "/dev/null' is a character device" -- "$ZW" filter-sweep "$M" --delay 2 --points 3 -o /dev/null
+expect relay-out-dev-null "/dev/null' is a character device" -- "$ZW" relay "$M" --delay 2 --damping 0 -o /dev/null
+expect coherences-out-dev-null "/dev/null' is a character device" -- "$ZW" estimate "$T/good.csv" -o "$T/coh_frf.csv" --coherences-output /dev/null
+check coherences-dev-null-nothing '[ ! -e "$T/coh_frf.csv" ] && [ -c /dev/null ]'
 if mknod "$T/chardev" c 1 3 2>/dev/null; then
   expect out-mknod-chardev "chardev' is a character device" -- "$ZW" simulate --model "$M" -o "$T/chardev" --seconds 1
   check mknod-intact '[ -c "$T/chardev" ]'
@@ -71,6 +76,15 @@ expect fit-out-is-input "is the input" -- "$ZW" fit "$T/frf.csv" -o "$T/frf.csv"
 expect simulate-out-is-model "is the input" -- "$ZW" simulate --model "$T/model.json" -o "$T/model.json" --seconds 1
 expect export-out-is-model "is the input" -- "$ZW" export "$T/model.json" --format matlab -o "$T/model.json"
 expect boundary-out-is-model "is the input" -- "$ZW" boundary "$T/model.json" -o "$T/model.json"
+# Refused before any work: a later bad flag (--points 1, --b-points 1) is not
+# reached, and relay does not start simulating.
+expect filter-sweep-out-is-model "is the input" -- "$ZW" filter-sweep "$T/model.json" --delay 2 --points 1 -o "$T/model.json"
+expect relay-out-is-model "is the input" -- "$ZW" relay "$T/model.json" --delay 2 --damping 0 --seconds 1 -o "$T/model.json"
+check relay-refused-before-simulating '! grep -q simulating "$T/stderr"'
+echo "b:1;a:1" > "$T/filter.txt"
+expect boundary-out-is-filter-file "filter.txt' is the input" -- "$ZW" boundary "$T/model.json" --velocity-filter-coeffs "$T/filter.txt" --b-points 1 -o "$T/filter.txt"
+check filter-file-intact '[ "$(cat "$T/filter.txt")" = "b:1;a:1" ]'
+expect coherences-output-is-output "also -o" -- "$ZW" estimate "$T/good.csv" -o "$T/same.csv" --coherences-output "$T/same.csv"
 check model-intact 'cmp -s "$M" "$T/model.json"'
 # "-": standard output; a symlink to a regular file is followed (the link stays)
 "$ZW" estimate "$T/good.csv" -o - > "$T/frf_stdout.csv" 2>/dev/null
@@ -87,7 +101,8 @@ check run-nonempty-intact '[ "$(ls "$T/full_dir")" = notes.txt ] && grep -q "kee
 check run-force-keeps-others '[ -f "$T/full_dir/model.json" ] && grep -q "keep me" "$T/full_dir/notes.txt" && [ -z "$(ls -a "$T" | grep tmp-)" ]'
 expect run-bad-log-leaves-nothing "cannot open log" -- "$ZW" run "$T/absent.csv" -o "$T/run_fail"
 check run-fail-no-folder '[ ! -e "$T/run_fail" ] && [ -z "$(ls -a "$T" | grep run_fail)" ]'
-expect run-grid-cap "more than 100000 B grid points" -- "$ZW" run "$T/good.csv" -o "$T/run_grid" --b-step 1e-12
+# The cap is on B values x delays (stability::kMaxBGridValues, 1e6): 2.6e11 x 3 here.
+expect run-grid-cap "B grid would have .* values x 3 delays, over the cap of 1000000" -- "$ZW" run "$T/good.csv" -o "$T/run_grid" --b-step 1e-12
 check run-grid-no-folder '[ ! -e "$T/run_grid" ]'
 # A folder name holding a quote and $(...): nothing executed, figures drawn.
 evil="$T/it's \$(touch pwned) \`touch pwned2\`; touch pwned3 '"
@@ -97,15 +112,16 @@ if command -v gnuplot >/dev/null; then
   check run-evil-name-figures '[ -s "$evil/figures/bode.svg" ]'
 fi
 mkdir "$T/empty_dir"
-"$ZW" run "$T/good.csv" -o "$T/empty_dir" >/dev/null 2>&1
-check run-empty-folder '[ -f "$T/empty_dir/report.html" ]'
+"$ZW" run "$T/good.csv" -o "$T/empty_dir" >/dev/null 2>"$T/stderr"; rc=$?
+check "run-empty-folder (exit $rc)" '[ $rc -eq 0 ] && [ -f "$T/empty_dir/report.html" ] && [ -z "$(ls -a "$T" | grep empty_dir.tmp-)" ]'
 # Two runs into one new folder at once: one wins whole, the other fails.
 "$ZW" simulate --model "$M" -o "$T/other.csv" --seconds 10 --seed 7 2>/dev/null
 "$ZW" run "$T/good.csv" -o "$T/race" >/dev/null 2>"$T/race1.err" & p1=$!
 "$ZW" run "$T/other.csv" -o "$T/race" >/dev/null 2>"$T/race2.err" & p2=$!
 wait $p1; r1=$?; wait $p2; r2=$?
 winner=""; [ $r1 -eq 0 ] && winner=good.csv; [ $r2 -eq 0 ] && winner=other.csv
-check run-concurrent-no-mix "[ \$((r1 + r2)) -eq 2 ] && grep -q '\"log\": \".*$winner\"' '$T/race/summary.json' && grep -q 'filled by another process\|is not empty' '$T/race1.err' '$T/race2.err' && [ -z \"\$(leftovers)\" ]"
+cat "$T/race1.err" "$T/race2.err" | grep -i error > "$T/stderr"
+check "run-concurrent-no-mix (exits $r1 $r2)" "[ \$((r1 + r2)) -eq 2 ] && grep -q '\"log\": \".*$winner\"' '$T/race/summary.json' && grep -q 'filled by another process\|is not empty' '$T/race1.err' '$T/race2.err' && [ -z \"\$(leftovers)\" ]"
 
 # ---- 3. signals remove temporary files; a full disk fails the write
 # Started through python to undo the SIG_IGN for SIGINT that a background job inherits.
@@ -145,6 +161,8 @@ expect in-dev-zero-model "/dev/zero: the model file is a character device" -- "$
 expect in-fifo-model "the model file is a FIFO" -- "$ZW" export "$T/good_fifo.csv" -o "$T/x4.json"
 expect in-fifo-fit "is a FIFO" -- "$ZW" fit "$T/good_fifo.csv" -o "$T/x5.json"
 expect in-dir-log "the log is a folder" -- "$ZW" estimate "$T/adir" -o "$T/x6.csv"
+expect in-dev-zero-filter "/dev/zero: the velocity filter file is a character device" -- "$ZW" boundary "$M" --velocity-filter-coeffs /dev/zero -o "$T/x28.csv"
+expect in-fifo-filter "the velocity filter file is a FIFO" -- "$ZW" boundary "$M" --velocity-filter-coeffs "$T/good_fifo.csv" -o "$T/x29.csv"
 expect in-fifo-scene "scene file is a FIFO" -- "$ZW" check "$T/good_fifo.csv" --model "$M" --delay 2
 # The old reader mapped names to positions (H_re -> 8) but counted distinct
 # names (3), so rows of 3 fields passed and were read at index 8: past the row.
