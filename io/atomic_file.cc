@@ -84,6 +84,12 @@ std::string Destination(const std::string& path) {
   return path;
 }
 
+}  // namespace
+
+void ForgetNotedInputs() { std::lock_guard<std::mutex> lock(g_inputs_mutex); g_inputs.clear(); }
+
+namespace {
+
 // Throws when `dest` is the same file as an input (noted, or in `inputs`).
 void CheckNotAnInput(const std::string& shown, const std::string& dest, const std::vector<std::string>& inputs) {
   struct stat ds;

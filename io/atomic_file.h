@@ -43,6 +43,9 @@ inline void CheckOutputFolder(const std::string& path, const std::vector<std::st
 void WriteAtomically(const std::string& path,
                      const std::function<void(const std::string& tmp_path)>& write);
 
+// Forgets the inputs noted so far (a long-lived process: each Python call is its own command).
+void ForgetNotedInputs();
+
 // Convenience: the whole content as text.
 void WriteTextAtomically(const std::string& path, const std::string& content);
 

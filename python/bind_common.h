@@ -7,6 +7,7 @@
 #pragma once
 
 #include <chrono>
+#include <cmath>
 #include <complex>
 #include <optional>
 #include <string>
@@ -64,6 +65,16 @@ void TimedCpp(F&& f) {
 }
 
 py::object JsonToPython(const nlohmann::json& j);
+
+// A row-major n x n covariance (log space) as an (n, n) array, None when empty.
+inline py::object SquareArray(const std::vector<double>& v) {
+  if (v.empty()) return py::none();
+  const auto n = static_cast<py::ssize_t>(std::llround(std::sqrt(static_cast<double>(v.size()))));
+  py::array_t<double> out({n, n});
+  std::copy(v.begin(), v.end(), out.mutable_data());
+  return out;
+}
+inline py::object CovarianceOf(const io::ModelFile& mf) { return SquareArray(mf.log_covariance); }
 
 // The CLI's --period rule (apps::ResolvePeriod): the given period when not
 // None (must be finite and > 0), else the model's sample_period_s, else 1 ms.

@@ -1,11 +1,9 @@
 // zwidth.fit and zwidth.FitResult (fit/fit.h).
 //
-// Waiting on issue 14 (fit/, wip/fit): modes="auto" and the fit quality
-// verdict; on issue 13: the covariance matrix. Each is a keyword or a
-// property to add here.
 #include "fit/fit.h"
 #include "model/error.h"
 #include "python/bind_common.h"
+#include "stability/uncertainty.h"
 
 namespace zwidth::python {
 namespace {
@@ -15,20 +13,62 @@ struct PyFitResult {
   io::ModelFile model;  // the fitted plant with its std and sample period
 };
 
+nlohmann::json QualityJson(const fit::FitResult& r) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const fit::QualityReason& q : r.reasons) a.push_back({{"code", q.code}, {"message", q.message}, {"advice", q.advice}});
+  return a;
+}
+
+nlohmann::json OrderTableJson(const fit::FitResult& r) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const fit::OrderTrial& t : r.order_table) {
+    std::vector<bool> persists(t.persists.begin(), t.persists.end());
+    a.push_back({{"modes", t.num_modes}, {"converged", t.converged}, {"chi2_per_dof", t.chi2_per_dof},
+                 {"bic", t.bic}, {"pole_hz", t.pole_hz}, {"persists", persists}, {"rejected_because", t.spurious},
+                 {"delay_samples", t.delay_samples}});
+  }
+  return a;
+}
+
+// The library's messages name the CLI flags; here they name the keywords.
+std::string Keywords(std::string s) {
+  for (auto [from, to] : {std::pair{"--allow-short", "allow_short=True"}, std::pair{"--window-length ", "window_length="}}) {
+    for (size_t p = s.find(from); p != std::string::npos; p = s.find(from, p)) s.replace(p, std::string(from).size(), to);
+  }
+  return s;
+}
+
 PyFitResult RunFit(const ident::FrequencyResponse& frf, const fit::FitOptions& o, const std::string& name) {
   PyFitResult out;
-  {
+  try {
     py::gil_scoped_release release;
     TimedCpp([&] { out.result = fit::FitModel(frf, o); });
+  } catch (const InputError& e) {
+    throw InputError(Keywords(e.what()));
   }
   const fit::FitResult& r = out.result;
-  // The model as `zwidth fit` stores it (apps/fit_support.cc), named by the caller.
+  // The model as `zwidth fit` stores it (apps/fit_support.cc FitToModelFile), named by the caller.
   out.model.plant = r.plant;
   out.model.plant.name = name;
   out.model.std_errors = r.std_errors;
+  out.model.log_covariance = r.log_covariance;
   out.model.sample_period_s = 1.0 / frf.sample_rate_hz;
   out.model.fit = {{"status", fit::ToString(r.status)},
-                   {"modes", o.num_modes},
+                   {"quality", fit::ToString(r.quality)},
+                   {"quality_reasons", QualityJson(r)},
+                   {"modes", r.plant.modes.size()},
+                   {"modes_chosen_automatically", o.auto_modes},
+                   {"order_choice", r.order_choice},
+                   {"order_table", OrderTableJson(r)},
+                   {"delay_choice", r.delay_choice},
+                   {"band", {{"f_min_used_hz", r.band.f_lo_hz}, {"f_max_used_hz", r.band.f_hi_hz},
+                             {"num_used", r.band.num_used}, {"num_outside_fmin_fmax", r.band.num_outside},
+                             {"num_low_input_power", r.band.num_low_input},
+                             {"num_low_coherence", r.band.num_low_coherence},
+                             {"min_input_power_ratio", o.band.min_input_power_ratio},
+                             {"min_coherence", o.band.min_coherence},
+                             {"input_power_checked", r.band.input_power_known}}},
+                   {"runs_test_z", r.runs_z},
                    {"delay_samples", r.plant.delay_samples},
                    {"delay_chosen_automatically", o.auto_delay},
                    {"chi2_per_dof", r.chi2_per_dof},
@@ -39,8 +79,8 @@ PyFitResult RunFit(const ident::FrequencyResponse& frf, const fit::FitOptions& o
                    {"num_bins", r.num_residuals / 2},
                    {"num_averages", frf.num_averages},
                    {"sample_rate_hz", frf.sample_rate_hz},
-                   {"f_min_hz", frf.f_hz.empty() ? 0.0 : frf.f_hz.front()},
-                   {"f_max_hz", frf.f_hz.empty() ? 0.0 : frf.f_hz.back()},
+                   {"f_min_hz", r.band.f_lo_hz},
+                   {"f_max_hz", r.band.f_hi_hz},
                    {"starts_tried", r.starts_tried},
                    {"residual", "exact ZOH response, weighted by the Welch per-bin std"},
                    {"order", "canonical: pole pairs sorted by omega, zero pairs by v (G is unchanged)"},
@@ -48,13 +88,23 @@ PyFitResult RunFit(const ident::FrequencyResponse& frf, const fit::FitOptions& o
   return out;
 }
 
-fit::FitOptions OptionsFrom(int modes, const py::object& delay_samples, int max_auto_delay,
+fit::FitOptions OptionsFrom(const py::object& modes, int max_modes, const py::object& delay_samples,
+                            int max_auto_delay, bool allow_short, double fmin, double fmax,
+                            double min_input_power_ratio, double min_coherence,
                             std::optional<io::ModelFile> init, int max_starts, int max_iterations,
                             double min_damping_ratio, double max_pole_damping_ratio,
                             double max_zero_damping_ratio, double max_frequency_fraction,
                             double relative_std_floor, double function_tolerance) {
   fit::FitOptions o;
-  o.num_modes = modes;
+  if (py::isinstance<py::str>(modes)) {
+    const std::string s = modes.cast<std::string>();
+    if (s != "auto") throw InputError("modes '" + s + "': expected 'auto' or an integer >= 0");
+    o.auto_modes = true;
+  } else {
+    if (py::isinstance<py::bool_>(modes)) throw InputError("modes: expected 'auto' or an integer >= 0");
+    o.num_modes = modes.cast<int>();
+  }
+  o.max_modes = max_modes;
   if (py::isinstance<py::str>(delay_samples)) {
     const std::string s = delay_samples.cast<std::string>();
     if (s != "auto") throw InputError("delay_samples '" + s + "': expected 'auto' or an integer >= 0");
@@ -63,6 +113,11 @@ fit::FitOptions OptionsFrom(int modes, const py::object& delay_samples, int max_
     o.delay_samples = delay_samples.cast<int>();
   }
   o.max_auto_delay = max_auto_delay;
+  o.allow_few_averages = allow_short;
+  o.band.fmin_hz = fmin;
+  o.band.fmax_hz = fmax;
+  o.band.min_input_power_ratio = min_input_power_ratio;
+  o.band.min_coherence = min_coherence;
   if (init) o.init = init->plant;
   o.max_starts = max_starts;
   o.max_iterations = max_iterations;
@@ -100,23 +155,48 @@ void BindFit(py::module_& m) {
       .def_property_readonly("starts_tried", [](const PyFitResult& r) { return r.result.starts_tried; })
       .def_property_readonly("iterations", [](const PyFitResult& r) { return r.result.iterations; })
       .def_property_readonly("warnings", [](const PyFitResult& r) { return r.result.warnings; })
+      .def_property_readonly("quality", [](const PyFitResult& r) { return fit::ToString(r.result.quality); },
+                             "the verdict: 'good' (no test failed) or 'poor' (see quality_reasons: do not "
+                             "trust the Z-width); 'not judged' when the fit did not converge")
+      .def_property_readonly("quality_reasons", [](const PyFitResult& r) { return JsonToPython(QualityJson(r.result)); },
+                             "the failed tests: a list of dicts code (chi2_per_dof, residual_runs, misfit_band, "
+                             "few_averages, parameter_at_bound, spurious_section, order_search_at_limit, "
+                             "delay_search_at_limit), message (what was seen) and advice (what to try)")
+      .def_property_readonly("covariance", [](const PyFitResult& r) { return SquareArray(r.result.log_covariance); },
+                             "parameter covariance in log space (scaled by std_scale), an (n, n) array ordered "
+                             "as covariance_names; None when it could not be computed")
+      .def_property_readonly("covariance_names",
+                             [](const PyFitResult& r) { return stability::LogParameterNames(r.result.plant); },
+                             "'m', 'b', then 'modes[i].omega', '.c', '.v', '.d' (each the log of the parameter)")
+      .def_property_readonly("order_choice", [](const PyFitResult& r) { return r.result.order_choice; },
+                             "why this order (modes='auto')")
+      .def_property_readonly("order_table", [](const PyFitResult& r) { return JsonToPython(OrderTableJson(r.result)); },
+                             "modes='auto': one dict per order tried (modes, chi2_per_dof, bic, pole_hz, ...)")
+      .def_property_readonly("delay_choice", [](const PyFitResult& r) { return r.result.delay_choice; })
       .def("brief_report", [](const PyFitResult& r) { return r.result.BriefReport(); },
            "One line, as `zwidth fit` prints it.")
       .def("__repr__", [](const PyFitResult& r) { return "<zwidth.FitResult " + r.result.BriefReport() + ">"; });
 
   m.def("fit",
-        [](const ident::FrequencyResponse& frf, int modes, const py::object& delay_samples, int max_auto_delay,
-           std::optional<io::ModelFile> init, int max_starts, int max_iterations, double min_damping_ratio,
+        [](const ident::FrequencyResponse& frf, const py::object& modes, int max_modes, const py::object& delay_samples,
+           int max_auto_delay, bool allow_short, double fmin, double fmax, double min_input_power_ratio,
+           double min_coherence, std::optional<io::ModelFile> init, int max_starts, int max_iterations, double min_damping_ratio,
            double max_pole_damping_ratio, double max_zero_damping_ratio, double max_frequency_fraction,
            double relative_std_floor, double function_tolerance, const std::string& name) {
           const fit::FitOptions o =
-              OptionsFrom(modes, delay_samples, max_auto_delay, std::move(init), max_starts, max_iterations,
+              OptionsFrom(modes, max_modes, delay_samples, max_auto_delay, allow_short, fmin, fmax,
+                          min_input_power_ratio, min_coherence, std::move(init), max_starts, max_iterations,
                           min_damping_ratio, max_pole_damping_ratio, max_zero_damping_ratio,
                           max_frequency_fraction, relative_std_floor, function_tolerance);
           return RunFit(frf, o, name);
         },
-        py::arg("frf"), py::arg("modes") = 2, py::arg("delay_samples") = 0,
-        py::arg("max_auto_delay") = fit::FitOptions{}.max_auto_delay, py::arg("init") = py::none(),
+        py::arg("frf"), py::arg("modes") = fit::FitOptions{}.num_modes,
+        py::arg("max_modes") = fit::FitOptions{}.max_modes, py::arg("delay_samples") = fit::FitOptions{}.delay_samples,
+        py::arg("max_auto_delay") = fit::FitOptions{}.max_auto_delay,
+        py::arg("allow_short") = fit::FitOptions{}.allow_few_averages,
+        py::arg("fmin") = fit::FitOptions{}.band.fmin_hz, py::arg("fmax") = fit::FitOptions{}.band.fmax_hz,
+        py::arg("min_input_power_ratio") = fit::FitOptions{}.band.min_input_power_ratio,
+        py::arg("min_coherence") = fit::FitOptions{}.band.min_coherence, py::arg("init") = py::none(),
         py::arg("max_starts") = fit::FitOptions{}.max_starts,
         py::arg("max_iterations") = fit::FitOptions{}.max_iterations,
         py::arg("min_damping_ratio") = fit::FitOptions{}.min_damping_ratio,
@@ -127,9 +207,15 @@ void BindFit(py::module_& m) {
         py::arg("function_tolerance") = fit::FitOptions{}.function_tolerance, py::arg("name") = "",
         R"doc(Fits eq. (1) with `modes` sections to a FrequencyResponse as `zwidth fit`
 does (Ceres; residual against the exact ZOH response weighted by the per-bin
-std). delay_samples: an integer >= 0 or 'auto' (0..max_auto_delay, best
-kept). init: a Model tried first. A fit that does not converge is returned
-with its status (check .converged); bad options raise InputError.)doc");
+std). modes: an integer >= 0 or 'auto' (0..max_modes, lowest BIC among the
+orders without a spurious section, as --modes auto). delay_samples: an
+integer >= 0 or 'auto' (0..max_auto_delay, best kept). Bins used: [fmin,
+fmax] Hz where the input has power (min_input_power_ratio) and the coherence
+>= min_coherence. A response of fewer than 3 Welch segments raises
+InputError unless allow_short=True (then judged 'poor'). init: a Model tried
+first. A fit that does not converge is returned with its status (check
+.converged); check .quality ('good'/'poor') and .quality_reasons before
+using the numbers; bad options raise InputError.)doc");
 }
 
 }  // namespace zwidth::python

@@ -2,6 +2,7 @@
 // zwidth.simulate, zwidth.estimate, zwidth.FrequencyResponse.
 #include <cmath>
 
+#include "io/atomic_file.h"
 #include "io/frf_file.h"
 #include "io/log.h"
 #include "model/error.h"
@@ -63,7 +64,7 @@ Welch-averaged frequency response y/u, as `zwidth estimate` computes it:
 window_length samples per segment (>= 16), overlap fraction in [0, 1),
 window 'hann' | 'hamming' | 'rect' (periodic), detrend 'none' | 'mean' |
 'linear' per segment, estimator 'h1' (S_uy/S_uu) | 'h2' (S_yy/S_yu), and the
-band [fmin, fmax] Hz kept (fmax clipped below Nyquist).)doc";
+band [fmin, fmax] Hz kept (default fmax inf: up to Nyquist, as the CLI).)doc";
 
 }  // namespace
 
@@ -91,7 +92,7 @@ void BindIdent(py::module_& m) {
       }, "sample times k / sample_rate_hz [s] (the readers check that the file's are uniform)")
       .def_property_readonly("u", [](const PyLog& l) { return ToArray(l.u); }, "input (torque) [N m]")
       .def_property_readonly("y", [](const PyLog& l) { return ToArray(l.y); }, "output (position) [rad]")
-      .def("save", [](const PyLog& l, const std::string& path) { io::WriteLog(path, l.sample_rate_hz, l.u, l.y); },
+      .def("save", [](const PyLog& l, const std::string& path) { io::ForgetNotedInputs(); io::WriteLog(path, l.sample_rate_hz, l.u, l.y); },
            py::arg("path"), "Writes the log as CSV (t,torque,position) or HDF5 by the extension (atomically).")
       .def("__repr__", [](const PyLog& l) {
         return "<zwidth.Log " + std::to_string(l.u.size()) + " samples at " + std::to_string(l.sample_rate_hz) +
@@ -178,6 +179,7 @@ Raises InputError naming the file, row or dataset.)doc");
                   py::arg("path"), py::arg("sample_rate_hz") = 0.0,
                   "Reads a response file of `zwidth estimate` (CSV or HDF5).")
       .def("save", [](const ident::FrequencyResponse& r, const std::string& path) {
+             io::ForgetNotedInputs();  // each call is its own command
              io::WriteFrequencyResponse(path, r);
            },
            py::arg("path"), "Writes it as `zwidth estimate -o` does (CSV or HDF5 by extension).")
@@ -229,9 +231,9 @@ Raises InputError naming the file, row or dataset.)doc");
             throw InputError(path + ": " + e.what());
           }
         },
-        py::arg("path"), py::arg("window_length") = 4096, py::arg("overlap") = 0.5, py::arg("window") = "hann",
-        py::arg("detrend") = "linear", py::arg("estimator") = "h1", py::arg("fmin") = 0.7,
-        py::arg("fmax") = 300.0, py::arg("input_column") = "torque", py::arg("output_column") = "position",
+        py::arg("path"), py::arg("window_length") = ident::WelchOptions{}.window_length, py::arg("overlap") = ident::WelchOptions{}.overlap, py::arg("window") = "hann",
+        py::arg("detrend") = "linear", py::arg("estimator") = "h1", py::arg("fmin") = ident::WelchOptions{}.fmin_hz,
+        py::arg("fmax") = ident::WelchOptions{}.fmax_hz, py::arg("input_column") = "torque", py::arg("output_column") = "position",
         py::arg("time_column") = "t", py::arg("input_dataset") = "/input/torque",
         py::arg("output_dataset") = "/output/position", py::arg("time_dataset") = "/time", py::arg("rate") = 0.0,
         "estimate(path, ...): streamed from a log file as `zwidth estimate` does (a few windows in memory, "
@@ -243,9 +245,9 @@ Raises InputError naming the file, row or dataset.)doc");
           const ident::WelchOptions o = WelchFrom(window_length, overlap, window, detrend, estimator, fmin, fmax);
           return Estimate(ToVector(u), ToVector(y), sample_rate_hz, o);
         },
-        py::arg("u"), py::arg("y"), py::arg("sample_rate_hz"), py::arg("window_length") = 4096,
-        py::arg("overlap") = 0.5, py::arg("window") = "hann", py::arg("detrend") = "linear",
-        py::arg("estimator") = "h1", py::arg("fmin") = 0.7, py::arg("fmax") = 300.0, kWelchDoc);
+        py::arg("u"), py::arg("y"), py::arg("sample_rate_hz"), py::arg("window_length") = ident::WelchOptions{}.window_length,
+        py::arg("overlap") = ident::WelchOptions{}.overlap, py::arg("window") = "hann", py::arg("detrend") = "linear",
+        py::arg("estimator") = "h1", py::arg("fmin") = ident::WelchOptions{}.fmin_hz, py::arg("fmax") = ident::WelchOptions{}.fmax_hz, kWelchDoc);
   m.def("estimate",
         [](const PyLog& log, int window_length, double overlap, const std::string& window,
            const std::string& detrend, const std::string& estimator, double fmin, double fmax) {
@@ -257,9 +259,9 @@ Raises InputError naming the file, row or dataset.)doc");
             throw InputError(log.source + ": " + e.what());
           }
         },
-        py::arg("log"), py::arg("window_length") = 4096, py::arg("overlap") = 0.5, py::arg("window") = "hann",
-        py::arg("detrend") = "linear", py::arg("estimator") = "h1", py::arg("fmin") = 0.7,
-        py::arg("fmax") = 300.0, "estimate(log, ...): the same from a Log.");
+        py::arg("log"), py::arg("window_length") = ident::WelchOptions{}.window_length, py::arg("overlap") = ident::WelchOptions{}.overlap, py::arg("window") = "hann",
+        py::arg("detrend") = "linear", py::arg("estimator") = "h1", py::arg("fmin") = ident::WelchOptions{}.fmin_hz,
+        py::arg("fmax") = ident::WelchOptions{}.fmax_hz, "estimate(log, ...): the same from a Log.");
 
   m.def("simulate",
         [](const io::ModelFile& model, double seconds, double sample_rate_hz, double torque_rms,

@@ -9,7 +9,9 @@
 #include "io/reference_models.h"
 #include "model/error.h"
 #include "model/state_space.h"
+#include "io/atomic_file.h"
 #include "python/bind_common.h"
+#include "stability/uncertainty.h"
 
 namespace zwidth::python {
 namespace {
@@ -102,7 +104,10 @@ Model.table1(): Table I of the paper (PHANToM 1.0, phi axis), built in.)doc")
       .def_static("from_json", [](const std::string& text) { return io::ParseModelJson(text, "<string>"); },
                   py::arg("text"), "Parses model JSON text.")
       .def_static("table1", &io::Table1Model, "Table I of the paper (PHANToM 1.0, phi axis), built into the library.")
-      .def("save", [](const io::ModelFile& mf, const std::string& path) { io::WriteModelJson(path, mf); },
+      .def("save", [](const io::ModelFile& mf, const std::string& path) {
+             io::ForgetNotedInputs();  // each call is its own command: a model loaded earlier may be replaced
+             io::WriteModelJson(path, mf);
+           },
            py::arg("path"), "Writes the model JSON (atomically; the CLI reads it back).")
       .def("to_json", [](const io::ModelFile& mf) { return io::ModelToJson(mf).dump(2); },
            "The model JSON as text.")
@@ -112,6 +117,7 @@ Model.table1(): Table I of the paper (PHANToM 1.0, phi axis), built in.)doc")
              if (!io::FromString(format, &f)) {
                throw InputError("format '" + format + "' is not one of json, hdf5, matlab, python, statespace");
              }
+             io::ForgetNotedInputs();
              io::ExportModel(mf, f, period_s ? ResolvePeriod(period_s, mf) : 0.0, path);
            },
            py::arg("path"), py::arg("format"), py::arg("period_s") = py::none(),
@@ -136,6 +142,21 @@ Model.table1(): Table I of the paper (PHANToM 1.0, phi axis), built in.)doc")
       .def_property_readonly("std", &StdOf,
                              "standard errors {'m', 'b', 'modes': [(omega, c, v, d), ...]} of a fitted model "
                              "(inf where unknown), else None")
+      .def_property("covariance", &CovarianceOf,
+                    [](io::ModelFile& mf, const py::object& c) {
+                      if (c.is_none()) { mf.log_covariance.clear(); return; }
+                      const DoubleArray a = DoubleArray::ensure(c);
+                      if (!a) throw InputError("covariance: expected a square array or None");
+                      std::vector<double> v = ToVector(a);
+                      stability::CheckLogCovariance(mf.plant, v);
+                      mf.log_covariance = std::move(v);
+                    },
+                    "the fit's parameter covariance in log space (the JSON's \"covariance\"), an (2 + 4 N)^2 "
+                    "array ordered as covariance_names; None when the model has none. Gives 'std' in "
+                    "ZWidth.summary().")
+      .def_property_readonly("covariance_names",
+                             [](const io::ModelFile& mf) { return stability::LogParameterNames(mf.plant); },
+                             "the covariance's rows: log m, log b, then log omega, log c, log v, log d per section")
       .def_property_readonly("fit_info", [](const io::ModelFile& mf) { return JsonToPython(mf.fit); },
                              "the fit metrics stored with a fitted model (dict), else None")
       .def_property_readonly("num_states", [](const io::ModelFile& mf) { return mf.plant.num_states(); })

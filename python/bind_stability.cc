@@ -1,15 +1,14 @@
 // zwidth.ZWidth (stability/zwidth.h), zwidth.relay (stability/relay.h) and
 // zwidth.check (the scene check of `zwidth check`).
-//
-// Waiting on issue 13 (stability/, wip/region): stable K-intervals per B
-// (ZWidth.stable_intervals) go in BindStability beside critical().
 #include <cmath>
 #include <limits>
 
 #include "io/stability_files.h"
 #include "model/error.h"
 #include "python/bind_common.h"
+#include "stability/haptic_loop.h"
 #include "stability/relay.h"
+#include "stability/uncertainty.h"
 #include "stability/zwidth.h"
 
 namespace zwidth::python {
@@ -19,8 +18,43 @@ namespace {
 struct PyZWidth {
   io::ModelFile model;
   int delay_samples = 0;
+  stability::LoopOptions loop;
   std::unique_ptr<stability::ZWidth> z;
 };
+
+// The CLI's loop flags (apps/loop_flags.cc) as keywords: a first-order
+// velocity low-pass at velocity_filter_hz (None: the raw difference) and the
+// user's hand (M, B, K) (None: nobody holds the device).
+stability::LoopOptions LoopFrom(std::optional<double> velocity_filter_hz,
+                                std::optional<std::tuple<double, double, double>> hand, double T) {
+  stability::LoopOptions l;
+  if (velocity_filter_hz) stability::SetLowPassFilter(*velocity_filter_hz, T, &l);
+  if (hand) l.hand = {std::get<0>(*hand), std::get<1>(*hand), std::get<2>(*hand)};
+  std::string why;
+  if (!l.IsValid(&why)) throw InputError(why);
+  return l;
+}
+
+// apps/cmd_stability.cc: the largest B >= 0 with a passive K >= 0 (bisection on
+// "the passive set is empty", which grows with B).
+double PassiveBMax(const stability::Passivity& pa, double b) {
+  if (pa.At(0.0).passive_set_empty) return 0.0;
+  double lo = 0.0, hi = b;
+  for (int i = 0; i < 60 && !pa.At(hi).passive_set_empty; ++i) { lo = hi; hi *= 2.0; }
+  if (!pa.At(hi).passive_set_empty) return std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 60; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (pa.At(mid).passive_set_empty ? hi : lo) = mid;
+  }
+  return lo;
+}
+
+nlohmann::json PassivitySummaryJson(const stability::Passivity& pa, double b) {
+  return {{"K_P_at_zero_B", io::NumberOrNull(pa.At(0.0).K_hi)}, {"B_P_max", io::NumberOrNull(PassiveBMax(pa, b))},
+          {"physical_damping_b", b},
+          {"meaning", "Colgate and Schenkel (1997): K < K_P(B) keeps the sampled wall passive; B_P_max: the largest "
+                      "B with a passive K"}};
+}
 
 void CheckDelay(int d, const char* name) {
   if (d < 0) throw InputError(std::string(name) + " = " + std::to_string(d) + ": delays must be >= 0 samples");
@@ -113,10 +147,17 @@ The Z-width of the sampled loop of eq. (2),
 with G_d the exact ZOH plant (the model's own delay adds to d).
 
 ZWidth(model, period_s=None, delay_samples=2, min_grid_points=2048,
-       grid_points_per_delay=64, theta_tolerance=1e-13, verify=True)
-period_s=None: the model's sample_period_s, else 1 ms (as the CLI).)doc")
+       grid_points_per_delay=64, theta_tolerance=1e-13, verify=True,
+       velocity_filter_hz=None, hand=None)
+period_s=None: the model's sample_period_s, else 1 ms (as the CLI).
+velocity_filter_hz: a first-order low-pass on the velocity of the B term,
+cut-off in (0, Nyquist) Hz (--velocity-filter-hz); None: the raw difference.
+hand: the user's hand (M, B, K) at the measured coordinate, each >= 0
+(--hand M,B,K); None: nobody holds the device.)doc")
       .def(py::init([](const io::ModelFile& model, std::optional<double> period_s, int delay_samples,
-                       int min_grid_points, int grid_points_per_delay, double theta_tolerance, bool verify) {
+                       int min_grid_points, int grid_points_per_delay, double theta_tolerance, bool verify,
+                       std::optional<double> velocity_filter_hz,
+                       std::optional<std::tuple<double, double, double>> hand) {
              CheckDelay(delay_samples, "delay_samples");
              stability::BoundaryOptions o;
              o.min_grid_points = min_grid_points;
@@ -129,9 +170,10 @@ period_s=None: the model's sample_period_s, else 1 ms (as the CLI).)doc")
              auto p = std::make_unique<PyZWidth>();
              p->model = model;
              p->delay_samples = delay_samples;
+             p->loop = LoopFrom(velocity_filter_hz, hand, T);
              {
                py::gil_scoped_release release;
-               p->z = std::make_unique<stability::ZWidth>(model.plant, T, delay_samples, o);
+               p->z = std::make_unique<stability::ZWidth>(model.plant, T, delay_samples, p->loop, o);
              }
              return p;
            }),
@@ -139,12 +181,37 @@ period_s=None: the model's sample_period_s, else 1 ms (as the CLI).)doc")
            py::arg("min_grid_points") = stability::BoundaryOptions{}.min_grid_points,
            py::arg("grid_points_per_delay") = stability::BoundaryOptions{}.grid_points_per_delay,
            py::arg("theta_tolerance") = stability::BoundaryOptions{}.theta_tolerance,
-           py::arg("verify") = stability::BoundaryOptions{}.verify)
+           py::arg("verify") = stability::BoundaryOptions{}.verify, py::arg("velocity_filter_hz") = py::none(),
+           py::arg("hand") = py::none())
       .def_property_readonly("period_s", [](const PyZWidth& z) { return z.z->period_s(); })
       .def_property_readonly("delay_samples", [](const PyZWidth& z) { return z.delay_samples; }, "loop delay d")
       .def_property_readonly("total_delay_samples", [](const PyZWidth& z) { return z.z->total_delay(); },
                              "d plus the model's own delay")
       .def_readonly("model", &PyZWidth::model)
+      .def_property_readonly("filter_b", [](const PyZWidth& z) { return z.loop.filter_b; },
+                             "velocity filter numerator (powers of z^-1); [] without a filter")
+      .def_property_readonly("filter_a", [](const PyZWidth& z) { return z.loop.filter_a; })
+      .def_property_readonly("hand", [](const PyZWidth& z) -> py::object {
+             if (z.loop.hand.IsNone()) return py::none();
+             return py::make_tuple(z.loop.hand.M, z.loop.hand.B, z.loop.hand.K);
+           }, "(M, B, K) of the user's hand, None when nobody holds the device")
+      .def("stable_intervals",
+           [](const PyZWidth& z, double B) {
+             std::vector<stability::KInterval> iv;
+             {
+               py::gil_scoped_release release;
+               iv = z.z->StableIntervals(B);
+             }
+             std::vector<std::pair<double, double>> out;
+             for (const auto& k : iv) out.emplace_back(k.K_lo, k.K_hi);
+             return out;
+           },
+           py::arg("B"),
+           R"doc(Every stable K interval at damping B [N m s/rad], ascending: a list of
+(K_lo, K_hi) tuples [N m/rad] (K_lo 0 means from K = 0+, K_hi may be inf). The
+loop is stable at (K, B) exactly when K lies strictly inside one of them
+(is_stable agrees); [] when no K > 0 is stable. Past B_max_from_zero the
+first interval no longer starts at 0 (reopened bands).)doc")
       .def("critical",
            [](const PyZWidth& z, const py::object& B) -> py::object {
              const DoubleArray b = B.cast<DoubleArray>();
@@ -225,18 +292,29 @@ the loop is unstable as K -> 0+ (B past B_max), inf with no crossing.)doc")
            "Schur-Cohn test of the closed loop at (K, B); broadcasts arrays (K = 0 is taken as 0+).")
       .def("summary",
            [](const PyZWidth& z) {
-             stability::DelaySummary s;
+             // One entry of the CLI's summary JSON "delays" list (apps/cmd_stability.cc, boundary --summary).
+             nlohmann::json e;
              {
                py::gil_scoped_release release;
-               s = z.z->Summarize();
+               const stability::DelaySummary s = z.z->Summarize();
+               const bool has_cov = !z.model.log_covariance.empty();
+               stability::SummaryStd sd;
+               if (has_cov) {
+                 sd = stability::SummaryStdDelta(z.model.plant, z.model.log_covariance, z.z->period_s(),
+                                                 z.delay_samples, s, {}, z.loop);
+               }
+               e = io::SummaryToJson(s, has_cov ? &sd : nullptr);
+               e["delay_samples"] = z.delay_samples;
+               e["total_delay_samples"] = s.delay_samples;
+               const stability::Passivity pa(z.model.plant.b, z.z->period_s(), z.z->total_delay(), z.loop);
+               e["passivity"] = PassivitySummaryJson(pa, z.model.plant.b);
              }
-             // One entry of the CLI's summary JSON "delays" list (apps/cmd_stability.cc).
-             nlohmann::json e = io::SummaryToJson(s);
-             e["delay_samples"] = z.delay_samples;
-             e["total_delay_samples"] = s.delay_samples;
              return JsonToPython(e);
            },
-           "B_t, K_cr^max, B_max, ... as the CLI's summary JSON (one entry of 'delays'; None for NaN/inf).")
+           R"doc(K_cr(0), B_t, K_cr^max, B_max (the largest B with some stable K > 0),
+B_max_from_zero (the paper's B_max), reopened_bands, passivity (K_P(0),
+B_P_max) and, when the model carries a covariance, "std" (delta method): the
+CLI's summary JSON, one entry of 'delays' (None for NaN/inf).)doc")
       .def("characteristic_polynomial",
            [](const PyZWidth& z, double K, double B) { return ToArray(z.z->CharacteristicPolynomial(K, B)); },
            py::arg("K"), py::arg("B"), "Closed-loop characteristic polynomial coefficients, z^0 first.");
@@ -286,23 +364,28 @@ the loop is unstable as K -> 0+ (B past B_max), inf with no crossing.)doc")
 Raises ComputationError when the loop neither oscillates nor diverges.)doc");
 
   m.def("check",
-        [](const py::object& scene, const io::ModelFile& model, int delay_samples, std::optional<double> period_s) {
+        [](const py::object& scene, const io::ModelFile& model, int delay_samples, std::optional<double> period_s,
+           std::optional<double> velocity_filter_hz, std::optional<std::tuple<double, double, double>> hand) {
           CheckDelay(delay_samples, "delay_samples");
           const double T = ResolvePeriod(period_s, model);
+          const stability::LoopOptions loop = LoopFrom(velocity_filter_hz, hand, T);
           const std::vector<io::SceneObject> objs = SceneFrom(scene);
           nlohmann::json out = {{"delay_samples", delay_samples}, {"period_s", T},
                                 {"objects", nlohmann::json::array()}};
           {
             py::gil_scoped_release release;
-            const stability::ZWidth z(model.plant, T, delay_samples);
+            const stability::ZWidth z(model.plant, T, delay_samples, loop);
             for (const auto& o : objs) out["objects"].push_back(io::CheckObject(z, o).ToJson(o));
           }
           return JsonToPython(out);
         },
         py::arg("scene"), py::arg("model"), py::arg("delay_samples"), py::arg("period_s") = py::none(),
+        py::arg("velocity_filter_hz") = py::none(), py::arg("hand") = py::none(),
         R"doc(Is each object {name, K, B} of a haptic scene stable on this device?
 scene: a scene JSON path ({"objects": [...]}) or a list of dicts / (name, K, B)
-tuples. Returns the dict `zwidth check --json` prints.)doc");
+tuples; velocity_filter_hz and hand as for ZWidth. Returns the dict `zwidth
+check --json` prints (each object with its stable intervals); the CLI exits
+with status 3 when an object is unstable, this returns normally.)doc");
 }
 
 }  // namespace zwidth::python
