@@ -32,27 +32,6 @@ double ResolvePeriod(double flag, const io::ModelFile& mf) {
 
 namespace {
 
-// The largest B >= 0 with a passive K >= 0 (bisection on "the passive set is
-// empty", which grows with B for the positive part of the condition).
-double PassiveBMax(const stability::Passivity& pa, double b) {
-  if (pa.At(0.0).passive_set_empty) return 0.0;
-  double lo = 0.0, hi = b;
-  for (int i = 0; i < 60 && !pa.At(hi).passive_set_empty; ++i) { lo = hi; hi *= 2.0; }
-  if (!pa.At(hi).passive_set_empty) return std::numeric_limits<double>::infinity();
-  for (int i = 0; i < 60; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (pa.At(mid).passive_set_empty ? hi : lo) = mid;
-  }
-  return lo;
-}
-
-nlohmann::json PassivitySummaryJson(const stability::Passivity& pa, double b) {
-  return {{"K_P_at_zero_B", io::NumberOrNull(pa.At(0.0).K_hi)}, {"B_P_max", io::NumberOrNull(PassiveBMax(pa, b))},
-          {"physical_damping_b", b},
-          {"meaning", "Colgate and Schenkel (1997): K < K_P(B) keeps the sampled wall passive; B_P_max: the largest "
-                      "B with a passive K"}};
-}
-
 nlohmann::json LoopJson(const std::vector<stability::LoopOptions>& loops) {
   nlohmann::json j = {{"filter_b", loops[0].filter_b}, {"filter_a", loops[0].filter_a},
                       {"hands", nlohmann::json::array()}};
@@ -172,7 +151,7 @@ void AddStabilityCommands(CLI::App& app) {
       nlohmann::json e = io::SummaryToJson(sums[i], has_cov ? &stds[i] : nullptr);
       e["delay_samples"] = bf->delays[i];
       e["total_delay_samples"] = sums[i].delay_samples;
-      e["passivity"] = PassivitySummaryJson(pas[i], mf.plant.b);
+      e["passivity"] = io::PassivitySummaryJson(pas[i], mf.plant.b);
       if (loops.size() > 1) {
         e["per_hand"] = nlohmann::json::array();
         for (size_t h = 0; h < loops.size(); ++h) {
@@ -227,7 +206,7 @@ void AddStabilityCommands(CLI::App& app) {
     for (size_t i = 0; i < sums.size(); ++i) {
       const stability::PassiveInterval p0 = pas[i].At(0.0);
       std::printf("d = %d passivity (Colgate-Schenkel, b = %g): K_P(0) = %.6g; passive up to B = %.6g\n",
-                  bf->delays[i], mf.plant.b, p0.K_hi, PassiveBMax(pas[i], mf.plant.b));
+                  bf->delays[i], mf.plant.b, p0.K_hi, io::PassiveBMax(pas[i], mf.plant.b));
     }
     std::printf("%d of %zu B values: the margin() reading of eq. (4) differs from the exact K_CR "
                 "(mostly B past B_max_0, where margin() stays positive but K -> 0+ is unstable)\n",

@@ -149,4 +149,25 @@ nlohmann::json ObjectVerdict::ToJson(const SceneObject& o) const {
           {"nearest_interval", nearest_interval >= 0 ? nlohmann::json(nearest_interval) : nlohmann::json(nullptr)}};
 }
 
+// The largest B >= 0 with a passive K >= 0 (bisection on "the passive set is
+// empty", which grows with B for the positive part of the condition).
+double PassiveBMax(const stability::Passivity& pa, double b) {
+  if (pa.At(0.0).passive_set_empty) return 0.0;
+  double lo = 0.0, hi = b;
+  for (int i = 0; i < 60 && !pa.At(hi).passive_set_empty; ++i) { lo = hi; hi *= 2.0; }
+  if (!pa.At(hi).passive_set_empty) return std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 60; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (pa.At(mid).passive_set_empty ? hi : lo) = mid;
+  }
+  return lo;
+}
+
+nlohmann::json PassivitySummaryJson(const stability::Passivity& pa, double b) {
+  return {{"K_P_at_zero_B", NumberOrNull(pa.At(0.0).K_hi)}, {"B_P_max", NumberOrNull(PassiveBMax(pa, b))},
+          {"physical_damping_b", b},
+          {"meaning", "Colgate and Schenkel (1997): K < K_P(B) keeps the sampled wall passive; B_P_max: the largest "
+                      "B with a passive K"}};
+}
+
 }  // namespace zwidth::io

@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "stability/haptic_loop.h"
 #include "stability/zwidth.h"
 
 namespace zwidth::io {
@@ -68,5 +69,11 @@ ObjectVerdict CheckObject(const stability::ZWidth& z, const SceneObject& o);
 nlohmann::json NumberOrNull(double v);
 
 std::vector<SceneObject> ReadScene(const std::string& path);
+
+// The largest B >= 0 with a passive K >= 0 (Colgate-Schenkel; bisection on
+// "the passive set is empty", which grows with B), for physical damping b.
+double PassiveBMax(const stability::Passivity& pa, double b);
+// The summary's "passivity" object: K_P_at_zero_B, B_P_max, physical_damping_b, meaning.
+nlohmann::json PassivitySummaryJson(const stability::Passivity& pa, double b);
 
 }  // namespace zwidth::io

@@ -1,6 +1,7 @@
 // zwidth.fit and zwidth.FitResult (fit/fit.h).
 //
 #include "fit/fit.h"
+#include "io/fit_file.h"
 #include "model/error.h"
 #include "python/bind_common.h"
 #include "stability/uncertainty.h"
@@ -12,23 +13,6 @@ struct PyFitResult {
   fit::FitResult result;
   io::ModelFile model;  // the fitted plant with its std and sample period
 };
-
-nlohmann::json QualityJson(const fit::FitResult& r) {
-  nlohmann::json a = nlohmann::json::array();
-  for (const fit::QualityReason& q : r.reasons) a.push_back({{"code", q.code}, {"message", q.message}, {"advice", q.advice}});
-  return a;
-}
-
-nlohmann::json OrderTableJson(const fit::FitResult& r) {
-  nlohmann::json a = nlohmann::json::array();
-  for (const fit::OrderTrial& t : r.order_table) {
-    std::vector<bool> persists(t.persists.begin(), t.persists.end());
-    a.push_back({{"modes", t.num_modes}, {"converged", t.converged}, {"chi2_per_dof", t.chi2_per_dof},
-                 {"bic", t.bic}, {"pole_hz", t.pole_hz}, {"persists", persists}, {"rejected_because", t.spurious},
-                 {"delay_samples", t.delay_samples}});
-  }
-  return a;
-}
 
 // The library's messages name the CLI flags; here they name the keywords.
 std::string Keywords(std::string s) {
@@ -47,44 +31,9 @@ PyFitResult RunFit(const ident::FrequencyResponse& frf, const fit::FitOptions& o
     throw InputError(Keywords(e.what()));
   }
   const fit::FitResult& r = out.result;
-  // The model as `zwidth fit` stores it (apps/fit_support.cc FitToModelFile), named by the caller.
-  out.model.plant = r.plant;
+  // The model as `zwidth fit` stores it (io::FittedModelFile), named by the caller.
+  out.model = io::FittedModelFile(r, frf, o, name);
   out.model.plant.name = name;
-  out.model.std_errors = r.std_errors;
-  out.model.log_covariance = r.log_covariance;
-  out.model.sample_period_s = 1.0 / frf.sample_rate_hz;
-  out.model.fit = {{"status", fit::ToString(r.status)},
-                   {"quality", fit::ToString(r.quality)},
-                   {"quality_reasons", QualityJson(r)},
-                   {"modes", r.plant.modes.size()},
-                   {"modes_chosen_automatically", o.auto_modes},
-                   {"order_choice", r.order_choice},
-                   {"order_table", OrderTableJson(r)},
-                   {"delay_choice", r.delay_choice},
-                   {"band", {{"f_min_used_hz", r.band.f_lo_hz}, {"f_max_used_hz", r.band.f_hi_hz},
-                             {"num_used", r.band.num_used}, {"num_outside_fmin_fmax", r.band.num_outside},
-                             {"num_low_input_power", r.band.num_low_input},
-                             {"num_low_coherence", r.band.num_low_coherence},
-                             {"min_input_power_ratio", o.band.min_input_power_ratio},
-                             {"min_coherence", o.band.min_coherence},
-                             {"input_power_checked", r.band.input_power_known}}},
-                   {"runs_test_z", r.runs_z},
-                   {"delay_samples", r.plant.delay_samples},
-                   {"delay_chosen_automatically", o.auto_delay},
-                   {"chi2_per_dof", r.chi2_per_dof},
-                   {"nrmse_fit_percent", r.nrmse_fit_percent},
-                   {"worst_misfit_hz", r.worst_misfit_hz},
-                   {"std_scale", r.std_scale},
-                   {"covariance_ok", r.covariance_ok},
-                   {"num_bins", r.num_residuals / 2},
-                   {"num_averages", frf.num_averages},
-                   {"sample_rate_hz", frf.sample_rate_hz},
-                   {"f_min_hz", r.band.f_lo_hz},
-                   {"f_max_hz", r.band.f_hi_hz},
-                   {"starts_tried", r.starts_tried},
-                   {"residual", "exact ZOH response, weighted by the Welch per-bin std"},
-                   {"order", "canonical: pole pairs sorted by omega, zero pairs by v (G is unchanged)"},
-                   {"warnings", r.warnings}};
   return out;
 }
 
@@ -158,7 +107,7 @@ void BindFit(py::module_& m) {
       .def_property_readonly("quality", [](const PyFitResult& r) { return fit::ToString(r.result.quality); },
                              "the verdict: 'good' (no test failed) or 'poor' (see quality_reasons: do not "
                              "trust the Z-width); 'not judged' when the fit did not converge")
-      .def_property_readonly("quality_reasons", [](const PyFitResult& r) { return JsonToPython(QualityJson(r.result)); },
+      .def_property_readonly("quality_reasons", [](const PyFitResult& r) { return JsonToPython(r.model.fit.at("quality_reasons")); },
                              "the failed tests: a list of dicts code (chi2_per_dof, residual_runs, misfit_band, "
                              "few_averages, parameter_at_bound, spurious_section, order_search_at_limit, "
                              "delay_search_at_limit), message (what was seen) and advice (what to try)")
@@ -170,7 +119,7 @@ void BindFit(py::module_& m) {
                              "'m', 'b', then 'modes[i].omega', '.c', '.v', '.d' (each the log of the parameter)")
       .def_property_readonly("order_choice", [](const PyFitResult& r) { return r.result.order_choice; },
                              "why this order (modes='auto')")
-      .def_property_readonly("order_table", [](const PyFitResult& r) { return JsonToPython(OrderTableJson(r.result)); },
+      .def_property_readonly("order_table", [](const PyFitResult& r) { return JsonToPython(r.model.fit.at("order_table")); },
                              "modes='auto': one dict per order tried (modes, chi2_per_dof, bic, pole_hz, ...)")
       .def_property_readonly("delay_choice", [](const PyFitResult& r) { return r.result.delay_choice; })
       .def("brief_report", [](const PyFitResult& r) { return r.result.BriefReport(); },

@@ -35,26 +35,6 @@ stability::LoopOptions LoopFrom(std::optional<double> velocity_filter_hz,
   return l;
 }
 
-// apps/cmd_stability.cc: the largest B >= 0 with a passive K >= 0 (bisection on
-// "the passive set is empty", which grows with B).
-double PassiveBMax(const stability::Passivity& pa, double b) {
-  if (pa.At(0.0).passive_set_empty) return 0.0;
-  double lo = 0.0, hi = b;
-  for (int i = 0; i < 60 && !pa.At(hi).passive_set_empty; ++i) { lo = hi; hi *= 2.0; }
-  if (!pa.At(hi).passive_set_empty) return std::numeric_limits<double>::infinity();
-  for (int i = 0; i < 60; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (pa.At(mid).passive_set_empty ? hi : lo) = mid;
-  }
-  return lo;
-}
-
-nlohmann::json PassivitySummaryJson(const stability::Passivity& pa, double b) {
-  return {{"K_P_at_zero_B", io::NumberOrNull(pa.At(0.0).K_hi)}, {"B_P_max", io::NumberOrNull(PassiveBMax(pa, b))},
-          {"physical_damping_b", b},
-          {"meaning", "Colgate and Schenkel (1997): K < K_P(B) keeps the sampled wall passive; B_P_max: the largest "
-                      "B with a passive K"}};
-}
 
 void CheckDelay(int d, const char* name) {
   if (d < 0) throw InputError(std::string(name) + " = " + std::to_string(d) + ": delays must be >= 0 samples");
@@ -307,7 +287,7 @@ the loop is unstable as K -> 0+ (B past B_max), inf with no crossing.)doc")
                e["delay_samples"] = z.delay_samples;
                e["total_delay_samples"] = s.delay_samples;
                const stability::Passivity pa(z.model.plant.b, z.z->period_s(), z.z->total_delay(), z.loop);
-               e["passivity"] = PassivitySummaryJson(pa, z.model.plant.b);
+               e["passivity"] = io::PassivitySummaryJson(pa, z.model.plant.b);
              }
              return JsonToPython(e);
            },
