@@ -178,7 +178,8 @@ void AddRunCommand(CLI::App& app) {
       std::ostringstream b;
       b.precision(10);
       const bool joint = est.response.method == ident::CombinedMethod::kJoint;
-      b << "# f_hz |H| phase_deg |G| phase_G_deg coherence" << (joint ? " coherence_ru coherence_ry" : "") << "\n";
+      b << "# f_hz |H| phase_deg |G| phase_G_deg coherence" << (joint ? " coherence_ru coherence_ry" : "")
+        << " used_by_fit\n";
       const DiscreteResponse g(DiscretizeZoh(model.plant, T));
       // Phases unwrapped along frequency (the model's continuously; the
       // measured one kept within half a turn of the model's).
@@ -194,7 +195,7 @@ void AddRunCommand(CLI::App& app) {
         b << frf.f_hz[k] << " " << std::abs(frf.H[k]) << " " << ph << " " << std::abs(gm) << " " << pm << " "
           << frf.coherence[k];
         if (joint) b << " " << est.response.coherence_ru[k] << " " << est.response.coherence_ry[k];
-        b << "\n";
+        b << " " << (k < frf.used_by_fit.size() && frf.used_by_fit[k] ? 1 : 0) << "\n";
       }
       io::WriteTextAtomically((fig / "bode.dat").string(), b.str());
       // Curves: the model's are the boundary rows; reference and rigid-only
@@ -294,9 +295,14 @@ void AddRunCommand(CLI::App& app) {
         gp << "set terminal " << term << "\n";
         gp << "set output 'bode." << ext << "'\nset multiplot layout 2,1 title 'Bode diagram: measured (" << ident::ToString(est.response.method) << ") and fitted model (exact ZOH) - Fig. 3'\n"
            << "set logscale x\nset logscale y\nset format y '10^{%L}'\nset ylabel 'magnitude [" << (linear ? "m/N" : "rad/(N m)") << "]'\nunset xlabel\n"
-           << "plot 'bode.dat' u 1:2 w l lc rgb '#1f77b4' t 'measured', '' u 1:4 w l lw 2 lc rgb 'black' t 'fitted model'\n"
+           << "uc = " << (joint ? 9 : 7) << "\n"
+           << "plot 'bode.dat' u 1:(column(uc) > 0 ? $2 : NaN) w l lc rgb '#1f77b4' t 'measured, fitted band', "
+           << "'' u 1:(column(uc) > 0 ? NaN : $2) w p pt 7 ps 0.25 lc rgb '#bbbbbb' t 'measured, not used', "
+           << "'' u 1:4 w l lw 2 lc rgb 'black' t 'fitted model'\n"
            << "unset logscale y\nset format y '%g'\nset ylabel 'phase [deg]'\nset xlabel 'frequency [Hz]'\n"
-           << "plot 'bode.dat' u 1:3 w l lc rgb '#1f77b4' t 'measured', '' u 1:5 w l lw 2 lc rgb 'black' t 'fitted model'\nunset multiplot\n";
+           << "plot 'bode.dat' u 1:(column(uc) > 0 ? $3 : NaN) w l lc rgb '#1f77b4' t 'measured, fitted band', "
+           << "'' u 1:(column(uc) > 0 ? NaN : $3) w p pt 7 ps 0.25 lc rgb '#bbbbbb' t 'measured, not used', "
+           << "'' u 1:5 w l lw 2 lc rgb 'black' t 'fitted model'\nunset multiplot\n";
         gp << "set output 'coherence." << ext << "'\nset title 'Magnitude-squared coherence'\nset xlabel 'frequency [Hz]'\nset ylabel 'coherence [-]'\nset yrange [0:1.05]\n"
            << (joint ? "plot 'bode.dat' u 1:7 w l lc rgb '#1f77b4' t 'r -> u', '' u 1:8 w l lc rgb '#d62728' t 'r -> y'\n"
                      : "plot 'bode.dat' u 1:6 w l lc rgb '#1f77b4' t 'coherence'\n")
