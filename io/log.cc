@@ -628,9 +628,12 @@ LogInfo StreamMatInProcess(const std::string& path, const LogSelect& sel, const 
   return info;
 }
 
-// As StreamHdf5: parsed in a child process (io/isolated.h), chunks framed
-// 'c' u[n] y[n], then 'i' count rate.
-LogInfo StreamMat(const std::string& path, const LogSelect& sel, const LogSink& sink) {
+// A binary log parsed in a child process (io/isolated.h): `parse` runs there and its
+// chunks come back framed 'c' u[n] y[n], then 'i' count rate. `what` names the
+// format in errors.
+LogInfo StreamIsolatedLog(const std::string& path, const std::string& what, const LogSelect& sel,
+                          const LogSink& sink,
+                          LogInfo (*parse)(const std::string&, const LogSelect&, const LogSink&)) {
   LogInfo info;
   bool ended = false;
   std::vector<double> u, y;
@@ -638,7 +641,7 @@ LogInfo StreamMat(const std::string& path, const LogSelect& sel, const LogSink& 
       path,
       [&](const FrameSender& send) {
         std::vector<char> frame;
-        const LogInfo in = StreamMatInProcess(path, sel, [&](const double* cu, const double* cy, size_t n) {
+        const LogInfo in = parse(path, sel, [&](const double* cu, const double* cy, size_t n) {
           frame.resize(1 + 2 * n * sizeof(double));
           frame[0] = 'c';
           std::memcpy(frame.data() + 1, cu, n * sizeof(double));
@@ -667,10 +670,15 @@ LogInfo StreamMat(const std::string& path, const LogSelect& sel, const LogSink& 
           info.num_samples = count;
           ended = true;
         } else {
-          throw InputError(path + ": could not read the .mat file (corrupt or truncated?)");
+          throw InputError(path + ": could not read the " + what + " (corrupt or truncated?)");
         }
       });
-  if (!ended) throw InputError(path + ": could not read the .mat file (corrupt or truncated?)");
+  if (!ended) throw InputError(path + ": could not read the " + what + " (corrupt or truncated?)");
+  return info;
+}
+
+LogInfo StreamMat(const std::string& path, const LogSelect& sel, const LogSink& sink) {
+  LogInfo info = StreamIsolatedLog(path, ".mat file", sel, sink, StreamMatInProcess);
   info.layout = "MATLAB .mat (libmatio)";
   return info;
 }
@@ -958,47 +966,7 @@ namespace {
 // is still read once, in bounded memory. Frames: 'c' then u[n], y[n] (a chunk);
 // 'i' then the sample count (uint64) and the rate (the end).
 LogInfo StreamHdf5(const std::string& path, const LogSelect& sel, const LogSink& sink) {
-  LogInfo info;
-  bool ended = false;
-  std::vector<double> u, y;
-  RunIsolated(
-      path,
-      [&](const FrameSender& send) {
-        std::vector<char> frame;
-        const LogInfo in = internal::StreamHdf5InProcess(path, sel, [&](const double* cu, const double* cy, size_t n) {
-          frame.resize(1 + 2 * n * sizeof(double));
-          frame[0] = 'c';
-          std::memcpy(frame.data() + 1, cu, n * sizeof(double));
-          std::memcpy(frame.data() + 1 + n * sizeof(double), cy, n * sizeof(double));
-          send(frame.data(), frame.size());
-        });
-        const uint64_t count = in.num_samples;
-        char end[1 + sizeof count + sizeof in.sample_rate_hz] = {'i'};
-        std::memcpy(end + 1, &count, sizeof count);
-        std::memcpy(end + 1 + sizeof count, &in.sample_rate_hz, sizeof in.sample_rate_hz);
-        send(end, sizeof end);
-      },
-      [&](std::string_view f) {
-        if (!f.empty() && f[0] == 'c' && (f.size() - 1) % (2 * sizeof(double)) == 0) {
-          const size_t n = (f.size() - 1) / (2 * sizeof(double));
-          u.resize(n);
-          y.resize(n);
-          std::memcpy(u.data(), f.data() + 1, n * sizeof(double));
-          std::memcpy(y.data(), f.data() + 1 + n * sizeof(double), n * sizeof(double));
-          sink(u.data(), y.data(), n);
-        } else if (f.size() == 1 + sizeof(uint64_t) + sizeof(double) && f[0] == 'i') {
-          uint64_t count = 0;
-          std::memcpy(&count, f.data() + 1, sizeof count);
-          std::memcpy(&info.sample_rate_hz, f.data() + 1 + sizeof count, sizeof(double));
-          info.source = path;
-          info.num_samples = count;
-          ended = true;
-        } else {
-          throw InputError(path + ": could not read the HDF5 file (corrupt or truncated?)");
-        }
-      });
-  if (!ended) throw InputError(path + ": could not read the HDF5 file (corrupt or truncated?)");
-  return info;
+  return StreamIsolatedLog(path, "HDF5 file", sel, sink, internal::StreamHdf5InProcess);
 }
 
 void WriteCsvLog(const std::string& tmp, double rate, const std::vector<double>& u,
