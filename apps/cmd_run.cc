@@ -11,6 +11,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "analysis/compare.h"
 #include "apps/common.h"
 #include "apps/fit_support.h"
 #include "apps/loop_flags.h"
@@ -108,12 +109,21 @@ void AddRunCommand(CLI::App& app) {
     double b_max = 0.0;
     const bool has_cov = !model.log_covariance.empty();
     std::vector<stability::SummaryStd> stds(f->delays.size());
+    // One sampled plant (and one set of perturbed plants for the delta method)
+    // shared by every delay.
+    const stability::SampledPlant sampled(model.plant, T, loop.hand);
+    std::unique_ptr<stability::PerturbedPlants> perturbed;
+    if (has_cov) {
+      stability::CheckLogCovariance(model.plant, model.log_covariance);
+      perturbed = std::make_unique<stability::PerturbedPlants>(
+          stability::SamplePerturbedPlants(model.plant, T, loop.hand));
+    }
     for (size_t i = 0; i < f->delays.size(); ++i) {
       const int d = f->delays[i];
-      zs.emplace_back(model.plant, T, d, loop);
+      zs.emplace_back(sampled, d, loop);
       sums.push_back(zs.back().Summarize());
       if (std::isfinite(sums.back().B_max)) b_max = std::max(b_max, sums.back().B_max);
-      if (has_cov) stds[i] = stability::SummaryStdDelta(model.plant, model.log_covariance, T, d, sums.back(), {}, loop);
+      if (has_cov) stds[i] = stability::SummaryStdDelta(*perturbed, model.log_covariance, d, sums.back(), loop);
       nlohmann::json e = io::SummaryToJson(sums.back(), has_cov ? &stds[i] : nullptr);
       e["delay_samples"] = d;
       summary["boundary"].push_back(e);
@@ -135,7 +145,7 @@ void AddRunCommand(CLI::App& app) {
         if (!rows.back().point.AgreesWithMargin()) ++disagree;
       }
       if (has_cov) {
-        const std::vector<double> sd = stability::KcrStd(model.plant, model.log_covariance, T, f->delays[i], pts, {}, loop);
+        const std::vector<double> sd = stability::KcrStd(*perturbed, model.log_covariance, f->delays[i], pts, loop);
         for (int k = 0; k < nB; ++k) rows[i * nB + k].K_cr_std = sd[k];
       }
     }
@@ -144,8 +154,22 @@ void AddRunCommand(CLI::App& app) {
     summary["margin_disagreements"] = disagree;
     t_total += timer.Lap("boundary");
     std::string cmp_text;
+    // The reference's Z-width per delay (the paper's loop), for the comparison
+    // and the figures.
+    std::vector<stability::ZWidth> ref_zs;
     if (have_ref) {  // the paper's loop for both
-      summary["comparison"] = CompareModels(model, ref, f->delays, T, &cmp_text, IsPlainLoop(loop) ? &sums : nullptr, linear);
+      const stability::SampledPlant ref_sampled(ref.plant, T);
+      std::vector<stability::DelaySummary> ref_sums;
+      for (int d : f->delays) {
+        ref_zs.emplace_back(ref_sampled, d);
+        ref_sums.push_back(ref_zs.back().Summarize());
+      }
+      const analysis::DelayStability model_st = IsPlainLoop(loop)
+                                                    ? analysis::DelayStability{sums, stds, has_cov}
+                                                    : analysis::SummarizeDelays(model, T, f->delays);
+      analysis::ModelComparison cmp = analysis::CompareModels(model, ref, f->delays, model_st, ref_sums, linear);
+      summary["comparison"] = std::move(cmp.json);
+      cmp_text = std::move(cmp.text);
       t_total += timer.Lap("compare (reference Z-width)");
     }
     Plant rigid = model.plant;
@@ -180,7 +204,8 @@ void AddRunCommand(CLI::App& app) {
       const bool joint = est.response.method == ident::CombinedMethod::kJoint;
       b << "# f_hz |H| phase_deg |G| phase_G_deg coherence" << (joint ? " coherence_ru coherence_ry" : "")
         << " used_by_fit\n";
-      const DiscreteResponse g(DiscretizeZoh(model.plant, T));
+      // The model's own sampled response (the loop's hand is not part of it).
+      const stability::SampledPlant g = loop.hand.IsNone() ? sampled : stability::SampledPlant(model.plant, T);
       // Phases unwrapped along frequency (the model's continuously; the
       // measured one kept within half a turn of the model's).
       double pm_prev = 0.0;
@@ -200,16 +225,16 @@ void AddRunCommand(CLI::App& app) {
       io::WriteTextAtomically((fig / "bode.dat").string(), b.str());
       // Curves: the model's are the boundary rows; reference and rigid-only
       // are computed here, for the figures alone.
+      const stability::SampledPlant rigid_sampled(rigid, T);
       for (int which = 0; which < 3; ++which) {
         if (which == 1 && !have_ref) continue;
         std::ostringstream o;
         o.precision(10);
         for (size_t i = 0; i < f->delays.size(); ++i) {
-          const Plant& p = which == 1 ? ref.plant : rigid;
           std::unique_ptr<stability::ZWidth> z;
-          if (which != 0) z = std::make_unique<stability::ZWidth>(p, T, f->delays[i]);
+          if (which == 2) z = std::make_unique<stability::ZWidth>(rigid_sampled, f->delays[i]);
           for (int k = 0; k < nB; ++k) {
-            const auto c = which == 0 ? rows[i * nB + k].point : z->At(bgrid[k]);
+            const auto c = which == 0 ? rows[i * nB + k].point : which == 1 ? ref_zs[i].At(bgrid[k]) : z->At(bgrid[k]);
             o << bgrid[k] << " " << c.K_cr << " " << c.f_cr_hz << " "
               << (which == 0 ? rows[i * nB + k].K_cr_std : std::numeric_limits<double>::quiet_NaN()) << "\n";
           }
@@ -253,9 +278,10 @@ void AddRunCommand(CLI::App& app) {
         o.precision(10);
         q.precision(10);
         for (size_t i = 0; i < f->delays.size(); ++i) {
-          const stability::ZWidth zf(model.plant, T, f->delays[i], lf), zr(model.plant, T, f->delays[i], lr);
+          const stability::ZWidth zf(sampled, f->delays[i], lf), zr(sampled, f->delays[i], lr);
           const stability::Passivity pf(model.plant.b, T, zf.total_delay(), lf), pr(model.plant.b, T, zr.total_delay(), lr);
-          const double bm = std::max(zr.Summarize().B_max, zf.Summarize().B_max);
+          // zr is the run's own loop when that has no filter: its summary is known.
+          const double bm = std::max(loop.HasFilter() ? zr.Summarize().B_max : sums[i].B_max, zf.Summarize().B_max);
           const double top = std::isfinite(bm) && bm > 0 ? 1.05 * bm : bgrid.back();
           for (int k = 0; k < 300; ++k) {
             const double B = top * k / 299.0;

@@ -4,6 +4,7 @@
 #include <limits>
 #include <cstdio>
 #include <iostream>
+#include <memory>
 
 #include "apps/common.h"
 #include "apps/loop_flags.h"
@@ -96,10 +97,13 @@ void AddStabilityCommands(CLI::App& app) {
     std::vector<stability::DelaySummary> sums;
     std::vector<stability::Passivity> pas;
     double largest = 0.0;
+    std::vector<stability::SampledPlant> sampled;  // one per hand, shared by every delay
+    for (const stability::LoopOptions& l : loops) sampled.emplace_back(mf.plant, T, l.hand);
     for (size_t i = 0; i < bf->delays.size(); ++i) {
       const int d = bf->delays[i];
-      for (const stability::LoopOptions& l : loops) {
-        zh[i].emplace_back(mf.plant, T, d, l);
+      for (size_t h = 0; h < loops.size(); ++h) {
+        const stability::LoopOptions& l = loops[h];
+        zh[i].emplace_back(sampled[h], d, l);
         hsums[i].push_back(zh[i].back().Summarize());
         if (std::isfinite(hsums[i].back().B_max)) largest = std::max(largest, hsums[i].back().B_max);
       }
@@ -120,6 +124,11 @@ void AddStabilityCommands(CLI::App& app) {
     rows.reserve(grid.size() * zs.size());
     int disagree = 0;
     std::vector<stability::SummaryStd> stds(zs.size());
+    std::unique_ptr<stability::PerturbedPlants> perturbed;  // shared by every delay
+    if (has_cov) {
+      stability::CheckLogCovariance(mf.plant, mf.log_covariance);
+      perturbed = std::make_unique<stability::PerturbedPlants>(stability::SamplePerturbedPlants(mf.plant, T, loops[0].hand));
+    }
     for (size_t i = 0; i < zs.size(); ++i) {
       std::vector<stability::CriticalPoint> pts;
       for (double B : grid) {
@@ -135,9 +144,9 @@ void AddStabilityCommands(CLI::App& app) {
         rows.push_back(std::move(r));
       }
       if (has_cov) {
-        const std::vector<double> sd = stability::KcrStd(mf.plant, mf.log_covariance, T, bf->delays[i], pts, {}, loops[0]);
+        const std::vector<double> sd = stability::KcrStd(*perturbed, mf.log_covariance, bf->delays[i], pts, loops[0]);
         for (size_t k = 0; k < grid.size(); ++k) rows[i * grid.size() + k].K_cr_std = sd[k];
-        stds[i] = stability::SummaryStdDelta(mf.plant, mf.log_covariance, T, bf->delays[i], sums[i], {}, loops[0]);
+        stds[i] = stability::SummaryStdDelta(*perturbed, mf.log_covariance, bf->delays[i], sums[i], loops[0]);
       }
     }
     io::WriteBoundaryCsv(bf->out, rows);
