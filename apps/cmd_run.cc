@@ -49,6 +49,7 @@ void AddRunCommand(CLI::App& app) {
     FitFlags fit;
     stability::BGridOptions grid;
     bool force = false;
+    bool no_figures = false;
     double report_filter_hz = 50.0;
     LoopFlags loop;
   };
@@ -57,6 +58,7 @@ void AddRunCommand(CLI::App& app) {
   cmd->add_option("logs", f->logs, "log files (text, .mat, .h5): runs of one device, spectra averaged")->required();
   cmd->add_option("-o,--output", f->outdir, "output folder: new, or existing and empty (its parent must exist)")->required();
   cmd->add_flag("--force", f->force, "write into a non-empty output folder, replacing zwidth's files there");
+  cmd->add_flag("--no-figures", f->no_figures, "no figures/ folder, no gnuplot: the data files and the report only");
   cmd->add_option("--reference", f->reference, "compare with: table1 (the paper's PHANToM, built in) or a model JSON (default: no comparison)");
   cmd->add_option("--delays", f->delays, "loop delays [samples]")->delimiter(',')->capture_default_str();
   f->fit.modes = "auto";  // run chooses the order unless told
@@ -197,8 +199,8 @@ void AddRunCommand(CLI::App& app) {
 
     // Figure data and the gnuplot script.
     const fs::path fig = out / "figures";
-    fs::create_directories(fig);
-    {
+    if (!f->no_figures) fs::create_directories(fig);
+    if (!f->no_figures) {
       std::ostringstream b;
       b.precision(10);
       const bool joint = est.response.method == ident::CombinedMethod::kJoint;
@@ -367,12 +369,15 @@ void AddRunCommand(CLI::App& app) {
       }
       io::WriteTextAtomically((fig / "figures.gp").string(), gp.str());
     }
-    timer.Lap("figure data (reference, rigid)");
-    // gnuplot started with an argument vector in the figures folder: no shell,
-    // so no folder name is ever interpreted. 127: not installed.
-    const int gnuplot = io::RunProgram({"gnuplot", "figures.gp"}, fig.string(), (fig / "gnuplot.log").string());
-    const bool have_figures = gnuplot == 0;
-    if (gnuplot != 127) timer.Lap("figures (gnuplot)");
+    bool have_figures = false;
+    if (!f->no_figures) {
+      timer.Lap("figure data (reference, rigid)");
+      // gnuplot started with an argument vector in the figures folder: no shell,
+      // so no folder name is ever interpreted. 127: not installed.
+      const int gnuplot = io::RunProgram({"gnuplot", "figures.gp"}, fig.string(), (fig / "gnuplot.log").string());
+      have_figures = gnuplot == 0;
+      if (gnuplot != 127) timer.Lap("figures (gnuplot)");
+    }
     // The report.
     std::ostringstream h;
     h << "<!DOCTYPE html><html><head><meta charset='utf-8'><title>zwidth report</title>"
@@ -439,6 +444,8 @@ void AddRunCommand(CLI::App& app) {
             << "origin: rendering beyond it relies on the stable region and on the hand being no worse than assumed.</p>\n";
         }
       }
+    } else if (f->no_figures) {
+      h << "<p>No figures (<code>--no-figures</code>).</p>\n";
     } else {
       h << "<p>Figures need gnuplot (Debian package <code>gnuplot-nox</code>): install it and run "
         << "<code>cd figures && gnuplot figures.gp</code>, or rerun zwidth run.</p>\n";
