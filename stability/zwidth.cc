@@ -16,9 +16,10 @@
 namespace zwidth::stability {
 namespace internal {
 
-// Brent's method (zeroin) for f(a) f(b) <= 0.
-double BrentRoot(const std::function<double(double)>& f, double a, double b, double fa,
-                 double fb, double tol) {
+// Brent's method (zeroin) for f(a) f(b) <= 0. A template, so that the
+// boundary's B(theta) - B inlines (no std::function call per evaluation).
+template <class F>
+double BrentRoot(const F& f, double a, double b, double fa, double fb, double tol) {
   if (fa == 0.0) return a;
   if (fb == 0.0) return b;
   double c = a, fc = fa, d = b - a, e = d;
