@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "analysis/compare.h"
+#include "analysis/plant_stability.h"
 #include "apps/common.h"
 #include "apps/fit_support.h"
 #include "apps/loop_flags.h"
@@ -104,52 +105,21 @@ void AddRunCommand(CLI::App& app) {
     const stability::LoopOptions loop = ResolveLoops(f->loop, T)[0];
     // The model's Z-width per delay, computed once for the summary, the
     // comparison, the boundary rows and the figures.
-    std::vector<stability::ZWidth> zs;
-    std::vector<stability::DelaySummary> sums;
+    const analysis::PlantStability st = analysis::AnalysePlantStability(model, T, f->delays, loop, f->grid);
+    const std::vector<stability::DelaySummary>& sums = st.summaries;
+    const std::vector<stability::SummaryStd>& stds = st.stds;
+    const std::vector<double>& bgrid = st.b_grid;
+    const std::vector<io::BoundaryRow>& rows = st.rows;
+    const bool has_cov = st.has_std;
+    const int disagree = st.margin_disagreements;
+    const int nB = static_cast<int>(bgrid.size());
+    const stability::SampledPlant& sampled = st.sampled;
     nlohmann::json summary;
     summary["boundary"] = nlohmann::json::array();
-    double b_max = 0.0;
-    const bool has_cov = !model.log_covariance.empty();
-    std::vector<stability::SummaryStd> stds(f->delays.size());
-    // One sampled plant (and one set of perturbed plants for the delta method)
-    // shared by every delay.
-    const stability::SampledPlant sampled(model.plant, T, loop.hand);
-    std::unique_ptr<stability::PerturbedPlants> perturbed;
-    if (has_cov) {
-      stability::CheckLogCovariance(model.plant, model.log_covariance);
-      perturbed = std::make_unique<stability::PerturbedPlants>(
-          stability::SamplePerturbedPlants(model.plant, T, loop.hand));
-    }
     for (size_t i = 0; i < f->delays.size(); ++i) {
-      const int d = f->delays[i];
-      zs.emplace_back(sampled, d, loop);
-      sums.push_back(zs.back().Summarize());
-      if (std::isfinite(sums.back().B_max)) b_max = std::max(b_max, sums.back().B_max);
-      if (has_cov) stds[i] = stability::SummaryStdDelta(*perturbed, model.log_covariance, d, sums.back(), loop);
-      nlohmann::json e = io::SummaryToJson(sums.back(), has_cov ? &stds[i] : nullptr);
-      e["delay_samples"] = d;
+      nlohmann::json e = io::SummaryToJson(sums[i], has_cov ? &stds[i] : nullptr);
+      e["delay_samples"] = f->delays[i];
       summary["boundary"].push_back(e);
-    }
-    const std::vector<double> bgrid =
-        stability::MakeBGrid(f->grid, b_max, model.plant.m / T, static_cast<int>(f->delays.size()));
-    std::vector<stability::Passivity> passivity;  // Colgate and Schenkel, the paper's loop
-    for (const auto& z : zs) passivity.emplace_back(model.plant.b, T, z.total_delay(), loop);
-    const int nB = static_cast<int>(bgrid.size());
-    std::vector<io::BoundaryRow> rows;
-    rows.reserve(zs.size() * bgrid.size());
-    int disagree = 0;
-    for (size_t i = 0; i < zs.size(); ++i) {
-      std::vector<stability::CriticalPoint> pts;
-      for (double B : bgrid) {
-        rows.push_back({f->delays[i], zs[i].At(B), zs[i].StableIntervals(B)});
-        rows.back().K_passive = passivity[i].At(B).K_hi;
-        pts.push_back(rows.back().point);
-        if (!rows.back().point.AgreesWithMargin()) ++disagree;
-      }
-      if (has_cov) {
-        const std::vector<double> sd = stability::KcrStd(*perturbed, model.log_covariance, f->delays[i], pts, loop);
-        for (int k = 0; k < nB; ++k) rows[i * nB + k].K_cr_std = sd[k];
-      }
     }
     summary["B_max_meaning"] = "B_max: the largest B at which some K > 0 is stable (reopened bands included); "
                                "B_max_from_zero: the B where the interval from K = 0+ closes (the paper's B_max)";
