@@ -31,6 +31,50 @@ StateSpace Sampled(const Plant& plant, double period_s, const Hand& hand) {
   return d;
 }
 
+// D(z) / (z - 1) (without the integrator's pole when has_integrator) from the
+// exactly known discrete poles e^{pT}; *hand_poles gets the continuous poles
+// with Im > 0 of the plant with the hand (none without a hand).
+std::vector<double> DiscreteDenominator(const Plant& plant, double T, const Hand& hand_in, bool has_integrator,
+                                        std::vector<std::complex<double>>* hand_poles) {
+  const bool hand = !hand_in.IsNone();
+  std::vector<double> den1 = {1.0};
+  if (!hand) {
+    den1 = PolyMul(den1, {-std::exp(-plant.b / plant.m * T), 1.0});
+    for (const Mode& md : plant.modes) {
+      const double disc = md.c * md.c / 4.0 - md.omega * md.omega;
+      if (disc < 0.0) {
+        const double r = std::exp(-md.c * T / 2.0), wd = std::sqrt(-disc);
+        den1 = PolyMul(den1, {r * r, -2.0 * r * std::cos(wd * T), 1.0});
+      } else {
+        const double s = std::sqrt(disc);
+        den1 = PolyMul(den1, {-std::exp((-md.c / 2.0 + s) * T), 1.0});
+        den1 = PolyMul(den1, {-std::exp((-md.c / 2.0 - s) * T), 1.0});
+      }
+    }
+  } else {
+    // With the hand the poles are the eigenvalues of the continuous A_h (the
+    // ZOH maps each to e^{lambda T}). Without hand stiffness the position state
+    // is not fed back: A_h keeps an exact zero eigenvalue, the integrator.
+    Eigen::VectorXcd ev = ContinuousStateSpaceWithHand(plant, hand_in).A.eigenvalues();
+    int skip = -1;
+    if (has_integrator) {
+      ev.cwiseAbs().minCoeff(&skip);
+    }
+    for (int i = 0; i < ev.size(); ++i) {
+      if (i == skip) continue;
+      const std::complex<double> l = ev(i);
+      if (l.imag() > 0.0) {
+        const double r = std::exp(l.real() * T);
+        den1 = PolyMul(den1, {r * r, -2.0 * r * std::cos(l.imag() * T), 1.0});
+        hand_poles->push_back(l);
+      } else if (l.imag() == 0.0) {
+        den1 = PolyMul(den1, {-std::exp(l.real() * T), 1.0});
+      }
+    }
+  }
+  return den1;
+}
+
 }  // namespace
 
 SampledPlant::SampledPlant(const Plant& plant, double period_s, const Hand& hand_in) {
@@ -55,43 +99,9 @@ SampledPlant::SampledPlant(const Plant& plant, double period_s, const Hand& hand
     }
   }
   // Denominator from the exactly known discrete poles e^{pT}.
-  std::vector<double>& den1 = d->den1;
-  den1 = {1.0};
   std::vector<std::complex<double>> hand_poles;  // continuous poles with Im > 0 (hand only)
-  if (!hand) {
-    den1 = PolyMul(den1, {-std::exp(-plant.b / plant.m * T), 1.0});
-    for (const Mode& md : plant.modes) {
-      const double disc = md.c * md.c / 4.0 - md.omega * md.omega;
-      if (disc < 0.0) {
-        const double r = std::exp(-md.c * T / 2.0), wd = std::sqrt(-disc);
-        den1 = PolyMul(den1, {r * r, -2.0 * r * std::cos(wd * T), 1.0});
-      } else {
-        const double s = std::sqrt(disc);
-        den1 = PolyMul(den1, {-std::exp((-md.c / 2.0 + s) * T), 1.0});
-        den1 = PolyMul(den1, {-std::exp((-md.c / 2.0 - s) * T), 1.0});
-      }
-    }
-  } else {
-    // With the hand the poles are the eigenvalues of the continuous A_h (the
-    // ZOH maps each to e^{lambda T}). Without hand stiffness the position state
-    // is not fed back: A_h keeps an exact zero eigenvalue, the integrator.
-    Eigen::VectorXcd ev = ContinuousStateSpaceWithHand(plant, hand_in).A.eigenvalues();
-    int skip = -1;
-    if (d->has_integrator) {
-      ev.cwiseAbs().minCoeff(&skip);
-    }
-    for (int i = 0; i < ev.size(); ++i) {
-      if (i == skip) continue;
-      const std::complex<double> l = ev(i);
-      if (l.imag() > 0.0) {
-        const double r = std::exp(l.real() * T);
-        den1 = PolyMul(den1, {r * r, -2.0 * r * std::cos(l.imag() * T), 1.0});
-        hand_poles.push_back(l);
-      } else if (l.imag() == 0.0) {
-        den1 = PolyMul(den1, {-std::exp(l.real() * T), 1.0});
-      }
-    }
-  }
+  d->den1 = DiscreteDenominator(plant, T, hand_in, d->has_integrator, &hand_poles);
+  const std::vector<double>& den1 = d->den1;
   d->den = d->has_integrator ? PolyMul(den1, {-1.0, 1.0}) : den1;
   // Numerator by interpolation at n rotated roots of unity (none is a pole).
   const int n = static_cast<int>(d->den.size()) - 1;
