@@ -11,6 +11,8 @@
 #include <numbers>
 #include <sstream>
 
+#include "analysis/compare.h"
+#include "analysis/plant_stability.h"
 #include "apps/common.h"
 #include "apps/fit_support.h"
 #include "apps/loop_flags.h"
@@ -37,6 +39,81 @@ std::string Html(const std::string& s) {
   return o;
 }
 
+// What the gnuplot script of `run` depends on.
+struct FigureScriptOptions {
+  std::vector<int> delays;                // loop delays [samples], one panel/curve each
+  ident::CombinedMethod method{};         // the estimate's method (Bode title)
+  bool joint = false;                     // closed-loop joint estimate: two coherence columns
+  bool linear = false;                    // N s/m and N/m labels instead of N m s/rad, N m/rad
+  bool have_ref = false;                  // kcr_reference.dat exists
+  bool table1 = false;                    // table2.dat exists
+  double k_clip = 1.0;                    // upper K of the region figure [N m/rad]
+  double k_clip_loop = 1.0;               // upper K of the loop figure [N m/rad]
+  double report_filter_hz = 50.0;         // the loop figure's velocity low-pass [Hz]
+};
+
+// figures.gp: every figure in SVG and PNG, read from the .dat files beside it.
+std::string FigureScript(const FigureScriptOptions& o) {
+  std::ostringstream gp;
+  gp << "set datafile missing 'nan'\nset grid\nset key outside right\n"
+     << "set linetype 1 lc rgb '#1f77b4' lw 2\nset linetype 2 lc rgb '#d62728' lw 2\n"
+     << "set linetype 3 lc rgb '#2ca02c' lw 2\nset linetype 4 lc rgb '#9467bd' lw 2\n"
+     << "set linetype 5 lc rgb '#ff7f0e' lw 2\nset linetype 6 lc rgb '#8c564b' lw 2\n";
+  std::string dl;
+  for (size_t i = 0; i < o.delays.size(); ++i) dl += (i ? " " : "") + std::to_string(o.delays[i]);
+  gp << "delays = '" << dl << "'\n";
+  for (const char* term : {"svg size 900,640 font 'sans,12'", "pngcairo size 900,640 font 'sans,10'"}) {
+    const std::string ext = std::string(term).rfind("svg", 0) == 0 ? "svg" : "png";
+    gp << "set terminal " << term << "\n";
+    gp << "set output 'bode." << ext << "'\nset multiplot layout 2,1 title 'Bode diagram: measured (" << ident::ToString(o.method) << ") and fitted model (exact ZOH) - Fig. 3'\n"
+       << "set logscale x\nset logscale y\nset format y '10^{%L}'\nset ylabel 'magnitude [" << (o.linear ? "m/N" : "rad/(N m)") << "]'\nunset xlabel\n"
+       << "uc = " << (o.joint ? 9 : 7) << "\n"
+       << "plot 'bode.dat' u 1:(column(uc) > 0 ? $2 : NaN) w l lc rgb '#1f77b4' t 'measured, fitted band', "
+       << "'' u 1:(column(uc) > 0 ? NaN : $2) w p pt 7 ps 0.25 lc rgb '#bbbbbb' t 'measured, not used', "
+       << "'' u 1:4 w l lw 2 lc rgb 'black' t 'fitted model'\n"
+       << "unset logscale y\nset format y '%g'\nset ylabel 'phase [deg]'\nset xlabel 'frequency [Hz]'\n"
+       << "plot 'bode.dat' u 1:(column(uc) > 0 ? $3 : NaN) w l lc rgb '#1f77b4' t 'measured, fitted band', "
+       << "'' u 1:(column(uc) > 0 ? NaN : $3) w p pt 7 ps 0.25 lc rgb '#bbbbbb' t 'measured, not used', "
+       << "'' u 1:5 w l lw 2 lc rgb 'black' t 'fitted model'\nunset multiplot\n";
+    gp << "set output 'coherence." << ext << "'\nset title 'Magnitude-squared coherence'\nset xlabel 'frequency [Hz]'\nset ylabel 'coherence [-]'\nset yrange [0:1.05]\n"
+       << (o.joint ? "plot 'bode.dat' u 1:7 w l lc rgb '#1f77b4' t 'r -> u', '' u 1:8 w l lc rgb '#d62728' t 'r -> y'\n"
+                 : "plot 'bode.dat' u 1:6 w l lc rgb '#1f77b4' t 'coherence'\n")
+       << "set yrange [*:*]\nunset logscale x\nunset title\n";
+    gp << "set output 'kcr." << ext << "'\nset multiplot layout 2,1 title 'Critical stiffness and ultimate frequency vs damping - Fig. 6 / Fig. 10'\n"
+       << "set xlabel 'B [" << (o.linear ? "N s/m" : "N m s/rad") << "]'\nset ylabel 'K_{CR} [" << (o.linear ? "N/m" : "N m/rad") << "]'\n"
+       << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:2 w l lt i t 'model, d='.word(delays,i)"
+       << (o.have_ref ? ", for [i=1:words(delays)] 'kcr_reference.dat' index i-1 u 1:2 w l lt i dt 2 lw 1 t 'reference, d='.word(delays,i)" : "")
+       << (o.table1 ? ", 'table2.dat' u 2:3 w p pt 7 ps 0.8 lc rgb 'red' t 'Table II (relay)'" : "") << "\n"
+       << "set logscale y\nset ylabel 'f_{CR} [Hz]'\n"
+       << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:3 w l lt i t 'model, d='.word(delays,i)"
+       << (o.table1 ? ", 'table2.dat' u 2:4 w p pt 7 ps 0.8 lc rgb 'red' t 'Table II (relay)'" : "") << "\nunset logscale y\nunset multiplot\n";
+    gp << "set output 'region." << ext << "'\nset multiplot layout " << o.delays.size()
+       << ",1 title 'Z-width: stable (B, K) region per delay (shaded), K_{CR}(B) and its +-2 sigma band'\n"
+       << "set xlabel 'B [N m s/rad]'\nset ylabel 'K [N m/rad]'\nset yrange [0:" << o.k_clip << "]\n"
+       << "do for [i=1:words(delays)] {\n"
+       << "  set title 'loop delay '.word(delays,i).' samples'\n"
+       << "  plot 'region_model.dat' index i-1 u 1:2:(0):($3-$2) w vectors nohead lc rgb '#9ecae1' t 'stable', "
+       << "'kcr_model.dat' index i-1 u 1:($2-2*$4):($2+2*$4) w filledcurves fs transparent solid 0.35 "
+       << "lc rgb '#d62728' t 'K_{CR} +- 2 sigma', '' index i-1 u 1:2 w l lw 2 lc rgb '#08306b' t 'K_{CR}(B)'\n"
+       << "}\nunset multiplot\nset yrange [*:*]\nunset title\n";
+    gp << "set output 'loop." << ext << "'\nset multiplot layout " << o.delays.size()
+       << ",1 title 'Stable region without and with a " << o.report_filter_hz
+       << " Hz velocity low-pass; passivity boundary K_P(B) (Colgate-Schenkel)'\n"
+       << "set xlabel 'B [N m s/rad]'\nset ylabel 'K [N m/rad]'\nset yrange [0:" << o.k_clip_loop << "]\n"
+       << "do for [i=1:words(delays)] {\n"
+       << "  set title 'loop delay '.word(delays,i).' samples'\n"
+       << "  plot 'loop_region.dat' index i-1 u 1:($2==1?$3:1/0):(0):($4-$3) w vectors nohead lc rgb '#fdae6b' t 'stable, filtered', "
+       << "'' index i-1 u 1:($2==0?$3:1/0):(0):($4-$3) w vectors nohead lc rgb '#6baed6' t 'stable, raw difference', "
+       << "'loop_passive.dat' index i-1 u 1:2 w l lw 2 lc rgb 'black' t 'K_P, raw', '' index i-1 u 1:3 w l lw 2 dt 2 lc rgb '#7f2704' t 'K_P, filtered'\n"
+       << "}\nunset multiplot\nset yrange [*:*]\nunset title\n";
+    gp << "set output 'rigid." << ext << "'\nset title 'With the vibration modes and without (rigid body only) - Fig. 7'\n"
+       << "set xlabel 'B [" << (o.linear ? "N s/m" : "N m s/rad") << "]'\nset ylabel 'K_{CR} [" << (o.linear ? "N/m" : "N m/rad") << "]'\n"
+       << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:2 w l lt i t 'with modes, d='.word(delays,i), "
+       << "for [i=1:words(delays)] 'kcr_rigid.dat' index i-1 u 1:2 w l lt i dt 2 t 'rigid only, d='.word(delays,i)\nunset title\n";
+  }
+  return gp.str();
+}
+
 }  // namespace
 
 void AddRunCommand(CLI::App& app) {
@@ -48,6 +125,7 @@ void AddRunCommand(CLI::App& app) {
     FitFlags fit;
     stability::BGridOptions grid;
     bool force = false;
+    bool no_figures = false;
     double report_filter_hz = 50.0;
     LoopFlags loop;
   };
@@ -56,6 +134,7 @@ void AddRunCommand(CLI::App& app) {
   cmd->add_option("logs", f->logs, "log files (text, .mat, .h5): runs of one device, spectra averaged")->required();
   cmd->add_option("-o,--output", f->outdir, "output folder: new, or existing and empty (its parent must exist)")->required();
   cmd->add_flag("--force", f->force, "write into a non-empty output folder, replacing zwidth's files there");
+  cmd->add_flag("--no-figures", f->no_figures, "no figures/ folder, no gnuplot: the data files and the report only");
   cmd->add_option("--reference", f->reference, "compare with: table1 (the paper's PHANToM, built in) or a model JSON (default: no comparison)");
   cmd->add_option("--delays", f->delays, "loop delays [samples]")->delimiter(',')->capture_default_str();
   f->fit.modes = "auto";  // run chooses the order unless told
@@ -101,51 +180,43 @@ void AddRunCommand(CLI::App& app) {
     const stability::LoopOptions loop = ResolveLoops(f->loop, T)[0];
     // The model's Z-width per delay, computed once for the summary, the
     // comparison, the boundary rows and the figures.
-    std::vector<stability::ZWidth> zs;
-    std::vector<stability::DelaySummary> sums;
+    const analysis::PlantStability st = analysis::AnalysePlantStability(model, T, f->delays, loop, f->grid);
+    const std::vector<stability::DelaySummary>& sums = st.summaries;
+    const std::vector<stability::SummaryStd>& stds = st.stds;
+    const std::vector<double>& bgrid = st.b_grid;
+    const std::vector<io::BoundaryRow>& rows = st.rows;
+    const bool has_cov = st.has_std;
+    const int disagree = st.margin_disagreements;
+    const int nB = static_cast<int>(bgrid.size());
+    const stability::SampledPlant& sampled = st.sampled;
     nlohmann::json summary;
     summary["boundary"] = nlohmann::json::array();
-    double b_max = 0.0;
-    const bool has_cov = !model.log_covariance.empty();
-    std::vector<stability::SummaryStd> stds(f->delays.size());
     for (size_t i = 0; i < f->delays.size(); ++i) {
-      const int d = f->delays[i];
-      zs.emplace_back(model.plant, T, d, loop);
-      sums.push_back(zs.back().Summarize());
-      if (std::isfinite(sums.back().B_max)) b_max = std::max(b_max, sums.back().B_max);
-      if (has_cov) stds[i] = stability::SummaryStdDelta(model.plant, model.log_covariance, T, d, sums.back(), {}, loop);
-      nlohmann::json e = io::SummaryToJson(sums.back(), has_cov ? &stds[i] : nullptr);
-      e["delay_samples"] = d;
+      nlohmann::json e = io::SummaryToJson(sums[i], has_cov ? &stds[i] : nullptr);
+      e["delay_samples"] = f->delays[i];
       summary["boundary"].push_back(e);
-    }
-    const std::vector<double> bgrid =
-        stability::MakeBGrid(f->grid, b_max, model.plant.m / T, static_cast<int>(f->delays.size()));
-    std::vector<stability::Passivity> passivity;  // Colgate and Schenkel, the paper's loop
-    for (const auto& z : zs) passivity.emplace_back(model.plant.b, T, z.total_delay(), loop);
-    const int nB = static_cast<int>(bgrid.size());
-    std::vector<io::BoundaryRow> rows;
-    rows.reserve(zs.size() * bgrid.size());
-    int disagree = 0;
-    for (size_t i = 0; i < zs.size(); ++i) {
-      std::vector<stability::CriticalPoint> pts;
-      for (double B : bgrid) {
-        rows.push_back({f->delays[i], zs[i].At(B), zs[i].StableIntervals(B)});
-        rows.back().K_passive = passivity[i].At(B).K_hi;
-        pts.push_back(rows.back().point);
-        if (!rows.back().point.AgreesWithMargin()) ++disagree;
-      }
-      if (has_cov) {
-        const std::vector<double> sd = stability::KcrStd(model.plant, model.log_covariance, T, f->delays[i], pts, {}, loop);
-        for (int k = 0; k < nB; ++k) rows[i * nB + k].K_cr_std = sd[k];
-      }
     }
     summary["B_max_meaning"] = "B_max: the largest B at which some K > 0 is stable (reopened bands included); "
                                "B_max_from_zero: the B where the interval from K = 0+ closes (the paper's B_max)";
     summary["margin_disagreements"] = disagree;
     t_total += timer.Lap("boundary");
     std::string cmp_text;
+    // The reference's Z-width per delay (the paper's loop), for the comparison
+    // and the figures.
+    std::vector<stability::ZWidth> ref_zs;
     if (have_ref) {  // the paper's loop for both
-      summary["comparison"] = CompareModels(model, ref, f->delays, T, &cmp_text, IsPlainLoop(loop) ? &sums : nullptr, linear);
+      const stability::SampledPlant ref_sampled(ref.plant, T);
+      std::vector<stability::DelaySummary> ref_sums;
+      for (int d : f->delays) {
+        ref_zs.emplace_back(ref_sampled, d);
+        ref_sums.push_back(ref_zs.back().Summarize());
+      }
+      const analysis::DelayStability model_st = IsPlainLoop(loop)
+                                                    ? analysis::DelayStability{sums, stds, has_cov}
+                                                    : analysis::SummarizeDelays(model, T, f->delays);
+      analysis::ModelComparison cmp = analysis::CompareModels(model, ref, f->delays, model_st, ref_sums, linear);
+      summary["comparison"] = std::move(cmp.json);
+      cmp_text = std::move(cmp.text);
       t_total += timer.Lap("compare (reference Z-width)");
     }
     Plant rigid = model.plant;
@@ -173,14 +244,15 @@ void AddRunCommand(CLI::App& app) {
 
     // Figure data and the gnuplot script.
     const fs::path fig = out / "figures";
-    fs::create_directories(fig);
-    {
+    if (!f->no_figures) fs::create_directories(fig);
+    if (!f->no_figures) {
       std::ostringstream b;
       b.precision(10);
       const bool joint = est.response.method == ident::CombinedMethod::kJoint;
       b << "# f_hz |H| phase_deg |G| phase_G_deg coherence" << (joint ? " coherence_ru coherence_ry" : "")
         << " used_by_fit\n";
-      const DiscreteResponse g(DiscretizeZoh(model.plant, T));
+      // The model's own sampled response (the loop's hand is not part of it).
+      const stability::SampledPlant g = loop.hand.IsNone() ? sampled : stability::SampledPlant(model.plant, T);
       // Phases unwrapped along frequency (the model's continuously; the
       // measured one kept within half a turn of the model's).
       double pm_prev = 0.0;
@@ -200,16 +272,16 @@ void AddRunCommand(CLI::App& app) {
       io::WriteTextAtomically((fig / "bode.dat").string(), b.str());
       // Curves: the model's are the boundary rows; reference and rigid-only
       // are computed here, for the figures alone.
+      const stability::SampledPlant rigid_sampled(rigid, T);
       for (int which = 0; which < 3; ++which) {
         if (which == 1 && !have_ref) continue;
         std::ostringstream o;
         o.precision(10);
         for (size_t i = 0; i < f->delays.size(); ++i) {
-          const Plant& p = which == 1 ? ref.plant : rigid;
           std::unique_ptr<stability::ZWidth> z;
-          if (which != 0) z = std::make_unique<stability::ZWidth>(p, T, f->delays[i]);
+          if (which == 2) z = std::make_unique<stability::ZWidth>(rigid_sampled, f->delays[i]);
           for (int k = 0; k < nB; ++k) {
-            const auto c = which == 0 ? rows[i * nB + k].point : z->At(bgrid[k]);
+            const auto c = which == 0 ? rows[i * nB + k].point : which == 1 ? ref_zs[i].At(bgrid[k]) : z->At(bgrid[k]);
             o << bgrid[k] << " " << c.K_cr << " " << c.f_cr_hz << " "
               << (which == 0 ? rows[i * nB + k].K_cr_std : std::numeric_limits<double>::quiet_NaN()) << "\n";
           }
@@ -253,9 +325,10 @@ void AddRunCommand(CLI::App& app) {
         o.precision(10);
         q.precision(10);
         for (size_t i = 0; i < f->delays.size(); ++i) {
-          const stability::ZWidth zf(model.plant, T, f->delays[i], lf), zr(model.plant, T, f->delays[i], lr);
+          const stability::ZWidth zf(sampled, f->delays[i], lf), zr(sampled, f->delays[i], lr);
           const stability::Passivity pf(model.plant.b, T, zf.total_delay(), lf), pr(model.plant.b, T, zr.total_delay(), lr);
-          const double bm = std::max(zr.Summarize().B_max, zf.Summarize().B_max);
+          // zr is the run's own loop when that has no filter: its summary is known.
+          const double bm = std::max(loop.HasFilter() ? zr.Summarize().B_max : sums[i].B_max, zf.Summarize().B_max);
           const double top = std::isfinite(bm) && bm > 0 ? 1.05 * bm : bgrid.back();
           for (int k = 0; k < 300; ++k) {
             const double B = top * k / 299.0;
@@ -282,71 +355,19 @@ void AddRunCommand(CLI::App& app) {
         }
         io::WriteTextAtomically((fig / "table2.dat").string(), t2.str());
       }
-      std::ostringstream gp;
-      gp << "set datafile missing 'nan'\nset grid\nset key outside right\n"
-         << "set linetype 1 lc rgb '#1f77b4' lw 2\nset linetype 2 lc rgb '#d62728' lw 2\n"
-         << "set linetype 3 lc rgb '#2ca02c' lw 2\nset linetype 4 lc rgb '#9467bd' lw 2\n"
-         << "set linetype 5 lc rgb '#ff7f0e' lw 2\nset linetype 6 lc rgb '#8c564b' lw 2\n";
-      std::string dl;
-      for (size_t i = 0; i < f->delays.size(); ++i) dl += (i ? " " : "") + std::to_string(f->delays[i]);
-      gp << "delays = '" << dl << "'\n";
-      for (const char* term : {"svg size 900,640 font 'sans,12'", "pngcairo size 900,640 font 'sans,10'"}) {
-        const std::string ext = std::string(term).rfind("svg", 0) == 0 ? "svg" : "png";
-        gp << "set terminal " << term << "\n";
-        gp << "set output 'bode." << ext << "'\nset multiplot layout 2,1 title 'Bode diagram: measured (" << ident::ToString(est.response.method) << ") and fitted model (exact ZOH) - Fig. 3'\n"
-           << "set logscale x\nset logscale y\nset format y '10^{%L}'\nset ylabel 'magnitude [" << (linear ? "m/N" : "rad/(N m)") << "]'\nunset xlabel\n"
-           << "uc = " << (joint ? 9 : 7) << "\n"
-           << "plot 'bode.dat' u 1:(column(uc) > 0 ? $2 : NaN) w l lc rgb '#1f77b4' t 'measured, fitted band', "
-           << "'' u 1:(column(uc) > 0 ? NaN : $2) w p pt 7 ps 0.25 lc rgb '#bbbbbb' t 'measured, not used', "
-           << "'' u 1:4 w l lw 2 lc rgb 'black' t 'fitted model'\n"
-           << "unset logscale y\nset format y '%g'\nset ylabel 'phase [deg]'\nset xlabel 'frequency [Hz]'\n"
-           << "plot 'bode.dat' u 1:(column(uc) > 0 ? $3 : NaN) w l lc rgb '#1f77b4' t 'measured, fitted band', "
-           << "'' u 1:(column(uc) > 0 ? NaN : $3) w p pt 7 ps 0.25 lc rgb '#bbbbbb' t 'measured, not used', "
-           << "'' u 1:5 w l lw 2 lc rgb 'black' t 'fitted model'\nunset multiplot\n";
-        gp << "set output 'coherence." << ext << "'\nset title 'Magnitude-squared coherence'\nset xlabel 'frequency [Hz]'\nset ylabel 'coherence [-]'\nset yrange [0:1.05]\n"
-           << (joint ? "plot 'bode.dat' u 1:7 w l lc rgb '#1f77b4' t 'r -> u', '' u 1:8 w l lc rgb '#d62728' t 'r -> y'\n"
-                     : "plot 'bode.dat' u 1:6 w l lc rgb '#1f77b4' t 'coherence'\n")
-           << "set yrange [*:*]\nunset logscale x\nunset title\n";
-        gp << "set output 'kcr." << ext << "'\nset multiplot layout 2,1 title 'Critical stiffness and ultimate frequency vs damping - Fig. 6 / Fig. 10'\n"
-           << "set xlabel 'B [" << (linear ? "N s/m" : "N m s/rad") << "]'\nset ylabel 'K_{CR} [" << (linear ? "N/m" : "N m/rad") << "]'\n"
-           << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:2 w l lt i t 'model, d='.word(delays,i)"
-           << (have_ref ? ", for [i=1:words(delays)] 'kcr_reference.dat' index i-1 u 1:2 w l lt i dt 2 lw 1 t 'reference, d='.word(delays,i)" : "")
-           << (table1 ? ", 'table2.dat' u 2:3 w p pt 7 ps 0.8 lc rgb 'red' t 'Table II (relay)'" : "") << "\n"
-           << "set logscale y\nset ylabel 'f_{CR} [Hz]'\n"
-           << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:3 w l lt i t 'model, d='.word(delays,i)"
-           << (table1 ? ", 'table2.dat' u 2:4 w p pt 7 ps 0.8 lc rgb 'red' t 'Table II (relay)'" : "") << "\nunset logscale y\nunset multiplot\n";
-        gp << "set output 'region." << ext << "'\nset multiplot layout " << f->delays.size()
-           << ",1 title 'Z-width: stable (B, K) region per delay (shaded), K_{CR}(B) and its +-2 sigma band'\n"
-           << "set xlabel 'B [N m s/rad]'\nset ylabel 'K [N m/rad]'\nset yrange [0:" << k_clip << "]\n"
-           << "do for [i=1:words(delays)] {\n"
-           << "  set title 'loop delay '.word(delays,i).' samples'\n"
-           << "  plot 'region_model.dat' index i-1 u 1:2:(0):($3-$2) w vectors nohead lc rgb '#9ecae1' t 'stable', "
-           << "'kcr_model.dat' index i-1 u 1:($2-2*$4):($2+2*$4) w filledcurves fs transparent solid 0.35 "
-           << "lc rgb '#d62728' t 'K_{CR} +- 2 sigma', '' index i-1 u 1:2 w l lw 2 lc rgb '#08306b' t 'K_{CR}(B)'\n"
-           << "}\nunset multiplot\nset yrange [*:*]\nunset title\n";
-        gp << "set output 'loop." << ext << "'\nset multiplot layout " << f->delays.size()
-           << ",1 title 'Stable region without and with a " << f->report_filter_hz
-           << " Hz velocity low-pass; passivity boundary K_P(B) (Colgate-Schenkel)'\n"
-           << "set xlabel 'B [N m s/rad]'\nset ylabel 'K [N m/rad]'\nset yrange [0:" << k_clip_loop << "]\n"
-           << "do for [i=1:words(delays)] {\n"
-           << "  set title 'loop delay '.word(delays,i).' samples'\n"
-           << "  plot 'loop_region.dat' index i-1 u 1:($2==1?$3:1/0):(0):($4-$3) w vectors nohead lc rgb '#fdae6b' t 'stable, filtered', "
-           << "'' index i-1 u 1:($2==0?$3:1/0):(0):($4-$3) w vectors nohead lc rgb '#6baed6' t 'stable, raw difference', "
-           << "'loop_passive.dat' index i-1 u 1:2 w l lw 2 lc rgb 'black' t 'K_P, raw', '' index i-1 u 1:3 w l lw 2 dt 2 lc rgb '#7f2704' t 'K_P, filtered'\n"
-           << "}\nunset multiplot\nset yrange [*:*]\nunset title\n";
-        gp << "set output 'rigid." << ext << "'\nset title 'With the vibration modes and without (rigid body only) - Fig. 7'\n"
-           << "set xlabel 'B [" << (linear ? "N s/m" : "N m s/rad") << "]'\nset ylabel 'K_{CR} [" << (linear ? "N/m" : "N m/rad") << "]'\n"
-           << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:2 w l lt i t 'with modes, d='.word(delays,i), "
-           << "for [i=1:words(delays)] 'kcr_rigid.dat' index i-1 u 1:2 w l lt i dt 2 t 'rigid only, d='.word(delays,i)\nunset title\n";
-      }
-      io::WriteTextAtomically((fig / "figures.gp").string(), gp.str());
+      const FigureScriptOptions so{f->delays, est.response.method, joint, linear, have_ref, table1,
+                                   k_clip, k_clip_loop, f->report_filter_hz};
+      io::WriteTextAtomically((fig / "figures.gp").string(), FigureScript(so));
     }
-    timer.Lap("figure data (reference, rigid)");
-    // gnuplot started with an argument vector in the figures folder: no shell,
-    // so no folder name is ever interpreted. 127: not installed.
-    const int gnuplot = io::RunProgram({"gnuplot", "figures.gp"}, fig.string(), (fig / "gnuplot.log").string());
-    const bool have_figures = gnuplot == 0;
-    if (gnuplot != 127) timer.Lap("figures (gnuplot)");
+    bool have_figures = false;
+    if (!f->no_figures) {
+      timer.Lap("figure data (reference, rigid)");
+      // gnuplot started with an argument vector in the figures folder: no shell,
+      // so no folder name is ever interpreted. 127: not installed.
+      const int gnuplot = io::RunProgram({"gnuplot", "figures.gp"}, fig.string(), (fig / "gnuplot.log").string());
+      have_figures = gnuplot == 0;
+      if (gnuplot != 127) timer.Lap("figures (gnuplot)");
+    }
     // The report.
     std::ostringstream h;
     h << "<!DOCTYPE html><html><head><meta charset='utf-8'><title>zwidth report</title>"
@@ -413,6 +434,8 @@ void AddRunCommand(CLI::App& app) {
             << "origin: rendering beyond it relies on the stable region and on the hand being no worse than assumed.</p>\n";
         }
       }
+    } else if (f->no_figures) {
+      h << "<p>No figures (<code>--no-figures</code>).</p>\n";
     } else {
       h << "<p>Figures need gnuplot (Debian package <code>gnuplot-nox</code>): install it and run "
         << "<code>cd figures && gnuplot figures.gp</code>, or rerun zwidth run.</p>\n";

@@ -4,6 +4,7 @@
 #include <limits>
 #include <cstdio>
 #include <iostream>
+#include <memory>
 
 #include "apps/common.h"
 #include "apps/loop_flags.h"
@@ -19,19 +20,6 @@
 namespace zwidth::app {
 namespace {
 
-// --period when given, else the model's sample_period_s, else 1 ms.
-}  // namespace
-
-double ResolvePeriod(double flag, const io::ModelFile& mf) {
-  if (std::isnan(flag)) return mf.sample_period_s ? *mf.sample_period_s : 0.001;
-  if (!(flag > 0.0 && std::isfinite(flag))) {
-    throw InputError("--period = " + std::to_string(flag) + " s: must be finite and > 0");
-  }
-  return flag;
-}
-
-namespace {
-
 nlohmann::json LoopJson(const std::vector<stability::LoopOptions>& loops) {
   nlohmann::json j = {{"filter_b", loops[0].filter_b}, {"filter_a", loops[0].filter_a},
                       {"hands", nlohmann::json::array()}};
@@ -45,10 +33,187 @@ void CheckDelay(int d, const char* flag) {
   if (d < 0) throw InputError(std::string(flag) + " = " + std::to_string(d) + ": delays must be >= 0 samples");
 }
 
-}  // namespace
+// The boundary table of every delay: one loop per hand, the region stable for
+// every hand, the first hand's summaries, passivity and (one hand) the std.
+struct BoundaryTable {
+  std::vector<stability::DelaySummary> sums;                // the first hand's, per delay
+  std::vector<std::vector<stability::DelaySummary>> hsums;  // [delay][hand]
+  std::vector<stability::Passivity> pas;                    // per delay
+  std::vector<double> grid;                                 // the B values
+  std::vector<io::BoundaryRow> rows;                        // [delay][B]
+  std::vector<stability::SummaryStd> stds;                  // per delay (nan without a covariance)
+  bool has_cov = false;
+  int disagree = 0;                                         // rows where margin() differs
+};
 
-void AddStabilityCommands(CLI::App& app) {
-  // ---- boundary
+BoundaryTable ComputeBoundaryTable(const io::ModelFile& mf, double T, const std::vector<int>& delays,
+                                 const std::vector<stability::LoopOptions>& loops,
+                                 const stability::BGridOptions& grid_options) {
+  std::vector<stability::ZWidth> zs;  // the first hand's loop per delay
+  std::vector<std::vector<stability::ZWidth>> zh(delays.size());  // [delay][hand]
+  std::vector<std::vector<stability::DelaySummary>> hsums(delays.size());
+  std::vector<stability::DelaySummary> sums;
+  std::vector<stability::Passivity> pas;
+  double largest = 0.0;
+  std::vector<stability::SampledPlant> sampled;  // one per hand, shared by every delay
+  for (const stability::LoopOptions& l : loops) sampled.emplace_back(mf.plant, T, l.hand);
+  for (size_t i = 0; i < delays.size(); ++i) {
+    const int d = delays[i];
+    for (size_t h = 0; h < loops.size(); ++h) {
+      const stability::LoopOptions& l = loops[h];
+      zh[i].emplace_back(sampled[h], d, l);
+      hsums[i].push_back(zh[i].back().Summarize());
+      if (std::isfinite(hsums[i].back().B_max)) largest = std::max(largest, hsums[i].back().B_max);
+    }
+    zs.push_back(zh[i][0]);
+    sums.push_back(hsums[i][0]);
+    pas.emplace_back(mf.plant.b, T, zs.back().total_delay(), loops[0]);
+  }
+  const std::vector<double> grid = stability::MakeBGrid(grid_options, largest, mf.plant.m / T,
+                                                        static_cast<int>(delays.size()));
+  // The delta method and Monte Carlo for one loop (with its filter and hand).
+  const bool has_cov = !mf.log_covariance.empty() && loops.size() == 1;
+  if (!mf.log_covariance.empty() && !has_cov) {
+    std::fprintf(stderr, "note: the std columns are not computed with several hands\n");
+  }
+  std::vector<io::BoundaryRow> rows;
+  rows.reserve(grid.size() * zs.size());
+  int disagree = 0;
+  std::vector<stability::SummaryStd> stds(zs.size());
+  std::unique_ptr<stability::PerturbedPlants> perturbed;  // shared by every delay
+  if (has_cov) {
+    stability::CheckLogCovariance(mf.plant, mf.log_covariance);
+    perturbed = std::make_unique<stability::PerturbedPlants>(stability::SamplePerturbedPlants(mf.plant, T, loops[0].hand));
+  }
+  for (size_t i = 0; i < zs.size(); ++i) {
+    std::vector<stability::CriticalPoint> pts;
+    for (double B : grid) {
+      io::BoundaryRow r{delays[i], zs[i].At(B), zs[i].StableIntervals(B)};
+      for (size_t h = 1; h < zh[i].size(); ++h) {  // the region stable for every hand
+        r.intervals = stability::IntersectIntervals(r.intervals, zh[i][h].StableIntervals(B));
+        const stability::CriticalPoint c = zh[i][h].At(B);
+        if (c.K_cr < r.point.K_cr) r.point = c;
+      }
+      r.K_passive = pas[i].At(B).K_hi;
+      if (!r.point.AgreesWithMargin()) ++disagree;
+      pts.push_back(r.point);
+      rows.push_back(std::move(r));
+    }
+    if (has_cov) {
+      const std::vector<double> sd = stability::KcrStd(*perturbed, mf.log_covariance, delays[i], pts, loops[0]);
+      for (size_t k = 0; k < grid.size(); ++k) rows[i * grid.size() + k].K_cr_std = sd[k];
+      stds[i] = stability::SummaryStdDelta(*perturbed, mf.log_covariance, delays[i], sums[i], loops[0]);
+    }
+  }
+  BoundaryTable t;
+  t.sums = std::move(sums);
+  t.hsums = std::move(hsums);
+  t.pas = std::move(pas);
+  t.grid = grid;
+  t.rows = std::move(rows);
+  t.stds = std::move(stds);
+  t.has_cov = has_cov;
+  t.disagree = disagree;
+  return t;
+}
+
+// The summary table, per-hand lines, passivity and the margin() count on stdout.
+void PrintBoundarySummary(const BoundaryTable& t, const io::ModelFile& mf, const std::vector<int>& delays,
+                          const std::vector<stability::LoopOptions>& loops) {
+  const auto& sums = t.sums;
+  const auto& hsums = t.hsums;
+  const auto& stds = t.stds;
+  const auto& pas = t.pas;
+  const bool has_cov = t.has_cov;
+  const int disagree = t.disagree;
+  std::printf("%-6s %12s %10s %10s %12s %10s %10s %12s %12s\n", "delay", "K_cr(B=0)", "f(B=0)", "B_t",
+              "K_cr^max", "f_before", "f_after", "B_max_0", "B_max");
+  for (size_t i = 0; i < sums.size(); ++i) {
+    const auto& s = sums[i];
+    std::printf("%-6d %12.6g %10.5g %10.6g %12.6g %10.5g %10.5g %12.6g %12.6g\n", delays[i],
+                s.K_cr_at_zero_B, s.f_at_zero_B_hz, s.B_t, s.K_cr_max, s.f_before_hz, s.f_after_hz,
+                s.B_max_from_zero, s.B_max);
+    if (has_cov) {
+      std::printf("  std   %12.3g %10s %10.3g %12.3g %10s %10s %12s %12.3g\n", stds[i].K_cr_at_zero_B, "",
+                  stds[i].B_t, stds[i].K_cr_max, "", "", "", stds[i].B_max);
+    }
+    for (const auto& band : s.reopened_bands) {
+      std::printf("  reopened band: B in (%.6g, %.6g), largest stable K %.6g\n", band.B_lo, band.B_hi, band.K_max);
+    }
+  }
+  std::printf("B_max_0: where the interval from K = 0+ closes; B_max: the largest B with some stable K > 0\n");
+  if (loops.size() > 1) {
+    for (size_t i = 0; i < sums.size(); ++i) {
+      for (size_t h = 0; h < loops.size(); ++h) {
+        const auto& s = hsums[i][h];
+        std::printf("  d = %d, hand M %g B %g K %g: K_cr(0) %.6g, K_cr^max %.6g, B_max %.6g\n", delays[i],
+                    loops[h].hand.M, loops[h].hand.B, loops[h].hand.K, s.K_cr_at_zero_B, s.K_cr_max, s.B_max);
+      }
+    }
+    std::printf("the boundary CSV holds the region stable for every hand (intersection of the intervals)\n");
+  }
+  for (size_t i = 0; i < sums.size(); ++i) {
+    const stability::PassiveInterval p0 = pas[i].At(0.0);
+    std::printf("d = %d passivity (Colgate-Schenkel, b = %g): K_P(0) = %.6g; passive up to B = %.6g\n",
+                delays[i], mf.plant.b, p0.K_hi, io::PassiveBMax(pas[i], mf.plant.b));
+  }
+  std::printf("%d of %zu B values: the margin() reading of eq. (4) differs from the exact K_CR "
+              "(mostly B past B_max_0, where margin() stays positive but K -> 0+ is unstable)\n",
+              disagree, t.rows.size());
+}
+
+// The summary JSON; with monte_carlo > 0 also the Monte Carlo std per delay
+// (printed beside the delta method's).
+nlohmann::json BoundarySummaryJson(const BoundaryTable& t, const io::ModelFile& mf, double T,
+                                   const std::vector<int>& delays,
+                                   const std::vector<stability::LoopOptions>& loops, int monte_carlo,
+                                   std::uint64_t seed) {
+  const auto& sums = t.sums;
+  const auto& hsums = t.hsums;
+  const auto& stds = t.stds;
+  const auto& pas = t.pas;
+  const bool has_cov = t.has_cov;
+  const int disagree = t.disagree;
+  nlohmann::json js;
+  js["period_s"] = T;
+  js["model"] = mf.plant.name;
+  js["B_max_meaning"] = "B_max: the largest B at which some K > 0 is stable (reopened bands included); "
+                        "B_max_from_zero: the B where the interval from K = 0+ closes (the paper's B_max)";
+  js["delays"] = nlohmann::json::array();
+  for (size_t i = 0; i < sums.size(); ++i) {
+    nlohmann::json e = io::SummaryToJson(sums[i], has_cov ? &stds[i] : nullptr);
+    e["delay_samples"] = delays[i];
+    e["total_delay_samples"] = sums[i].delay_samples;
+    e["passivity"] = io::PassivitySummaryJson(pas[i], mf.plant.b);
+    if (loops.size() > 1) {
+      e["per_hand"] = nlohmann::json::array();
+      for (size_t h = 0; h < loops.size(); ++h) {
+        nlohmann::json eh = io::SummaryToJson(hsums[i][h]);
+        eh["hand"] = {{"M", loops[h].hand.M}, {"B", loops[h].hand.B}, {"K", loops[h].hand.K}};
+        e["per_hand"].push_back(eh);
+      }
+    }
+    if (monte_carlo > 0) {
+      std::fprintf(stderr, "Monte Carlo, d = %d: %d samples...\n", delays[i], monte_carlo);
+      const stability::MonteCarloResult mc = stability::SummaryMonteCarlo(
+          mf.plant, mf.log_covariance, T, delays[i], monte_carlo, seed, loops[0]);
+      e["monte_carlo"] = {{"samples", mc.samples}, {"seed", seed},
+                          {"std", io::SummaryToJson(stability::DelaySummary{}, &mc.std)["std"]},
+                          {"mean", io::SummaryToJson(stability::DelaySummary{}, &mc.mean)["std"]}};
+      std::printf("d = %d  std by delta method / Monte Carlo (%d samples): K_cr(0) %.4g / %.4g, B_t %.4g / %.4g, "
+                  "K_cr^max %.4g / %.4g, B_max %.4g / %.4g\n",
+                  delays[i], mc.samples, stds[i].K_cr_at_zero_B, mc.std.K_cr_at_zero_B, stds[i].B_t,
+                  mc.std.B_t, stds[i].K_cr_max, mc.std.K_cr_max, stds[i].B_max, mc.std.B_max);
+    }
+    js["delays"].push_back(e);
+  }
+  js["margin_disagreements"] = disagree;
+  js["loop"] = LoopJson(loops);
+  return js;
+}
+
+// zwidth boundary: the stable K intervals per B, K_CR(B) and the summary per delay.
+void AddBoundaryCommand(CLI::App& app) {
   struct BoundaryFlags {
     std::string model, out, summary;
     std::vector<int> delays = {2, 4, 8};
@@ -89,131 +254,17 @@ void AddStabilityCommands(CLI::App& app) {
       throw InputError("--monte-carlo needs a model with a \"covariance\" (a model written by zwidth fit)");
     }
     const std::vector<stability::LoopOptions> loops = ResolveLoops(bf->loop, T);
-    const bool plain = loops.size() == 1 && IsPlainLoop(loops[0]);
-    std::vector<stability::ZWidth> zs;  // the first hand's loop per delay
-    std::vector<std::vector<stability::ZWidth>> zh(bf->delays.size());  // [delay][hand]
-    std::vector<std::vector<stability::DelaySummary>> hsums(bf->delays.size());
-    std::vector<stability::DelaySummary> sums;
-    std::vector<stability::Passivity> pas;
-    double largest = 0.0;
-    for (size_t i = 0; i < bf->delays.size(); ++i) {
-      const int d = bf->delays[i];
-      for (const stability::LoopOptions& l : loops) {
-        zh[i].emplace_back(mf.plant, T, d, l);
-        hsums[i].push_back(zh[i].back().Summarize());
-        if (std::isfinite(hsums[i].back().B_max)) largest = std::max(largest, hsums[i].back().B_max);
-      }
-      zs.push_back(zh[i][0]);
-      sums.push_back(hsums[i][0]);
-      pas.emplace_back(mf.plant.b, T, zs.back().total_delay(), loops[0]);
-    }
-    const std::vector<double> grid = stability::MakeBGrid(bf->grid, largest, mf.plant.m / T,
-                                                          static_cast<int>(bf->delays.size()));
-    // The delta method and Monte Carlo for one loop (with its filter and hand).
-    const bool has_cov = !mf.log_covariance.empty() && loops.size() == 1;
-    if (!mf.log_covariance.empty() && !has_cov) {
-      std::fprintf(stderr, "note: the std columns are not computed with several hands\n");
-    }
     if (bf->monte_carlo > 0 && loops.size() > 1) throw InputError("--monte-carlo takes at most one --hand");
-    (void)plain;
-    std::vector<io::BoundaryRow> rows;
-    rows.reserve(grid.size() * zs.size());
-    int disagree = 0;
-    std::vector<stability::SummaryStd> stds(zs.size());
-    for (size_t i = 0; i < zs.size(); ++i) {
-      std::vector<stability::CriticalPoint> pts;
-      for (double B : grid) {
-        io::BoundaryRow r{bf->delays[i], zs[i].At(B), zs[i].StableIntervals(B)};
-        for (size_t h = 1; h < zh[i].size(); ++h) {  // the region stable for every hand
-          r.intervals = stability::IntersectIntervals(r.intervals, zh[i][h].StableIntervals(B));
-          const stability::CriticalPoint c = zh[i][h].At(B);
-          if (c.K_cr < r.point.K_cr) r.point = c;
-        }
-        r.K_passive = pas[i].At(B).K_hi;
-        if (!r.point.AgreesWithMargin()) ++disagree;
-        pts.push_back(r.point);
-        rows.push_back(std::move(r));
-      }
-      if (has_cov) {
-        const std::vector<double> sd = stability::KcrStd(mf.plant, mf.log_covariance, T, bf->delays[i], pts, {}, loops[0]);
-        for (size_t k = 0; k < grid.size(); ++k) rows[i * grid.size() + k].K_cr_std = sd[k];
-        stds[i] = stability::SummaryStdDelta(mf.plant, mf.log_covariance, T, bf->delays[i], sums[i], {}, loops[0]);
-      }
-    }
-    io::WriteBoundaryCsv(bf->out, rows);
-    nlohmann::json js;
-    js["period_s"] = T;
-    js["model"] = mf.plant.name;
-    js["B_max_meaning"] = "B_max: the largest B at which some K > 0 is stable (reopened bands included); "
-                          "B_max_from_zero: the B where the interval from K = 0+ closes (the paper's B_max)";
-    js["delays"] = nlohmann::json::array();
-    for (size_t i = 0; i < sums.size(); ++i) {
-      nlohmann::json e = io::SummaryToJson(sums[i], has_cov ? &stds[i] : nullptr);
-      e["delay_samples"] = bf->delays[i];
-      e["total_delay_samples"] = sums[i].delay_samples;
-      e["passivity"] = io::PassivitySummaryJson(pas[i], mf.plant.b);
-      if (loops.size() > 1) {
-        e["per_hand"] = nlohmann::json::array();
-        for (size_t h = 0; h < loops.size(); ++h) {
-          nlohmann::json eh = io::SummaryToJson(hsums[i][h]);
-          eh["hand"] = {{"M", loops[h].hand.M}, {"B", loops[h].hand.B}, {"K", loops[h].hand.K}};
-          e["per_hand"].push_back(eh);
-        }
-      }
-      if (bf->monte_carlo > 0) {
-        std::fprintf(stderr, "Monte Carlo, d = %d: %d samples...\n", bf->delays[i], bf->monte_carlo);
-        const stability::MonteCarloResult mc = stability::SummaryMonteCarlo(
-            mf.plant, mf.log_covariance, T, bf->delays[i], bf->monte_carlo, bf->seed, loops[0]);
-        e["monte_carlo"] = {{"samples", mc.samples}, {"seed", bf->seed},
-                            {"std", io::SummaryToJson(stability::DelaySummary{}, &mc.std)["std"]},
-                            {"mean", io::SummaryToJson(stability::DelaySummary{}, &mc.mean)["std"]}};
-        std::printf("d = %d  std by delta method / Monte Carlo (%d samples): K_cr(0) %.4g / %.4g, B_t %.4g / %.4g, "
-                    "K_cr^max %.4g / %.4g, B_max %.4g / %.4g\n",
-                    bf->delays[i], mc.samples, stds[i].K_cr_at_zero_B, mc.std.K_cr_at_zero_B, stds[i].B_t,
-                    mc.std.B_t, stds[i].K_cr_max, mc.std.K_cr_max, stds[i].B_max, mc.std.B_max);
-      }
-      js["delays"].push_back(e);
-    }
-    js["margin_disagreements"] = disagree;
-    js["loop"] = LoopJson(loops);
+    const BoundaryTable t = ComputeBoundaryTable(mf, T, bf->delays, loops, bf->grid);
+    io::WriteBoundaryCsv(bf->out, t.rows);
+    const nlohmann::json js = BoundarySummaryJson(t, mf, T, bf->delays, loops, bf->monte_carlo, bf->seed);
     if (!bf->summary.empty()) io::WriteTextAtomically(bf->summary, js.dump(2) + "\n");
-    std::printf("%-6s %12s %10s %10s %12s %10s %10s %12s %12s\n", "delay", "K_cr(B=0)", "f(B=0)", "B_t",
-                "K_cr^max", "f_before", "f_after", "B_max_0", "B_max");
-    for (size_t i = 0; i < sums.size(); ++i) {
-      const auto& s = sums[i];
-      std::printf("%-6d %12.6g %10.5g %10.6g %12.6g %10.5g %10.5g %12.6g %12.6g\n", bf->delays[i],
-                  s.K_cr_at_zero_B, s.f_at_zero_B_hz, s.B_t, s.K_cr_max, s.f_before_hz, s.f_after_hz,
-                  s.B_max_from_zero, s.B_max);
-      if (has_cov) {
-        std::printf("  std   %12.3g %10s %10.3g %12.3g %10s %10s %12s %12.3g\n", stds[i].K_cr_at_zero_B, "",
-                    stds[i].B_t, stds[i].K_cr_max, "", "", "", stds[i].B_max);
-      }
-      for (const auto& band : s.reopened_bands) {
-        std::printf("  reopened band: B in (%.6g, %.6g), largest stable K %.6g\n", band.B_lo, band.B_hi, band.K_max);
-      }
-    }
-    std::printf("B_max_0: where the interval from K = 0+ closes; B_max: the largest B with some stable K > 0\n");
-    if (loops.size() > 1) {
-      for (size_t i = 0; i < sums.size(); ++i) {
-        for (size_t h = 0; h < loops.size(); ++h) {
-          const auto& s = hsums[i][h];
-          std::printf("  d = %d, hand M %g B %g K %g: K_cr(0) %.6g, K_cr^max %.6g, B_max %.6g\n", bf->delays[i],
-                      loops[h].hand.M, loops[h].hand.B, loops[h].hand.K, s.K_cr_at_zero_B, s.K_cr_max, s.B_max);
-        }
-      }
-      std::printf("the boundary CSV holds the region stable for every hand (intersection of the intervals)\n");
-    }
-    for (size_t i = 0; i < sums.size(); ++i) {
-      const stability::PassiveInterval p0 = pas[i].At(0.0);
-      std::printf("d = %d passivity (Colgate-Schenkel, b = %g): K_P(0) = %.6g; passive up to B = %.6g\n",
-                  bf->delays[i], mf.plant.b, p0.K_hi, io::PassiveBMax(pas[i], mf.plant.b));
-    }
-    std::printf("%d of %zu B values: the margin() reading of eq. (4) differs from the exact K_CR "
-                "(mostly B past B_max_0, where margin() stays positive but K -> 0+ is unstable)\n",
-                disagree, grid.size() * zs.size());
+    PrintBoundarySummary(t, mf, bf->delays, loops);
   });
+}
 
-  // ---- filter-sweep
+// zwidth filter-sweep: the velocity low-pass cut-off that maximises a Z-width measure.
+void AddFilterSweepCommand(CLI::App& app) {
   struct SweepFlags {
     std::string model, out;
     int delay = -1;
@@ -282,8 +333,10 @@ void AddStabilityCommands(CLI::App& app) {
     std::printf("best cut-off %.5g Hz: %.6g (lowest %.5g Hz: %.6g; highest %.5g Hz: %.6g)\n", r.cutoffs_hz[r.best],
                 r.measure[r.best], r.cutoffs_hz.front(), r.measure.front(), r.cutoffs_hz.back(), r.measure.back());
   });
+}
 
-  // ---- relay
+// zwidth relay: the relay experiment of section IV, beside the exact K_CR.
+void AddRelayCommand(CLI::App& app) {
   struct RelayFlags {
     std::string model, trace;
     stability::RelayOptions o;
@@ -362,8 +415,10 @@ void AddStabilityCommands(CLI::App& app) {
                   cp.K_cr, cp.f_cr_hz);
     }
   });
+}
 
-  // ---- check
+// zwidth check: is each object of a haptic scene stable on this device?
+void AddCheckCommand(CLI::App& app) {
   struct CheckFlags {
     std::string scene, model;
     int delay = -1;
@@ -424,6 +479,15 @@ void AddStabilityCommands(CLI::App& app) {
       std::exit(3);  // documented: some object is unstable (1 and 2 are errors)
     }
   });
+}
+
+}  // namespace
+
+void AddStabilityCommands(CLI::App& app) {
+  AddBoundaryCommand(app);
+  AddFilterSweepCommand(app);
+  AddRelayCommand(app);
+  AddCheckCommand(app);
 }
 
 }  // namespace zwidth::app

@@ -215,4 +215,12 @@ double StageTimer::Lap(const std::string& stage) {
   return ms;
 }
 
+double ResolvePeriod(double flag, const io::ModelFile& mf) {
+  if (std::isnan(flag)) return mf.sample_period_s ? *mf.sample_period_s : 0.001;
+  if (!(flag > 0.0 && std::isfinite(flag))) {
+    throw InputError("--period = " + std::to_string(flag) + " s: must be finite and > 0");
+  }
+  return flag;
+}
+
 }  // namespace zwidth::app

@@ -1,5 +1,7 @@
 #include "apps/fit_support.h"
 
+#include "analysis/compare.h"
+
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -15,27 +17,6 @@
 #include "stability/zwidth.h"
 
 namespace zwidth::app {
-namespace {
-
-struct Row { std::string name, unit; double value, std; };
-
-std::vector<Row> Rows(const Plant& p, const Plant* s, bool linear = false) {
-  const double inf = std::numeric_limits<double>::infinity();
-  std::vector<Row> r = {{"m", linear ? "kg" : "kg m^2", p.m, s ? s->m : inf},
-                        {"b", linear ? "N s/m" : "N m s/rad", p.b, s ? s->b : inf}};
-  for (size_t i = 0; i < p.modes.size(); ++i) {
-    const std::string k = std::to_string(i + 1);
-    const Mode* e = s ? &s->modes[i] : nullptr;
-    r.push_back({"omega" + k, "rad/s", p.modes[i].omega, e ? e->omega : inf});
-    r.push_back({"c" + k, "rad/s", p.modes[i].c, e ? e->c : inf});
-    r.push_back({"v" + k, "rad/s", p.modes[i].v, e ? e->v : inf});
-    r.push_back({"d" + k, "rad/s", p.modes[i].d, e ? e->d : inf});
-  }
-  return r;
-}
-
-}  // namespace
-
 io::ModelFile ReadReference(const std::string& flag, bool* is_table1) {
   const bool t1 = flag == "table1";
   if (is_table1) *is_table1 = t1;
@@ -128,91 +109,17 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
   return io::FittedModelFile(r, frf, o, source);
 }
 
-std::string ParameterTable(const io::ModelFile& mf, bool linear) {
-  std::ostringstream os;
-  char line[160];
-  std::snprintf(line, sizeof line, "%-8s %14s %12s  %s\n", "param", "value", "std", "unit");
-  os << line;
-  for (const Row& r : Rows(mf.plant, mf.std_errors ? &*mf.std_errors : nullptr, linear)) {
-    std::snprintf(line, sizeof line, "%-8s %14.6g %12.3g  %s\n", r.name.c_str(), r.value, r.std, r.unit.c_str());
-    os << line;
-  }
-  std::snprintf(line, sizeof line, "%-8s %14d %12s  %s\n", "delay", mf.plant.delay_samples, "", "samples");
-  os << line;
-  return os.str();
-}
+std::string ParameterTable(const io::ModelFile& mf, bool linear) { return analysis::ParameterTable(mf, linear); }
 
 nlohmann::json CompareModels(const io::ModelFile& model, const io::ModelFile& ref,
-                             const std::vector<int>& delays, double T, std::string* text,
-                             const std::vector<stability::DelaySummary>* model_summaries, bool linear) {
-  std::ostringstream os;
-  nlohmann::json j;
-  j["parameters"] = nlohmann::json::array();
-  const bool same_shape = model.plant.modes.size() == ref.plant.modes.size();
-  char line[200];
-  if (same_shape) {
-    const auto a = Rows(model.plant, model.std_errors ? &*model.std_errors : nullptr, linear);
-    const auto b = Rows(ref.plant, nullptr);
-    std::snprintf(line, sizeof line, "%-8s %24s %12s %9s %9s  %s\n", "param", "fitted +- std", "reference",
-                  "diff %", "diff/std", "unit");
-    os << line;
-    for (size_t i = 0; i < a.size(); ++i) {
-      const double pct = 100.0 * (a[i].value - b[i].value) / b[i].value;
-      const double nsd = std::isfinite(a[i].std) && a[i].std > 0 ? (a[i].value - b[i].value) / a[i].std
-                                                                : std::numeric_limits<double>::quiet_NaN();
-      std::snprintf(line, sizeof line, "%-8s %12.6g +- %-9.3g %12.6g %9.2f %9.2f  %s\n", a[i].name.c_str(),
-                    a[i].value, a[i].std, b[i].value, pct, nsd, a[i].unit.c_str());
-      os << line;
-      j["parameters"].push_back({{"name", a[i].name}, {"value", a[i].value}, {"std", io::NumberOrNull(a[i].std)},
-                                 {"reference", b[i].value}, {"diff_percent", pct},
-                                 {"diff_in_std", io::NumberOrNull(nsd)}, {"unit", a[i].unit}});
-    }
-  } else {
-    os << "the models have different numbers of modes (" << model.plant.modes.size() << " vs "
-       << ref.plant.modes.size() << "): no per-parameter comparison\n";
-  }
-  j["stability"] = nlohmann::json::array();
-  std::snprintf(line, sizeof line, "\n%-6s %-10s %12s %10s %12s %10s\n", "delay", "model", "K_cr(B=0)", "B_t",
-                "K_cr^max", "B_max");
-  os << line;
-  for (size_t i = 0; i < delays.size(); ++i) {
-    const int d = delays[i];
-    nlohmann::json e = {{"delay_samples", d}};
-    stability::DelaySummary both[2];
-    stability::SummaryStd sd;  // of the model's quantities, from its covariance (issue 13)
-    for (int which = 0; which < 2; ++which) {
-      const Plant& p = which == 0 ? model.plant : ref.plant;
-      const stability::DelaySummary s = (which == 0 && model_summaries && model_summaries->size() == delays.size())
-                                            ? (*model_summaries)[i]
-                                            : stability::ZWidth(p, T, d).Summarize();
-      both[which] = s;
-      if (which == 0 && !model.log_covariance.empty()) {
-        sd = stability::SummaryStdDelta(model.plant, model.log_covariance, T, d, s);
-      }
-      e[which == 0 ? "model" : "reference"] = io::SummaryToJson(s, which == 0 && !model.log_covariance.empty() ? &sd : nullptr);
-      std::snprintf(line, sizeof line, "%-6d %-10s %12.5g %10.5g %12.5g %10.5g\n", d,
-                    which == 0 ? "model" : "reference", s.K_cr_at_zero_B, s.B_t, s.K_cr_max, s.B_max);
-      os << line;
-    }
-    // What the parameter differences do to the Z-width: model - reference, and
-    // that in units of the model's std.
-    const double dq[4] = {both[0].K_cr_at_zero_B - both[1].K_cr_at_zero_B, both[0].B_t - both[1].B_t,
-                          both[0].K_cr_max - both[1].K_cr_max, both[0].B_max - both[1].B_max};
-    const double sq[4] = {sd.K_cr_at_zero_B, sd.B_t, sd.K_cr_max, sd.B_max};
-    double zq[4];
-    for (int q = 0; q < 4; ++q) zq[q] = sq[q] > 0.0 ? dq[q] / sq[q] : std::numeric_limits<double>::quiet_NaN();
-    std::snprintf(line, sizeof line, "%-6s %-10s %12.5g %10.5g %12.5g %10.5g\n%-6s %-10s %12.3g %10.3g %12.3g %10.3g\n",
-                  "", "difference", dq[0], dq[1], dq[2], dq[3], "", "diff/std", zq[0], zq[1], zq[2], zq[3]);
-    os << line;
-    const char* keys[4] = {"K_cr_at_zero_B", "B_t", "K_cr_max", "B_max"};
-    for (int q = 0; q < 4; ++q) {
-      e["difference"][keys[q]] = io::NumberOrNull(dq[q]);
-      e["difference_in_std"][keys[q]] = io::NumberOrNull(zq[q]);
-    }
-    j["stability"].push_back(e);
-  }
-  if (text) *text = os.str();
-  return j;
+                             const std::vector<int>& delays, double T, std::string* text, bool linear) {
+  const stability::SampledPlant sr(ref.plant, T);
+  std::vector<stability::DelaySummary> rs;
+  for (int d : delays) rs.push_back(stability::ZWidth(sr, d).Summarize());
+  analysis::ModelComparison c =
+      analysis::CompareModels(model, ref, delays, analysis::SummarizeDelays(model, T, delays), rs, linear);
+  if (text) *text = std::move(c.text);
+  return std::move(c.json);
 }
 
 }  // namespace zwidth::app

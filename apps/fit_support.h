@@ -41,12 +41,10 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
 // "parameter value std unit" table; linear: kg and N s/m labels.
 std::string ParameterTable(const io::ModelFile& mf, bool linear = false);
 
-// Per-parameter comparison and the stability figures of both models at the
-// given delays. Returns JSON; *text gets the printable version. Summaries
-// already computed by the caller (one per delay, in order) are reused.
+// analysis::CompareModels with both models' Z-width computed here (the
+// paper's loop). Returns JSON; *text gets the printable version.
 nlohmann::json CompareModels(const io::ModelFile& model, const io::ModelFile& reference,
                              const std::vector<int>& delays, double period_s, std::string* text,
-                             const std::vector<stability::DelaySummary>* model_summaries = nullptr,
                              bool linear = false);
 
 // --reference: "table1" (Table I of the paper, built in) or a model JSON path.

@@ -141,14 +141,30 @@ void BM_BoundarySweep(benchmark::State& state) {
 }
 BENCHMARK(BM_BoundarySweep)->ArgsProduct({{256, 2048}, {0, 1}})->Unit(benchmark::kMillisecond);
 
-// The 8010-point map: d = 1..10, B = 0:0.0005:0.4.
+// The 8010-point map: d = 1..10, B = 0:0.0005:0.4, on one sampled plant
+// (stability/sampled_plant.h) shared by the delays, sampling included. Error:
+// the largest relative difference of K_CR from the brute force's
+// (tests/brute_force.h: companion-matrix eigenvalues, geometric scan and
+// bisection) at every 100th B of every delay (90 points).
 void BM_BoundaryMap(benchmark::State& state) {
   for (auto _ : state) {
+    const stability::SampledPlant sp(PhantomTable1(), 1e-3);
     for (int d = 1; d <= 10; ++d) {
-      const stability::ZWidth z(PhantomTable1(), 1e-3, d);
+      const stability::ZWidth z(sp, d);
       for (int i = 0; i <= 800; ++i) benchmark::DoNotOptimize(z.At(0.0005 * i).K_cr);
     }
   }
+  double err = 0;
+  for (int d = 1; d <= 10; ++d) {
+    const stability::ZWidth z(PhantomTable1(), 1e-3, d);
+    const stability::BruteForce bf(PhantomTable1(), 1e-3, d);
+    for (int i = 0; i <= 800; i += 100) {
+      const double a = z.At(0.0005 * i).K_cr, b = bf.KCritical(0.0005 * i);
+      if (b > 0 && std::isfinite(b)) err = std::max(err, std::abs(a / b - 1));
+      else if (a != b) err = std::max(err, 1.0);  // 0 or inf on one side only
+    }
+  }
+  state.counters["max_rel_err_K_cr_vs_brute_force"] = err;
 }
 BENCHMARK(BM_BoundaryMap)->Unit(benchmark::kMillisecond);
 

@@ -90,29 +90,37 @@ void CheckLogCovariance(const Plant& plant, const std::vector<double>& cov) {
   }
 }
 
+PerturbedPlants SamplePerturbedPlants(const Plant& plant, double T, const Hand& hand, const UncertaintyOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) throw InputError("uncertainty options: " + why);
+  PerturbedPlants r{SampledPlant(plant, T, hand), {}, {}, o.log_step};
+  const int p = NumLogParameters(plant);
+  for (int i = 0; i < p; ++i) {
+    std::vector<double> dx(p, 0.0);
+    dx[i] = o.log_step;
+    r.plus.emplace_back(PerturbLog(plant, dx), T, hand);
+    dx[i] = -o.log_step;
+    r.minus.emplace_back(PerturbLog(plant, dx), T, hand);
+  }
+  return r;
+}
+
 std::vector<double> KcrStd(const Plant& plant, const std::vector<double>& cov, double T, int delay,
                            const std::vector<CriticalPoint>& points, const UncertaintyOptions& o,
                            const LoopOptions& loop) {
   std::string why;
   if (!o.IsValid(&why)) throw InputError("uncertainty options: " + why);
+  CheckLogCovariance(plant, cov);
+  return KcrStd(SamplePerturbedPlants(plant, T, loop.hand, o), cov, delay, points, loop);
+}
+
+std::vector<double> KcrStd(const PerturbedPlants& pl, const std::vector<double>& cov, int delay,
+                           const std::vector<CriticalPoint>& points, const LoopOptions& loop) {
+  const Plant& plant = pl.nominal.plant();
+  const double T = pl.nominal.period_s();
   const Eigen::MatrixXd S = CovMatrix(plant, cov);
   const int p = NumLogParameters(plant);
   const int D = delay + plant.delay_samples;
-  auto sampled = [&](const Plant& q) {
-    if (loop.hand.IsNone()) return DiscretizeZoh(q, T);
-    StateSpace d = DiscretizeZohStateSpace(ContinuousStateSpaceWithHand(q, loop.hand), T);
-    d.delay_samples = q.delay_samples;
-    return d;
-  };
-  const DiscreteResponse g0(sampled(plant));
-  std::vector<DiscreteResponse> gp, gm;
-  for (int i = 0; i < p; ++i) {
-    std::vector<double> dx(p, 0.0);
-    dx[i] = o.log_step;
-    gp.emplace_back(sampled(PerturbLog(plant, dx)));
-    dx[i] = -o.log_step;
-    gm.emplace_back(sampled(PerturbLog(plant, dx)));
-  }
   // V(theta) = F(e^{j theta}) (1 - e^{-j theta}) / T.
   auto V = [&](double th) {
     const std::complex<double> zi = std::polar(1.0, -th);
@@ -125,9 +133,14 @@ std::vector<double> KcrStd(const Plant& plant, const std::vector<double>& cov, d
     }
     return F * (1.0 - zi) / T;
   };
-  auto W = [&](const DiscreteResponse& g, double th) {
-    return -std::polar(1.0, th * D) / g.AtZ(std::polar(1.0, th));
+  // G_d by the state-space (Hessenberg) solve, as the delta method was validated with.
+  auto W = [&](const SampledPlant& g, double th) {
+    return -std::polar(1.0, th * D) / g.GdStateSpace(std::polar(1.0, th));
   };
+  const SampledPlant& g0 = pl.nominal;
+  const std::vector<SampledPlant>& gp = pl.plus;
+  const std::vector<SampledPlant>& gm = pl.minus;
+  const UncertaintyOptions o{pl.log_step};
   std::vector<double> out(points.size(), kNaN);
   for (size_t k = 0; k < points.size(); ++k) {
     const CriticalPoint& c = points[k];
@@ -159,16 +172,20 @@ SummaryStd SummaryStdDelta(const Plant& plant, const std::vector<double>& cov, d
                            const DelaySummary& nominal, const UncertaintyOptions& o, const LoopOptions& loop) {
   std::string why;
   if (!o.IsValid(&why)) throw InputError("uncertainty options: " + why);
+  CheckLogCovariance(plant, cov);
+  return SummaryStdDelta(SamplePerturbedPlants(plant, T, loop.hand, o), cov, delay, nominal, loop);
+}
+
+SummaryStd SummaryStdDelta(const PerturbedPlants& pl, const std::vector<double>& cov, int delay,
+                           const DelaySummary& nominal, const LoopOptions& loop) {
+  const Plant& plant = pl.nominal.plant();
   const Eigen::MatrixXd S = CovMatrix(plant, cov);
   const int p = NumLogParameters(plant);
+  const UncertaintyOptions o{pl.log_step};
   Eigen::MatrixXd J(4, p);
   for (int i = 0; i < p; ++i) {
     SummaryStd q[2];
-    for (int s = 0; s < 2; ++s) {
-      std::vector<double> dx(p, 0.0);
-      dx[i] = s == 0 ? o.log_step : -o.log_step;
-      q[s] = ZWidth(PerturbLog(plant, dx), T, delay, loop).SummarizeNear(nominal);
-    }
+    for (int s = 0; s < 2; ++s) q[s] = ZWidth(s == 0 ? pl.plus[i] : pl.minus[i], delay, loop).SummarizeNear(nominal);
     J(0, i) = (q[0].K_cr_at_zero_B - q[1].K_cr_at_zero_B) / (2 * o.log_step);
     J(1, i) = (q[0].B_t - q[1].B_t) / (2 * o.log_step);
     J(2, i) = (q[0].K_cr_max - q[1].K_cr_max) / (2 * o.log_step);

@@ -54,6 +54,25 @@ struct UncertaintyOptions {
 // not symmetric positive semi-definite (to 1e-9 relative).
 void CheckLogCovariance(const Plant& plant, const std::vector<double>& log_covariance);
 
+// The sampled plant at x0 and at x0 +- log_step e_i for every log parameter,
+// built once per (plant, period, hand) and shared by every delay.
+struct PerturbedPlants {
+  SampledPlant nominal;
+  std::vector<SampledPlant> plus, minus;  // [i]: at x0 + log_step e_i, x0 - log_step e_i
+  double log_step = 1e-4;
+};
+// Throws InputError for invalid options, plant, period or hand.
+PerturbedPlants SamplePerturbedPlants(const Plant& plant, double period_s, const Hand& hand = {},
+                                      const UncertaintyOptions& options = {});
+
+// The two estimates below on shared perturbed plants (loop.hand must be
+// plants.nominal.hand()); the same numbers as the overloads that sample.
+std::vector<double> KcrStd(const PerturbedPlants& plants, const std::vector<double>& log_covariance,
+                           int delay_samples, const std::vector<CriticalPoint>& points,
+                           const LoopOptions& loop = {});
+SummaryStd SummaryStdDelta(const PerturbedPlants& plants, const std::vector<double>& log_covariance,
+                           int delay_samples, const DelaySummary& nominal, const LoopOptions& loop = {});
+
 // Std of K_CR at each point (points from ZWidth::At on the same plant, T, delay).
 std::vector<double> KcrStd(const Plant& plant, const std::vector<double>& log_covariance,
                            double period_s, int delay_samples,

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <functional>
 #include <numbers>
+#include <stdexcept>
 
 #include "model/error.h"
 #include "stability/haptic_loop.h"
@@ -15,9 +16,10 @@
 namespace zwidth::stability {
 namespace internal {
 
-// Brent's method (zeroin) for f(a) f(b) <= 0.
-double BrentRoot(const std::function<double(double)>& f, double a, double b, double fa,
-                 double fb, double tol) {
+// Brent's method (zeroin) for f(a) f(b) <= 0. A template, so that the
+// boundary's B(theta) - B inlines (no std::function call per evaluation).
+template <class F>
+double BrentRoot(const F& f, double a, double b, double fa, double fb, double tol) {
   if (fa == 0.0) return a;
   if (fb == 0.0) return b;
   double c = a, fc = fa, d = b - a, e = d;
@@ -86,35 +88,51 @@ bool CriticalPoint::AgreesWithMargin(double rel_tol) const {
   return std::abs(K_margin - K_cr) <= rel_tol * std::max(std::abs(K_cr), 1e-300);
 }
 
+namespace {
+
+// The checks of the one-loop constructors, in their historical order (plant,
+// delay, loop, then the period in the discretisation).
+SampledPlant SampleForOneLoop(const Plant& plant, double period_s, int delay_samples, const LoopOptions& loop) {
+  plant.Validate();
+  if (delay_samples < 0) {
+    throw InputError("delay = " + std::to_string(delay_samples) + " samples: must be >= 0");
+  }
+  if (delay_samples > 100000) throw InputError("delay is over 100000 samples");
+  std::string why;
+  if (!loop.IsValid(&why)) throw InputError("loop options: " + why);
+  return SampledPlant(plant, period_s, loop.hand);
+}
+
+bool SameHand(const Hand& a, const Hand& b) { return a.M == b.M && a.B == b.B && a.K == b.K; }
+
+}  // namespace
+
 ZWidth::ZWidth(const Plant& plant, double period_s, int delay_samples,
                const BoundaryOptions& options)
     : ZWidth(plant, period_s, delay_samples, LoopOptions{}, options) {}
 
 ZWidth::ZWidth(const Plant& plant, double period_s, int delay_samples, const LoopOptions& loop,
                const BoundaryOptions& options)
-    : period_s_(period_s),
-      total_delay_(delay_samples + plant.delay_samples),
+    : ZWidth(SampleForOneLoop(plant, period_s, delay_samples, loop), delay_samples, loop, options) {}
+
+ZWidth::ZWidth(const SampledPlant& sampled, int delay_samples, const LoopOptions& loop,
+               const BoundaryOptions& options)
+    : sp_(sampled),
+      period_s_(sampled.period_s()),
+      total_delay_(delay_samples + sampled.plant().delay_samples),
       loop_(loop),
-      options_(options),
-      response_([&] {
-        plant.Validate();
-        if (delay_samples < 0) {
-          throw InputError("delay = " + std::to_string(delay_samples) + " samples: must be >= 0");
-        }
-        if (delay_samples > 100000) throw InputError("delay is over 100000 samples");
-        std::string why;
-        if (!loop.IsValid(&why)) throw InputError("loop options: " + why);
-        StateSpace d = loop.hand.IsNone()
-                           ? DiscretizeZoh(plant, period_s)
-                           : DiscretizeZohStateSpace(ContinuousStateSpaceWithHand(plant, loop.hand), period_s);
-        d.delay_samples = 0;  // the delay is handled explicitly here
-        return d;
-      }()) {
+      options_(options) {
+  if (!SameHand(loop.hand, sampled.hand())) {
+    throw std::invalid_argument("ZWidth: loop.hand differs from the hand the plant was sampled with");
+  }
+  if (delay_samples < 0) {
+    throw InputError("delay = " + std::to_string(delay_samples) + " samples: must be >= 0");
+  }
+  if (delay_samples > 100000) throw InputError("delay is over 100000 samples");
   std::string why;
+  if (!loop.IsValid(&why)) throw InputError("loop options: " + why);
   if (!options_.IsValid(&why)) throw InputError("boundary options: " + why);
-  const double T = period_s_;
-  const bool hand = !loop_.hand.IsNone();
-  has_integrator_ = !(loop_.hand.K > 0.0);
+  has_integrator_ = sp_.has_integrator();
   has_filter_ = loop_.HasFilter();
   if (has_filter_) {
     // b_i z^-i and a_i z^-i times z^L: coefficient of z^{L - i}.
@@ -124,94 +142,28 @@ ZWidth::ZWidth(const Plant& plant, double period_s, int delay_samples, const Loo
     for (size_t i = 0; i < loop_.filter_b.size(); ++i) fn_[L - i] = loop_.filter_b[i];
     for (size_t i = 0; i < loop_.filter_a.size(); ++i) fd_[L - i] = loop_.filter_a[i];
   }
-  if (!hand) {
-    std::vector<double> sec;
-    for (const Mode& md : plant.modes) sec.insert(sec.end(), {md.omega, md.c, md.v, md.d});
-    use_modal_ = modal_.Build(plant.m, plant.b, sec.data(), static_cast<int>(plant.modes.size()), T);
-    // Trust the faster form only where it agrees with the state-space response
-    // (near-coincident poles make its residues cancel).
-    for (int k = 1; use_modal_ && k <= 16; ++k) {
-      const std::complex<double> z = std::polar(1.0, std::numbers::pi * (k - 0.5) / 16.0);
-      const Cx<double> a = modal_.At(z.real(), z.imag());
-      const std::complex<double> b = response_.AtZ(z);
-      if (!(std::abs(std::complex<double>(a.re, a.im) - b) <= 1e-10 * std::abs(b))) use_modal_ = false;
-    }
-  }
-  // Denominator from the exactly known discrete poles e^{pT}.
-  den1_ = {1.0};
-  std::vector<std::complex<double>> hand_poles;  // continuous poles with Im > 0 (hand only)
-  if (!hand) {
-    den1_ = PolyMul(den1_, {-std::exp(-plant.b / plant.m * T), 1.0});
-    for (const Mode& md : plant.modes) {
-      const double disc = md.c * md.c / 4.0 - md.omega * md.omega;
-      if (disc < 0.0) {
-        const double r = std::exp(-md.c * T / 2.0), wd = std::sqrt(-disc);
-        den1_ = PolyMul(den1_, {r * r, -2.0 * r * std::cos(wd * T), 1.0});
-      } else {
-        const double s = std::sqrt(disc);
-        den1_ = PolyMul(den1_, {-std::exp((-md.c / 2.0 + s) * T), 1.0});
-        den1_ = PolyMul(den1_, {-std::exp((-md.c / 2.0 - s) * T), 1.0});
-      }
-    }
-  } else {
-    // With the hand the poles are the eigenvalues of the continuous A_h (the
-    // ZOH maps each to e^{lambda T}). Without hand stiffness the position state
-    // is not fed back: A_h keeps an exact zero eigenvalue, the integrator.
-    Eigen::VectorXcd ev = ContinuousStateSpaceWithHand(plant, loop_.hand).A.eigenvalues();
-    int skip = -1;
-    if (has_integrator_) {
-      ev.cwiseAbs().minCoeff(&skip);
-    }
-    for (int i = 0; i < ev.size(); ++i) {
-      if (i == skip) continue;
-      const std::complex<double> l = ev(i);
-      if (l.imag() > 0.0) {
-        const double r = std::exp(l.real() * T);
-        den1_ = PolyMul(den1_, {r * r, -2.0 * r * std::cos(l.imag() * T), 1.0});
-        hand_poles.push_back(l);
-      } else if (l.imag() == 0.0) {
-        den1_ = PolyMul(den1_, {-std::exp(l.real() * T), 1.0});
-      }
-    }
-  }
-  den_ = has_integrator_ ? PolyMul(den1_, {-1.0, 1.0}) : den1_;
-  // Numerator by interpolation at n rotated roots of unity (none is a pole).
-  const int n = static_cast<int>(den_.size()) - 1;
-  num_.assign(n, 0.0);
-  for (int k = 0; k < n; ++k) {
-    const std::complex<double> z = std::polar(1.0, (2.0 * std::numbers::pi * k + std::numbers::pi) / n);
-    std::complex<double> dz = 0.0, zp = 1.0;
-    for (double c : den_) { dz += c * zp; zp *= z; }
-    const std::complex<double> nz = response_.AtZ(z) * dz;
-    std::complex<double> zm = 1.0;
-    for (int m = 0; m < n; ++m) { num_[m] += (nz / zm).real() / n; zm *= z; }
-  }
+  BuildGrid();
+  const std::complex<double> gpi = sp_.gd_at_minus_one();
+  const double sgn = (total_delay_ % 2 == 0) ? 1.0 : -1.0;  // z^d at z = -1
+  K_pi_at_zero_B_ = (-sgn / gpi).real();
+  V_pi_ = V(-1.0, 0.0).real();
+}
 
-  // theta grid: uniform, plus dense patches around every resonance and
-  // antiresonance (width ~ damping * T), so that sharp modes are resolved.
+void ZWidth::BuildGrid() {
+  // theta grid: uniform, plus the sampled plant's dense patches around every
+  // resonance and antiresonance (width ~ damping * T), so that sharp modes are
+  // resolved.
+  const int n = static_cast<int>(sp_.denominator().size()) - 1;
   const int nu = std::max(options_.min_grid_points,
                           options_.grid_points_per_delay * (total_delay_ + n + static_cast<int>(fd_.size())));
+  const std::vector<double>& patches = sp_.mode_patch_theta();
   std::vector<double> th;
-  th.reserve(nu + 2600 * plant.modes.size());
+  th.reserve(nu + 1 + patches.size());
   const double pi = std::numbers::pi;
   th.push_back(pi * 1e-7);
   for (int i = 1; i < nu; ++i) th.push_back(pi * i / nu);
   th.push_back(pi * (1.0 - 1e-9));
-  auto patch = [&](double w, double c) {
-    const double disc = w * w - c * c / 4.0;
-    if (disc <= 0.0) return;
-    const double center = std::sqrt(disc) * T;
-    const double h = std::max(c * T / 16.0, 1e-9);
-    for (int k = -320; k <= 320; ++k) {
-      const double t = center + k * h;
-      if (t > th.front() && t < th.back()) th.push_back(t);
-    }
-  };
-  for (const Mode& md : plant.modes) {
-    if (!hand) patch(md.omega, md.c);
-    patch(md.v, md.d);  // the hand leaves G's zeros where they are
-  }
-  for (const std::complex<double>& l : hand_poles) patch(std::abs(l), -2.0 * l.real());
+  th.insert(th.end(), patches.begin(), patches.end());
   std::sort(th.begin(), th.end());
   th.erase(std::unique(th.begin(), th.end()), th.end());
   grid_theta_ = th;
@@ -238,10 +190,6 @@ ZWidth::ZWidth(const Plant& plant, double period_s, int delay_samples, const Loo
     sg.ib = static_cast<int>(std::lower_bound(th.begin(), th.end(), sg.tb) - th.begin()) - 1;
     segments_.push_back(sg);
   }
-  const std::complex<double> gpi = response_.AtZ(-1.0);
-  const double sgn = (total_delay_ % 2 == 0) ? 1.0 : -1.0;  // z^d at z = -1
-  K_pi_at_zero_B_ = (-sgn / gpi).real();
-  V_pi_ = V(-1.0, 0.0).real();
 }
 
 std::complex<double> ZWidth::V(double c, double s) const {
@@ -256,12 +204,6 @@ std::complex<double> ZWidth::V(double c, double s) const {
   return F * (1.0 - zi) / period_s_;
 }
 
-std::complex<double> ZWidth::Gd(std::complex<double> z) const {
-  if (!use_modal_) return response_.AtZ(z);
-  const Cx<double> g = modal_.At(z.real(), z.imag());
-  return {g.re, g.im};
-}
-
 void ZWidth::Point(double theta, double* B, double* K) const {
   const double c = std::cos(theta), s = std::sin(theta);
   const std::complex<double> z(c, s);
@@ -271,7 +213,7 @@ void ZWidth::Point(double theta, double* B, double* K) const {
     if (e & 1) zd *= zp;
     zp *= zp;
   }
-  const std::complex<double> W = -zd / Gd(z);
+  const std::complex<double> W = -zd / sp_.Gd(z);
   if (has_filter_) {
     const std::complex<double> v = V(c, s);
     *B = W.imag() / v.imag();
@@ -320,20 +262,20 @@ std::vector<double> ZWidth::CharacteristicPolynomial(double K, double B) const {
   // z^{d+1} D(z) F_d(z) + (K z F_d(z) + (B/T)(z - 1) F_n(z)) N(z)
   const int d = total_delay_;
   if (!has_filter_) {
-    std::vector<double> p(d + 1 + den_.size(), 0.0);
-    for (size_t i = 0; i < den_.size(); ++i) p[i + d + 1] += den_[i];
+    std::vector<double> p(d + 1 + sp_.denominator().size(), 0.0);
+    for (size_t i = 0; i < sp_.denominator().size(); ++i) p[i + d + 1] += sp_.denominator()[i];
     const std::vector<double> ctrl = {-B / period_s_, K + B / period_s_};
-    const std::vector<double> cn = PolyMul(ctrl, num_);
+    const std::vector<double> cn = PolyMul(ctrl, sp_.numerator());
     for (size_t i = 0; i < cn.size(); ++i) p[i] += cn[i];
     return p;
   }
-  const std::vector<double> dfd = PolyMul(den_, fd_);
+  const std::vector<double> dfd = PolyMul(sp_.denominator(), fd_);
   std::vector<double> p(d + 1 + dfd.size(), 0.0);
   for (size_t i = 0; i < dfd.size(); ++i) p[i + d + 1] += dfd[i];
   std::vector<double> ctrl(fd_.size() + 1, 0.0);  // K z F_d + (B/T)(z - 1) F_n
   for (size_t i = 0; i < fd_.size(); ++i) ctrl[i + 1] += K * fd_[i];
   for (size_t i = 0; i < fn_.size(); ++i) { ctrl[i + 1] += B / period_s_ * fn_[i]; ctrl[i] -= B / period_s_ * fn_[i]; }
-  const std::vector<double> cn = PolyMul(ctrl, num_);
+  const std::vector<double> cn = PolyMul(ctrl, sp_.numerator());
   for (size_t i = 0; i < cn.size(); ++i) p[i] += cn[i];
   return p;
 }
@@ -344,8 +286,8 @@ bool ZWidth::IsStable(double K, double B) const {
   // K = 0+: the factor (z - 1) leaves z^{d+1} D1(z) F_d(z) + (B/T) F_n(z) N(z).
   // (The root at z = 1 moves inside for K > 0 when b + B F(1) > 0.)
   const int d = total_delay_;
-  const std::vector<double> dfd = PolyMul(den1_, fd_);
-  const std::vector<double> fnn = PolyMul(fn_, num_);
+  const std::vector<double> dfd = PolyMul(sp_.denominator_without_integrator(), fd_);
+  const std::vector<double> fnn = PolyMul(fn_, sp_.numerator());
   std::vector<double> q(std::max(d + 1 + dfd.size(), fnn.size()), 0.0);
   for (size_t i = 0; i < dfd.size(); ++i) q[i + d + 1] += dfd[i];
   for (size_t i = 0; i < fnn.size(); ++i) q[i] += B / period_s_ * fnn[i];

@@ -23,9 +23,8 @@
 #include <vector>
 
 #include "model/plant.h"
-#include "model/state_space.h"
-#include "model/zoh_modal.h"
 #include "stability/loop_options.h"
+#include "stability/sampled_plant.h"
 
 namespace zwidth::stability {
 
@@ -138,7 +137,14 @@ std::vector<double> MakeBGrid(const BGridOptions& options, double largest_stable
 
 class ZWidth {
  public:
-  // Throws InputError for an invalid plant, period or delay.
+  // The loop of one delay on a sampled plant shared with other delays (the
+  // ZOH, N(z)/D(z) and the mode patches are not recomputed). loop.hand must be
+  // the sampled plant's hand (std::invalid_argument otherwise: a broken
+  // contract). Throws InputError for an invalid delay, loop or options.
+  ZWidth(const SampledPlant& sampled, int delay_samples, const LoopOptions& loop = {},
+         const BoundaryOptions& options = {});
+  // Convenience: samples the plant for this one loop. Throws InputError for an
+  // invalid plant, period or delay.
   ZWidth(const Plant& plant, double period_s, int delay_samples,
          const BoundaryOptions& options = {});
   // The generalised loop of stability/haptic_loop.h: velocity filter F(z) and
@@ -167,25 +173,25 @@ class ZWidth {
   int total_delay() const { return total_delay_; }
   const LoopOptions& loop() const { return loop_; }
   double period_s() const { return period_s_; }
+  const SampledPlant& sampled_plant() const { return sp_; }
   // Closed-loop characteristic polynomial coefficients (z^0 first).
   std::vector<double> CharacteristicPolynomial(double K, double B) const;
 
  private:
   // A monotone piece of B(theta); grid points ia..ib lie strictly inside it.
   struct Segment { double ta, tb, Ba, Bb; int ia, ib; };
+  // The theta grid, B(theta) and K(theta) on it, and its monotone pieces.
+  void BuildGrid();
   void Point(double theta, double* B, double* K) const;
   // Bisection for the B where f_CR jumps between f_lo (at b_lo) and f_hi.
   double FindTransition(double b_lo, double b_hi, double f_lo, double f_hi) const;
   double HzOf(double theta) const;
   // Largest B of the D-decomposition curve (and of the theta = pi line) with K > 0.
   double StableBBound() const;
-  // G_d(z) without the delay: the pole-residue form when it reproduces the
-  // state-space response (distinct underdamped modes), else the Hessenberg solve.
-  std::complex<double> Gd(std::complex<double> z) const;
-
   // V(theta) = F(e^{j theta})(1 - e^{-j theta})/T.
   std::complex<double> V(double c, double s) const;
 
+  SampledPlant sp_;
   double period_s_;
   int total_delay_;
   LoopOptions loop_;
@@ -196,12 +202,6 @@ class ZWidth {
   std::vector<double> fn_ = {1.0}, fd_ = {1.0};  // F = fn/fd as polynomials in z, z^0 first
   double V_pi_ = 0.0;  // V(pi) = 2 F(-1)/T
   BoundaryOptions options_;
-  DiscreteResponse response_;
-  ZohModalForm<double> modal_;
-  bool use_modal_ = false;
-  std::vector<double> num_;      // N(z) of G_d = N/D, z^0 first
-  std::vector<double> den_;      // D(z) monic, z^0 first
-  std::vector<double> den1_;     // D(z) / (z - 1)
   std::vector<Segment> segments_;
   std::vector<double> grid_theta_, grid_K_, grid_B_;
   double K_pi_at_zero_B_ = 0.0;  // Re W(pi)

@@ -23,5 +23,7 @@ check "one section too many named from 1" 'grep -qE "section [1-4]:" "$T/out" &&
 "$ZW" run "$T/log.h5" -o "$T/run" > "$T/out" 2>&1
 check "run: verdict first in summary.json" '[ "$(sed -n 2p "$T/run/summary.json" | tr -d " ")" = "\"fit_quality\":\"good\"," ]'
 check "run: frf.csv has used_by_fit" 'head -1 "$T/run/frf.csv" | grep -q ",used_by_fit$"'
+"$ZW" run "$T/log.h5" -o "$T/run_nf" --no-figures > /dev/null 2>&1
+check "run --no-figures: no figures/, same boundary.csv and summary" '[ ! -e "$T/run_nf/figures" ] && cmp -s "$T/run/boundary.csv" "$T/run_nf/boundary.csv" && grep -q "no-figures" "$T/run_nf/report.html"'
 echo "$pass passed, $fail failed"
 [ $fail = 0 ]

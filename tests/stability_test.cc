@@ -2,6 +2,7 @@
 #include <complex>
 #include <numbers>
 #include <random>
+#include <stdexcept>
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
@@ -10,6 +11,7 @@
 #include "model/plant.h"
 #include "model/state_space.h"
 #include "stability/relay.h"
+#include "stability/sampled_plant.h"
 #include "stability/schur_cohn.h"
 #include "stability/zwidth.h"
 #include "tests/brute_force.h"
@@ -156,6 +158,53 @@ TEST(Relay, PastTheTransitionTheModeCrossingIsTheCriticalOne) {
     EXPECT_NEAR(r.K_cr / c.K_cr, 1.0, 1e-3) << d;
     EXPECT_NEAR(r.f_cr_hz / c.f_cr_hz, 1.0, 1e-3) << d;
   }
+}
+
+// A ZWidth on a shared SampledPlant is the same computation as the one-loop
+// constructor: every number bit-identical, at several delays, with and without
+// a velocity filter and a hand; and G_d of the sampled plant is the ZOH
+// response of model/state_space.h.
+TEST(SampledPlant, SharedByDelaysGivesTheOneLoopConstructorsNumbers) {
+  const Plant p = PhantomTable1();
+  LoopOptions filt;
+  filt.filter_b = {0.2};
+  filt.filter_a = {1.0, -0.8};
+  LoopOptions hand = filt;
+  hand.hand = {0.3 * p.m, p.b, 50.0};
+  for (const LoopOptions& l : {LoopOptions{}, filt, hand}) {
+    const SampledPlant sp(p, 1e-3, l.hand);
+    for (int d : {0, 2, 7}) {
+      const ZWidth a(sp, d, l), b(p, 1e-3, d, l);
+      const DelaySummary sa = a.Summarize(), sb = b.Summarize();
+      EXPECT_EQ(sa.K_cr_at_zero_B, sb.K_cr_at_zero_B);
+      EXPECT_EQ(sa.K_cr_max, sb.K_cr_max);
+      EXPECT_EQ(sa.B_max, sb.B_max);
+      for (double B : {0.0, 0.01, 0.05}) {
+        const auto ia = a.StableIntervals(B), ib = b.StableIntervals(B);
+        ASSERT_EQ(ia.size(), ib.size());
+        for (size_t k = 0; k < ia.size(); ++k) {
+          EXPECT_EQ(ia[k].K_lo, ib[k].K_lo);
+          EXPECT_EQ(ia[k].K_hi, ib[k].K_hi);
+        }
+      }
+    }
+  }
+  const SampledPlant sp(p, 1e-3);
+  const DiscreteResponse g(DiscretizeZoh(p, 1e-3));
+  for (double th : {0.01, 0.5, 2.0}) {
+    const std::complex<double> a = sp.AtTheta(th), b = g.AtTheta(th);
+    EXPECT_EQ(a, b);
+    EXPECT_LE(std::abs(sp.Gd(std::polar(1.0, th)) - g.AtZ(std::polar(1.0, th))), 1e-10 * std::abs(b));
+  }
+}
+
+TEST(SampledPlant, AHandOtherThanTheSampledOnesIsABrokenContract) {
+  const SampledPlant sp(PhantomTable1(), 1e-3);
+  LoopOptions l;
+  l.hand = {1e-4, 0.0, 0.0};
+  EXPECT_THROW(ZWidth(sp, 2, l), std::invalid_argument);
+  EXPECT_THROW(ZWidth(sp, -1), InputError);
+  EXPECT_THROW(SampledPlant(PhantomTable1(), 0.0), InputError);
 }
 
 TEST(Relay, ATangentialCrossingIsProbed) {

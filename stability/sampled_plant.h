@@ -1,0 +1,76 @@
+// The sampled plant of one (model, period, hand): everything of the Z-width
+// computation that does not depend on the loop delay or the velocity filter,
+// built once and shared by every delay, the comparison, the boundary rows, the
+// uncertainty and the figures.
+//
+//   - the exact ZOH state-space response G_d(z) (balanced, Hessenberg form;
+//     model/state_space.h), without the plant's own input delay;
+//   - its pole-residue form (model/zoh_modal.h) where that reproduces the
+//     state-space response to 1e-10 (no hand; distinct underdamped modes);
+//   - G_d = N(z)/D(z): D from the exactly known discrete poles e^{pT}, N by
+//     interpolation at the rotated roots of unity;
+//   - the theta points around every resonance and antiresonance that the
+//     boundary grid needs (stability/zwidth.h).
+//
+// Copying is cheap (a shared, immutable body), so a ZWidth keeps its own copy.
+#pragma once
+
+#include <complex>
+#include <memory>
+#include <vector>
+
+#include "model/plant.h"
+#include "model/state_space.h"
+#include "model/zoh_modal.h"
+#include "stability/loop_options.h"
+
+namespace zwidth::stability {
+
+class SampledPlant {
+ public:
+  // Throws InputError for an invalid plant, period or hand.
+  SampledPlant(const Plant& plant, double period_s, const Hand& hand = {});
+
+  const Plant& plant() const { return d_->plant; }
+  double period_s() const { return d_->period_s; }
+  const Hand& hand() const { return d_->hand; }
+  // Without a hand stiffness G has its integrator pole at z = 1.
+  bool has_integrator() const { return d_->has_integrator; }
+
+  // G_d(z) without any delay: the pole-residue form when it reproduces the
+  // state-space response, else the Hessenberg solve.
+  std::complex<double> Gd(std::complex<double> z) const;
+  // G_d(z) by the Hessenberg solve alone, without any delay.
+  std::complex<double> GdStateSpace(std::complex<double> z) const { return d_->response.AtZ(z); }
+  // G_d(e^{j theta}) e^{-j theta delay} with the plant's own input delay: the
+  // model's sampled frequency response (theta = omega T in rad/sample).
+  std::complex<double> AtTheta(double theta) const;
+  // N(z) and monic D(z) of G_d = N/D, z^0 first; D1 = D/(z - 1) when
+  // has_integrator(), else D.
+  const std::vector<double>& numerator() const { return d_->num; }
+  const std::vector<double>& denominator() const { return d_->den; }
+  const std::vector<double>& denominator_without_integrator() const { return d_->den1; }
+  // Theta points in (0, pi) dense around every resonance and antiresonance
+  // (and the hand's poles), unsorted.
+  const std::vector<double>& mode_patch_theta() const { return d_->patch_theta; }
+  // G_d(-1).
+  std::complex<double> gd_at_minus_one() const { return d_->g_minus_one; }
+
+ private:
+  struct Data {
+    Plant plant;
+    double period_s = 0.0;
+    Hand hand;
+    bool has_integrator = true;
+    DiscreteResponse response;
+    ZohModalForm<double> modal;
+    bool use_modal = false;
+    std::vector<double> num, den, den1;
+    std::vector<double> patch_theta;
+    std::complex<double> g_minus_one;
+    explicit Data(const StateSpace& s) : response(s) {}
+  };
+  std::shared_ptr<const Data> d_;
+};
+
+}  // namespace zwidth::stability
