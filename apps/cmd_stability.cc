@@ -342,6 +342,7 @@ void AddRelayCommand(CLI::App& app) {
     stability::RelayOptions o;
     double period = kNotGiven;
     bool json = false;
+    LoopFlags loop;
   };
   auto rf = std::make_shared<RelayFlags>();
   CLI::App* r = app.add_subcommand("relay", "simulate the relay experiment of section IV (Fig. 9)");
@@ -353,16 +354,27 @@ void AddRelayCommand(CLI::App& app) {
   r->add_option("--seconds", rf->o.seconds, "simulated time [s]")->capture_default_str();
   r->add_flag("--json", rf->json, "print only JSON on standard output");
   r->add_option("-o,--output", rf->trace, "trace CSV (t, relay, damping, command, position)");
+  AddLoopFlags(r, &rf->loop);
   r->callback([rf] {
     if (!rf->trace.empty()) io::CheckOutputFolder(rf->trace, {rf->model});
     const io::ModelFile mf = io::ReadModelJson(rf->model);
     rf->o.period_s = ResolvePeriod(rf->period, mf);
     CheckDelay(rf->o.delay_samples, "--delay");
+    const std::vector<stability::LoopOptions> loops = ResolveLoops(rf->loop, rf->o.period_s);
+    if (loops.size() != 1) throw InputError("relay: give at most one --hand (the experiment runs one loop)");
+    rf->o.loop = loops.front();
+    std::string why;
+    if (!rf->o.IsValid(&why)) {  // the fields' flags: --period, --delay, --damping, --amplitude, --seconds
+      throw InputError(why + " (relay flags: period_s --period, delay_samples --delay, damping --damping, "
+                       "amplitude --amplitude, seconds --seconds)");
+    }
     std::fprintf(stderr, "simulating %.3g s of relay feedback (d = %d, B = %g)...\n", rf->o.seconds,
                  rf->o.delay_samples, rf->o.damping);
     const stability::RelayResult res = stability::SimulateRelay(mf.plant, rf->o);
-    if (!res.oscillating && !res.diverged) throw ComputationError("the relay loop did not oscillate");
-    const stability::ZWidth z(mf.plant, rf->o.period_s, rf->o.delay_samples);
+    if (res.status == stability::RelayStatus::kNoOscillation) {
+      throw ComputationError("the relay loop did not oscillate");
+    }
+    const stability::ZWidth z(mf.plant, rf->o.period_s, rf->o.delay_samples, rf->o.loop);
     const stability::CriticalPoint cp = z.At(rf->o.damping);
     if (!rf->trace.empty()) {
       io::WriteAtomically(rf->trace, [&](const std::string& tmp) {
@@ -377,23 +389,24 @@ void AddRelayCommand(CLI::App& app) {
       });
     }
     nlohmann::json j = {{"K_cr", io::NumberOrNull(res.K_cr)}, {"f_cr_hz", io::NumberOrNull(res.f_cr_hz)},
-                        {"refined", res.refined}, {"diverged", res.diverged},
+                        {"status", stability::ToString(res.status)},
+                        {"refined", res.refined()}, {"diverged", res.status == stability::RelayStatus::kDiverged},
                         {"K_cr_peak", io::NumberOrNull(res.K_cr_peak)},
                         {"f_cr_peak_hz", io::NumberOrNull(res.f_cr_peak_hz)}, {"relay_runs", res.relay_runs},
                         {"unsettled", res.unsettled},
-                        {"uncertainty", io::NumberOrNull(res.uncertainty)}, {"below_band", res.below_band},
+                        {"uncertainty", io::NumberOrNull(res.uncertainty)}, {"below_band", res.status == stability::RelayStatus::kBelowBand},
                         {"band_low_hz", io::NumberOrNull(res.band_low_hz)},
                         {"K_cr_exact", io::NumberOrNull(cp.K_cr)},
                         {"f_cr_exact_hz", io::NumberOrNull(cp.f_cr_hz)},
                         {"delay_samples", rf->o.delay_samples}, {"B", rf->o.damping},
                         {"period_s", rf->o.period_s}};
-    if (res.refined && !(res.uncertainty <= 1e-3)) {
+    if (res.refined() && !(res.uncertainty <= 1e-3)) {
       std::fprintf(stderr,
                    "warning: the estimate is uncertain to about %.2g%% (L from the two halves of the steady part "
                    "differs by %.2g%%, the oscillation was still settling); simulate longer with --seconds\n",
                    100.0 * res.uncertainty, 100.0 * res.unsettled);
     }
-    if (res.below_band) {
+    if (res.status == stability::RelayStatus::kBelowBand) {
       std::fprintf(stderr,
                    "warning: the relay run at %.3g Hz, the lowest this record resolves (20 cycles in the steady part), "
                    "is already past -180 deg: the critical crossing lies below it; simulate longer with --seconds\n",
@@ -401,17 +414,17 @@ void AddRelayCommand(CLI::App& app) {
     }
     if (rf->json) {
       std::cout << j.dump() << std::endl;
-    } else if (res.diverged) {
+    } else if (res.status == stability::RelayStatus::kDiverged) {
       std::printf("relay: the loop diverges with the relay alone, so K -> 0+ is unstable here (B past B_max_from_zero): "
                   "K_cr = 0\n");
     } else {
       std::printf("relay, paper's reading (spectral peak, first harmonics): K_cr = %.6g N m/rad at %.5g Hz\n",
                   res.K_cr_peak, res.f_cr_peak_hz);
       std::printf("relay, -180 deg crossings measured by steered runs:    K_cr = %.6g N m/rad at %.5g Hz%s\n",
-                  res.K_cr, res.f_cr_hz, res.refined ? "" : " (no crossing found: the paper's reading)");
+                  res.K_cr, res.f_cr_hz, res.refined() ? "" : " (no crossing found: the paper's reading)");
     }
     if (!rf->json) {
-      std::printf("exact (eq. 2):                                          K_cr = %.6g N m/rad at %.5g Hz\n",
+      std::printf("exact (eq. 2, with this loop's filter and hand):        K_cr = %.6g N m/rad at %.5g Hz\n",
                   cp.K_cr, cp.f_cr_hz);
     }
   });

@@ -342,6 +342,35 @@ void BM_Relay(benchmark::State& state) {
 }
 BENCHMARK(BM_Relay)->ArgsProduct({{10, 30, 120}, {0, 90}})->Unit(benchmark::kMillisecond);
 
+// The relay on the haptic loop (issue 16): Table I at d = 4 with a 50 Hz
+// velocity low-pass and a hand (M = 0.3 m, B = b, K giving 2 Hz), record
+// length (s) against the error of the estimate from the exact Z-width of the
+// same loop, at B = 0.5 B_t of that loop (of B_max_from_zero: it has no B_t).
+void BM_RelayLoop(benchmark::State& state) {
+  const Plant p = PhantomTable1();
+  stability::RelayOptions o;
+  o.delay_samples = 4;
+  o.seconds = static_cast<double>(state.range(0));
+  stability::SetLowPassFilter(50.0, 1e-3, &o.loop);
+  const double w = 2 * std::numbers::pi * 2.0;
+  o.loop.hand = {0.3 * p.m, p.b, w * w * 1.3 * p.m};
+  const stability::ZWidth z(p, 1e-3, 4, o.loop);
+  const stability::DelaySummary s = z.Summarize();
+  o.damping = 0.5 * (std::isfinite(s.B_t) ? s.B_t : s.B_max_from_zero);
+  stability::RelayResult r;
+  for (auto _ : state) {
+    r = stability::SimulateRelay(p, o);
+    benchmark::DoNotOptimize(r.K_cr);
+  }
+  const stability::CriticalPoint c = z.At(o.damping);
+  state.counters["rel_err_K_cr"] = std::abs(r.K_cr / c.K_cr - 1);
+  state.counters["rel_err_f_cr"] = std::abs(r.f_cr_hz / c.f_cr_hz - 1);
+  state.counters["paper_rel_err_K"] = std::abs(r.K_cr_peak / c.K_cr - 1);
+  state.counters["refined"] = r.refined();
+  state.counters["runs"] = r.relay_runs;
+}
+BENCHMARK(BM_RelayLoop)->Arg(10)->Arg(30)->Unit(benchmark::kMillisecond);
+
 }  // namespace
 }  // namespace zwidth
 

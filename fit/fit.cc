@@ -1,4 +1,5 @@
 #include "fit/fit.h"
+#include "fit/bin_correlated_covariance.h"
 
 #include <Eigen/Dense>
 
@@ -64,6 +65,34 @@ void Physical(const T* x, int num_modes, T* m, T* b, std::vector<T>* sec) {
     (*sec)[4 * i + 2] = v;
     (*sec)[4 * i + 3] = T(2.0) * exp(x[5 + 4 * i]) * v;
   }
+}
+
+// The fit's covariance in the solver's log space, row-major p x p, from the
+// weighted Jacobian and residuals at the solution (fit/bin_correlated_covariance.h).
+// Bin positions: theta over the smallest spacing between bins; max_lag: 2 for
+// Hann and Hamming (w^2 holds cosines up to 2 cycles, so bins 3 apart are
+// uncorrelated), 0 for uncorrelated bins (rectangular window, whole records).
+std::vector<double> BinCorrelatedCovarianceOf(ceres::Problem& problem, const Bins& bins, const Eigen::MatrixXd& A_inv,
+                                              int max_lag) {
+  double cost = 0.0;
+  std::vector<double> rv;
+  ceres::CRSMatrix crs;
+  problem.Evaluate(ceres::Problem::EvaluateOptions(), &cost, &rv, nullptr, &crs);
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+  for (int i = 0; i < crs.num_rows; ++i) {
+    for (int k = crs.rows[i]; k < crs.rows[i + 1]; ++k) J(i, crs.cols[k]) = crs.values[k];
+  }
+  double step = std::numeric_limits<double>::infinity();
+  for (size_t k = 1; k < bins.z.size(); ++k) step = std::min(step, std::arg(bins.z[k]) - std::arg(bins.z[k - 1]));
+  std::vector<long> position(bins.z.size(), 0);
+  for (size_t k = 0; k < bins.z.size() && std::isfinite(step); ++k) {
+    position[k] = std::lround((std::arg(bins.z[k]) - std::arg(bins.z[0])) / step);
+  }
+  const Eigen::MatrixXd C = internal::BinCorrelatedCovariance(
+      J, Eigen::Map<const Eigen::VectorXd>(rv.data(), static_cast<long>(rv.size())), position, A_inv, max_lag);
+  std::vector<double> out(C.size());
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(out.data(), C.rows(), C.cols()) = C;
+  return out;
 }
 
 // Residuals with an analytic Jacobian per bin, built on the derivatives of the
@@ -752,10 +781,12 @@ Fixed FitFixed(const ident::FrequencyResponse& sub, const FitOptions& o, int n, 
     if (cov.Compute(blocks, &problem)) {
       std::vector<double> S(p * p);
       cov.GetCovarianceBlock(x.data(), x.data(), S.data());
-      auto s = [&](int i, int j) { return S[i * p + j] * res.std_scale; };
+      // The sandwich with the bins' correlation measured from the residuals
+      // (fit/bin_correlated_covariance.h); std_scale stays the model-based figure.
+      fit_cov = BinCorrelatedCovarianceOf(problem, bins, Eigen::Map<const Eigen::MatrixXd>(S.data(), p, p),
+                                          sub.bin_correlation > 1.0 + 1e-9 ? 2 : 0);
+      auto s = [&](int i, int j) { return fit_cov[i * p + j]; };
       res.covariance_ok = true;
-      fit_cov.resize(S.size());
-      for (size_t k = 0; k < S.size(); ++k) fit_cov[k] = S[k] * res.std_scale;
       res.std_errors.m = res.plant.m * std::sqrt(s(0, 0));
       res.std_errors.b = res.plant.b * std::sqrt(s(1, 1));
       for (int i = 0; i < n; ++i) {

@@ -99,7 +99,8 @@ struct FitResult {
   Plant plant;                   // canonical order: poles by omega, zeros by v
   Plant std_errors;              // same shape; +inf where unknown
   bool covariance_ok = false;
-  // Full parameter covariance (scaled by std_scale), row-major (2 + 4 N)^2, in
+  // Full parameter covariance (the sandwich of fit/bin_correlated_covariance.h:
+  // the bins' correlation measured from the residuals), row-major (2 + 4 N)^2, in
   // the order and log space of stability/uncertainty.h: log m, log b, then per
   // section (canonical order) log omega, log c, log v, log d. Empty when the
   // covariance could not be computed.
@@ -110,7 +111,7 @@ struct FitResult {
   double chi2_per_dof = 0.0;     // sum r^2 / (num_residuals - num_parameters)
   double nrmse_fit_percent = 0.0;  // 100 (1 - |H - G| / |H - mean H|), MATLAB compare's "fit"
   double worst_misfit_hz = 0.0;    // bin with the largest |H - G| / s
-  double std_scale = 1.0;          // covariance scale: chi2/dof * bin correlation
+  double std_scale = 1.0;          // chi2/dof * bin correlation: the model-based covariance's scale (diagnostic)
   int starts_tried = 0;
   int iterations = 0;
   std::vector<std::string> warnings;

@@ -302,16 +302,20 @@ CLI's summary JSON, one entry of 'delays' (None for NaN/inf).)doc")
   py::class_<stability::RelayResult>(m, "RelayResult", "The simulated relay experiment (stability/relay.h).")
       .def_readonly("K_cr", &stability::RelayResult::K_cr, "estimate [N m/rad]")
       .def_readonly("f_cr_hz", &stability::RelayResult::f_cr_hz)
-      .def_readonly("refined", &stability::RelayResult::refined)
+      .def_property_readonly("status", [](const stability::RelayResult& r) { return stability::ToString(r.status); },
+                             "refined | peak_reading | below_band | diverged | no_oscillation (stability/relay.h)")
+      .def_property_readonly("refined", &stability::RelayResult::refined)
       .def_readonly("relay_runs", &stability::RelayResult::relay_runs)
       .def_readonly("unsettled", &stability::RelayResult::unsettled)
       .def_readonly("uncertainty", &stability::RelayResult::uncertainty)
-      .def_readonly("below_band", &stability::RelayResult::below_band)
+      .def_property_readonly("below_band",
+                             [](const stability::RelayResult& r) { return r.status == stability::RelayStatus::kBelowBand; })
       .def_readonly("band_low_hz", &stability::RelayResult::band_low_hz)
       .def_readonly("K_cr_peak", &stability::RelayResult::K_cr_peak, "the paper's reading (spectral peak)")
       .def_readonly("f_cr_peak_hz", &stability::RelayResult::f_cr_peak_hz)
-      .def_readonly("oscillating", &stability::RelayResult::oscillating)
-      .def_readonly("diverged", &stability::RelayResult::diverged)
+      .def_property_readonly("oscillating", &stability::RelayResult::oscillating)
+      .def_property_readonly("diverged",
+                             [](const stability::RelayResult& r) { return r.status == stability::RelayStatus::kDiverged; })
       .def_property_readonly("relay_force", [](const stability::RelayResult& r) { return ToArray(r.relay_force); })
       .def_property_readonly("damping_force", [](const stability::RelayResult& r) { return ToArray(r.damping_force); })
       .def_property_readonly("command", [](const stability::RelayResult& r) { return ToArray(r.command); })
@@ -319,7 +323,8 @@ CLI's summary JSON, one entry of 'delays' (None for NaN/inf).)doc")
 
   m.def("relay",
         [](const io::ModelFile& model, int delay_samples, double damping, std::optional<double> period_s,
-           double amplitude, double seconds, double settle_fraction) {
+           double amplitude, double seconds, double settle_fraction, std::optional<double> velocity_filter_hz,
+           std::optional<std::tuple<double, double, double>> hand) {
           CheckDelay(delay_samples, "delay_samples");
           stability::RelayOptions o;
           o.period_s = ResolvePeriod(period_s, model);
@@ -328,19 +333,22 @@ CLI's summary JSON, one entry of 'delays' (None for NaN/inf).)doc")
           o.amplitude = amplitude;
           o.seconds = seconds;
           o.settle_fraction = settle_fraction;
+          o.loop = LoopFrom(velocity_filter_hz, hand, o.period_s);
           stability::RelayResult r;
           {
             py::gil_scoped_release release;
             r = stability::SimulateRelay(model.plant, o);
           }
-          if (!r.oscillating && !r.diverged) throw ComputationError("the relay loop did not oscillate");
+          if (r.status == stability::RelayStatus::kNoOscillation) throw ComputationError("the relay loop did not oscillate");
           return r;
         },
         py::arg("model"), py::arg("delay_samples"), py::arg("damping"), py::arg("period_s") = py::none(),
         py::arg("amplitude") = stability::RelayOptions{}.amplitude,
         py::arg("seconds") = stability::RelayOptions{}.seconds,
         py::arg("settle_fraction") = stability::RelayOptions{}.settle_fraction,
-        R"doc(The relay experiment of section IV, simulated as `zwidth relay` does it.
+        py::arg("velocity_filter_hz") = py::none(), py::arg("hand") = py::none(),
+        R"doc(The relay experiment of section IV, simulated as `zwidth relay` does it;
+velocity_filter_hz and hand (M, B, K) as for ZWidth (the haptic loop).
 Raises ComputationError when the loop neither oscillates nor diverges.)doc");
 
   m.def("check",

@@ -10,24 +10,50 @@
 
 #include "model/error.h"
 #include "model/state_space.h"
+#include "stability/haptic_loop.h"
 
 #include <unsupported/Eigen/FFT>
 
 namespace zwidth::stability {
 
 bool RelayOptions::IsValid(std::string* why) const {
-  auto bad = [&](const char* m) { if (why) *why = m; return false; };
-  if (!(std::isfinite(period_s) && period_s > 0)) return bad("--period must be > 0");
-  if (delay_samples < 0) return bad("--delay must be >= 0");
-  if (!(std::isfinite(damping) && damping >= 0)) return bad("--damping must be >= 0");
-  if (!(std::isfinite(amplitude) && amplitude > 0)) return bad("--amplitude must be > 0");
-  if (!(std::isfinite(seconds) && seconds > 0)) return bad("--seconds must be > 0");
-  if (seconds / period_s > 5e7) return bad("--seconds / --period is over 5e7 samples");
-  if (!(settle_fraction >= 0 && settle_fraction <= 0.9)) return bad("settle fraction must be in [0, 0.9]");
+  auto bad = [&](const std::string& m) { if (why) *why = "RelayOptions::" + m; return false; };
+  if (!(std::isfinite(period_s) && period_s > 0)) return bad("period_s must be finite and > 0");
+  if (delay_samples < 0) return bad("delay_samples must be >= 0");
+  if (!(std::isfinite(damping) && damping >= 0)) return bad("damping must be finite and >= 0");
+  if (!(std::isfinite(amplitude) && amplitude > 0)) return bad("amplitude must be finite and > 0");
+  if (!(std::isfinite(seconds) && seconds > 0)) return bad("seconds must be finite and > 0");
+  if (seconds / period_s > 5e7) return bad("seconds / period_s is over 5e7 samples: simulate less");
+  if (!(settle_fraction >= 0 && settle_fraction <= 0.9)) return bad("settle_fraction must be in [0, 0.9]");
   if (seconds * (1.0 - settle_fraction) / period_s < 256) {
-    return bad("--seconds too short: the steady part needs at least 256 samples");
+    return bad("seconds too short: the steady part, seconds x (1 - settle_fraction), needs at least 256 samples");
   }
+  std::string loop_why;
+  if (!loop.IsValid(&loop_why)) return bad("loop." + loop_why);
   return true;
+}
+
+namespace {
+constexpr std::pair<RelayStatus, const char*> kStatusNames[] = {
+    {RelayStatus::kNotRun, "not_run"},         {RelayStatus::kRefined, "refined"},
+    {RelayStatus::kPeakReading, "peak_reading"}, {RelayStatus::kBelowBand, "below_band"},
+    {RelayStatus::kDiverged, "diverged"},       {RelayStatus::kNoOscillation, "no_oscillation"},
+};
+}  // namespace
+
+std::string ToString(RelayStatus s) {
+  for (const auto& [v, name] : kStatusNames) {
+    if (v == s) return name;
+  }
+  return "unknown";
+}
+
+RelayStatus RelayStatusFromString(const std::string& s) {
+  for (const auto& [v, name] : kStatusNames) {
+    if (s == name) return v;
+  }
+  throw InputError("relay status '" + s + "': expected refined, peak_reading, below_band, diverged, no_oscillation "
+                   "or not_run");
 }
 
 namespace {
@@ -130,90 +156,108 @@ struct Resonator {
   }
 };
 
-// One relay run: the output is the ideal relay -A sign(s(t)) averaged over the
-// sample centred on t = k, with s linear through s_{k-1} and s_k (a plain
-// sign(s_k) switches up to one sample late, which alone pulls the limit cycle
-// 5-10% low at 1 kHz). s is the position, or (centre > 0) the position through
-// two resonators at that centre: they steer the oscillation towards the centre
-// and keep the square wave's harmonics (which can lock the cycle onto a
-// vibration mode) out of the switching.
-struct Run {
-  RelayResult r;
-  double theta = 0.0;            // oscillation, rad/sample (spectral peak)
-  std::complex<double> L = 0.0;  // X1/F1: the loop's response at theta, exact
-  double unsettled = 0.0;        // |L(first half) - L(second half)| / |L| of the steady part
+// The velocity filter F(z) of LoopOptions in direct form I: w_k = sum b_i v_{k-i}
+// - sum_{i>=1} a_i w_{k-i} (a0 = 1). Without coefficients it passes v unchanged.
+class VelocityFilter {
+ public:
+  explicit VelocityFilter(const LoopOptions& loop)
+      : b_(loop.filter_b), a_(loop.filter_a), v_(b_.size(), 0.0), w_(a_.size(), 0.0) {}
+  double Step(double v) {
+    if (b_.empty()) return v;
+    std::rotate(v_.rbegin(), v_.rbegin() + 1, v_.rend());
+    v_[0] = v;
+    double w = 0.0;
+    for (size_t i = 0; i < b_.size(); ++i) w += b_[i] * v_[i];
+    for (size_t i = 1; i < a_.size(); ++i) w -= a_[i] * w_[i - 1];
+    if (!w_.empty()) {
+      std::rotate(w_.rbegin(), w_.rbegin() + 1, w_.rend());
+      w_[0] = w;
+    }
+    return w;
+  }
+
+ private:
+  std::vector<double> b_, a_, v_, w_;  // v_[i] = v_{k-i}, w_[i] = w_{k-1-i} before the step
 };
 
-Run RunOnce(const StateSpace& ss, int d, const RelayOptions& o, double centre, WindowCache& windows) {
-  Run run;
-  RelayResult& r = run.r;
+// The ideal relay -A sign(s(t)) averaged over the sample centred on t = k,
+// with s linear through s_{k-1} and s_k (a plain sign(s_k) switches up to one
+// sample late, which alone pulls the limit cycle 5-10% low at 1 kHz).
+double RelayOutput(double s_prev, double s, double amplitude) {
+  const double slope = s - s_prev;
+  const double ya = s - 0.5 * slope, yb = s + 0.5 * slope;
+  if ((ya > 0.0) == (yb > 0.0) || ya == yb) return (0.5 * (ya + yb) > 0.0) ? -amplitude : amplitude;
+  const double phi = ya / (ya - yb);  // zero crossing within the sample
+  const double positive = ya > 0.0 ? phi : 1.0 - phi;
+  return -amplitude * (2.0 * positive - 1.0);
+}
+
+// The time loop of one relay run, filling r's traces. s is the position, or
+// (centre > 0) the position through two resonators at that centre: they steer
+// the oscillation towards the centre and keep the square wave's harmonics
+// (which can lock the cycle onto a vibration mode) out of the switching. The
+// damping force is -B F(z)(1 - z^-1)/T y; relay plus damping reach the plant d
+// samples later.
+void SimulateLoop(const StateSpace& ss, int d, const RelayOptions& o, double centre, RelayResult* r) {
   const size_t n = static_cast<size_t>(std::llround(o.seconds / o.period_s));
-  r.relay_force.resize(n);
-  r.damping_force.resize(n);
-  r.command.resize(n);
-  r.position.resize(n);
+  r->relay_force.resize(n);
+  r->damping_force.resize(n);
+  r->command.resize(n);
+  r->position.resize(n);
   const int ns = static_cast<int>(ss.A.rows());
   Eigen::VectorXd x = Eigen::VectorXd::Zero(ns), next(ns);
   const bool filtered = centre > 0.0;
   Resonator f1, f2;
   if (filtered) f1 = f2 = Resonator::At(centre, kResonatorQ);
+  VelocityFilter velocity(o.loop);
   double y_prev = 0.0, s_prev = 0.0;
   for (size_t k = 0; k < n; ++k) {
     const double y = ss.C.dot(x);
     const double s = filtered ? f2.Step(f1.Step(y)) : y;
-    // s(t) linear through s_{k-1}, s_k over the sample centred on t = k.
-    const double slope = s - s_prev;
-    const double ya = s - 0.5 * slope, yb = s + 0.5 * slope;
-    double relay;
-    if ((ya > 0.0) == (yb > 0.0) || ya == yb) {
-      relay = (0.5 * (ya + yb) > 0.0) ? -o.amplitude : o.amplitude;
-    } else {
-      const double phi = ya / (ya - yb);  // zero crossing within the sample
-      const double positive = ya > 0.0 ? phi : 1.0 - phi;
-      relay = -o.amplitude * (2.0 * positive - 1.0);
-    }
+    const double relay = RelayOutput(s_prev, s, o.amplitude);
     s_prev = s;
-    const double damp = -o.damping * (y - y_prev) / o.period_s;
+    const double damp = -o.damping * velocity.Step((y - y_prev) / o.period_s);
     y_prev = y;
-    r.position[k] = y;
-    r.relay_force[k] = relay;
-    r.damping_force[k] = damp;
-    const double cmd = relay + damp;
-    r.command[k] = cmd;
-    const double u = (k >= static_cast<size_t>(d)) ? r.command[k - d] : 0.0;
+    r->position[k] = y;
+    r->relay_force[k] = relay;
+    r->damping_force[k] = damp;
+    r->command[k] = relay + damp;
+    const double u = (k >= static_cast<size_t>(d)) ? r->command[k - d] : 0.0;
     next.noalias() = ss.A * x;
     next += ss.B * u;
     x.swap(next);
   }
-  const size_t start = static_cast<size_t>(o.settle_fraction * n);
-  const size_t m = n - start;
-  // Diverging (the loop is unstable without the relay, past B_max_from_zero): the peak
-  // grows by the same factor, over 1.2, from each quarter of the steady part
-  // to the next (exponential growth; a cycle still building up or changing
-  // over grows by changing factors), or overflows.
+}
+
+// Diverging (the loop is unstable without the relay, past B_max_from_zero):
+// the peak grows by the same factor, over 1.2, from each quarter of the steady
+// part [start, end) to the next (exponential growth; a cycle still building up
+// or changing over grows by changing factors), or overflows.
+bool Diverges(const std::vector<double>& position, size_t start) {
+  const size_t m = position.size() - start;
   auto peak = [&](size_t q) {
     double v = 0.0;
     for (size_t k = start + q * m / 4; k < start + (q + 1) * m / 4; ++k) {
-      if (!std::isfinite(r.position[k])) return std::numeric_limits<double>::infinity();
-      v = std::max(v, std::abs(r.position[k]));
+      if (!std::isfinite(position[k])) return std::numeric_limits<double>::infinity();
+      v = std::max(v, std::abs(position[k]));
     }
     return v;
   };
   const double q0 = peak(0), q1 = peak(1), q2 = peak(2), q3 = peak(3);
   const double g1 = q1 / q0, g2 = q2 / q1, g3 = q3 / q2;
   const double g_lo = std::min({g1, g2, g3}), g_hi = std::max({g1, g2, g3});
-  if (!std::isfinite(q3) || (g_lo > 1.2 && g_hi < 1.25 * g_lo)) {
-    r.diverged = true;
-    return run;
-  }
-  // The peak of the averaged power spectra of force and position (each
-  // normalised, mean removed), as the paper reads the oscillation frequency.
-  std::vector<double> rf(r.relay_force.begin() + start, r.relay_force.end());
-  std::vector<double> ps(r.position.begin() + start, r.position.end());
+  return !std::isfinite(q3) || (g_lo > 1.2 && g_hi < 1.25 * g_lo);
+}
+
+// The peak of the averaged power spectra of force and position (each
+// normalised, mean removed), as the paper reads the oscillation frequency
+// [rad/sample]; NaN when either signal is flat.
+double SpectralPeak(std::vector<double> rf, std::vector<double> ps, const std::vector<double>& window) {
+  const size_t m = rf.size();
   auto detrend = [](std::vector<double>& v) {
     double mean = 0.0;
     for (double a : v) mean += a;
-    mean /= v.size();
+    mean /= static_cast<double>(v.size());
     for (double& a : v) a -= mean;
   };
   detrend(rf);
@@ -221,9 +265,8 @@ Run RunOnce(const StateSpace& ss, int d, const RelayOptions& o, double centre, W
   // Normalise the two spectra so that neither dominates the average.
   double ef = 0.0, ey = 0.0;
   for (size_t i = 0; i < m; ++i) { ef += rf[i] * rf[i]; ey += ps[i] * ps[i]; }
-  if (!(ey > 0.0) || !(ef > 0.0)) return run;
+  if (!(ey > 0.0) || !(ef > 0.0)) return std::numeric_limits<double>::quiet_NaN();
   for (double& v : ps) v *= std::sqrt(ef / ey);
-  const std::vector<double>& window = windows.Full(m);
   // Coarse peak from a zero-padded FFT of the windowed signals.
   size_t nfft = 1;
   while (nfft < m) nfft *= 2;
@@ -262,10 +305,37 @@ Run RunOnce(const StateSpace& ss, int d, const RelayOptions& o, double centre, W
       theta = 0.5 * (lo + hi);
     }
   }
+  return theta;
+}
+
+// One relay run (plain: centre = 0; steered: the resonators' centre [rad/sample]).
+struct Run {
+  RelayResult r;                 // traces; status kDiverged, kNoOscillation or kPeakReading (oscillating)
+  double theta = 0.0;            // oscillation, rad/sample (spectral peak)
+  std::complex<double> L = 0.0;  // X1/F1: the loop's response at theta, exact
+  double unsettled = 0.0;        // |L(first half) - L(second half)| / |L| of the steady part
+};
+
+Run RunOnce(const StateSpace& ss, int d, const RelayOptions& o, double centre, WindowCache& windows) {
+  Run run;
+  RelayResult& r = run.r;
+  r.status = RelayStatus::kNoOscillation;
+  SimulateLoop(ss, d, o, centre, &r);
+  const size_t n = r.position.size();
+  const size_t start = static_cast<size_t>(o.settle_fraction * static_cast<double>(n));
+  const size_t m = n - start;
+  if (Diverges(r.position, start)) {
+    r.status = RelayStatus::kDiverged;
+    return run;
+  }
+  const std::vector<double>& window = windows.Full(m);
+  const double theta = SpectralPeak(std::vector<double>(r.relay_force.begin() + start, r.relay_force.end()),
+                                    std::vector<double>(r.position.begin() + start, r.position.end()), window);
+  if (!std::isfinite(theta)) return run;
   const std::complex<double> F1 = Harmonic(r.relay_force.data() + start, window, theta);
   const std::complex<double> X1 = Harmonic(r.position.data() + start, window, theta);
   if (!(std::abs(X1) > 0.0) || !(std::abs(F1) > 0.0)) return run;
-  r.oscillating = true;
+  r.status = RelayStatus::kPeakReading;
   run.theta = theta;
   run.L = X1 / F1;
   // Still settling (a slow transient, e.g. near B_max): the two halves disagree.
@@ -292,61 +362,59 @@ struct Point {
   double unsettled;
 };
 
-}  // namespace
+// The steered runs of one relay estimate and their search for the -180 deg
+// crossings of L. X1/F1 is the loop's response L exactly at the oscillation
+// frequency, but the relay oscillates only near a -180 deg crossing (the
+// describing-function error: up to 7% in f and 13% in K here, where L's phase
+// stays near -180 deg over a wide band), and near B_t it can lock onto a
+// vibration mode's cycle, which is not the critical one. Runs with the
+// resonators in the relay path oscillate near a chosen centre, each measuring
+// L exactly at its own oscillation. A scan of centres (x sqrt 2, from 20
+// cycles in the steady part to 0.9 Nyquist; halved where the phase moves over
+// 45 deg or |L| over 2x between runs; dips towards -180 deg probed) finds the
+// -180 deg crossings; the Illinois method on the centre narrows each bracket
+// to 1e-4 in f, where K and f are interpolated linearly in f (phase and log-
+// magnitude). K_cr is the smallest K over the crossings. A crossing below the
+// scan's lowest frequency is reported (kBelowBand), not guessed.
+class SteeredSearch {
+ public:
+  SteeredSearch(const StateSpace& ss, int d, const RelayOptions& o, WindowCache& windows)
+      : ss_(ss), d_(d), o_(o), windows_(windows) {}
+  int runs() const { return runs_; }
 
-RelayResult SimulateRelay(const Plant& plant, const RelayOptions& o) {
-  std::string why;
-  if (!o.IsValid(&why)) throw InputError(why);
-  plant.Validate();
-  StateSpace ss = DiscretizeZoh(plant, o.period_s);
-  const int d = o.delay_samples + plant.delay_samples;
-  ss.delay_samples = 0;
-  WindowCache windows;
-  Run base = RunOnce(ss, d, o, 0.0, windows);  // the plain relay
-  RelayResult r = std::move(base.r);
-  if (!r.oscillating) {
-    if (r.diverged) r.K_cr = r.K_cr_peak = 0.0;  // no K > 0 is stable
-    return r;
-  }
-  const double to_hz = 1.0 / (2.0 * std::numbers::pi * o.period_s);
-  // The paper's reading: the spectral peak, and |F1|/|X1| there.
-  r.K_cr_peak = 1.0 / std::abs(base.L);
-  r.f_cr_peak_hz = base.theta * to_hz;
-  r.K_cr = r.K_cr_peak;
-  r.f_cr_hz = r.f_cr_peak_hz;
-  r.unsettled = base.unsettled;
-  // X1/F1 is the loop's response L exactly at the oscillation frequency, but
-  // the relay oscillates only near a -180 deg crossing (the describing-
-  // function error: up to 7% in f and 13% in K here, where L's phase stays near
-  // -180 deg over a wide band), and near B_t it can lock onto a vibration
-  // mode's cycle, which is not the critical one. Runs with the resonators in
-  // the relay path oscillate near a chosen centre, each measuring L exactly at
-  // its own oscillation. A scan of centres (x sqrt 2, from 20 cycles in the
-  // steady part to 0.9 Nyquist; halved where the phase moves over 45 deg or |L|
-  // over 2x between runs; dips towards -180 deg probed) finds the -180 deg
-  // crossings; the Illinois method on the centre narrows each bracket to 1e-4
-  // in f, where K and f are interpolated linearly in f (phase and log-
-  // magnitude). K_cr is the smallest K over the crossings. A crossing below
-  // the scan's lowest frequency is reported (below_band), not guessed.
-  const size_t steady = r.position.size() - static_cast<size_t>(o.settle_fraction * r.position.size());
-  const double theta_min = 2.0 * std::numbers::pi * 20.0 / static_cast<double>(steady);
-  const double theta_max = 0.9 * std::numbers::pi;
-  r.band_low_hz = theta_min * to_hz;
-  int runs = 0;
-  auto measure = [&](double centre) -> std::optional<Point> {
-    ++runs;
-    const Run run = RunOnce(ss, d, o, centre, windows);
+  // The scan from theta_min to theta_max [rad/sample], sorted by theta, with
+  // its steps split where L moves fast.
+  std::vector<Point> Scan(double theta_min, double theta_max);
+  // Adds runs past -180 deg found at dips of the phase towards it.
+  void ProbeDips(std::vector<Point>& scan);
+  // The smallest K over the refined -180 deg crossings of the scan, into r
+  // (K_cr, f_cr_hz, unsettled, uncertainty); false when the scan has none.
+  bool RefineCrossings(const std::vector<Point>& scan, double to_hz, RelayResult& r);
+
+ private:
+  std::optional<Point> Measure(double centre) {
+    ++runs_;
+    const Run run = RunOnce(ss_, d_, o_, centre, windows_);
     // Not steered (another cycle, or a drift, took over): no use for the search.
-    if (!run.r.oscillating || std::abs(std::log(run.theta / centre)) > std::log(2.0)) return std::nullopt;
+    if (!run.r.oscillating() || std::abs(std::log(run.theta / centre)) > std::log(2.0)) return std::nullopt;
     return Point{centre, run.theta, PhaseError(run.L), run.L, run.unsettled};
-  };
-  std::vector<Point> scan;
-  for (double c = theta_min; c < theta_max && runs < kMaxScanRuns; c *= std::numbers::sqrt2) {
-    if (auto p = measure(c)) scan.push_back(*p);
   }
-  auto by_theta = [](const Point& a, const Point& b) { return a.theta < b.theta; };
-  std::sort(scan.begin(), scan.end(), by_theta);
-  for (size_t i = 0; i + 1 < scan.size() && runs < kMaxScanRuns;) {
+  static bool ByTheta(const Point& a, const Point& b) { return a.theta < b.theta; }
+
+  const StateSpace& ss_;
+  int d_;
+  const RelayOptions& o_;
+  WindowCache& windows_;
+  int runs_ = 0;
+};
+
+std::vector<Point> SteeredSearch::Scan(double theta_min, double theta_max) {
+  std::vector<Point> scan;
+  for (double c = theta_min; c < theta_max && runs_ < kMaxScanRuns; c *= std::numbers::sqrt2) {
+    if (auto p = Measure(c)) scan.push_back(*p);
+  }
+  std::sort(scan.begin(), scan.end(), ByTheta);
+  for (size_t i = 0; i + 1 < scan.size() && runs_ < kMaxScanRuns;) {
     const Point& a = scan[i];
     const Point& b = scan[i + 1];
     const double jump = std::abs(std::remainder(b.g - a.g, 2.0 * std::numbers::pi));
@@ -356,23 +424,20 @@ RelayResult SimulateRelay(const Plant& plant, const RelayOptions& o) {
       ++i;
       continue;
     }
-    const auto p = measure(std::sqrt(a.centre * b.centre));
+    const auto p = Measure(std::sqrt(a.centre * b.centre));
     if (p && p->theta > a.theta && p->theta < b.theta) {
       scan.insert(scan.begin() + static_cast<std::ptrdiff_t>(i) + 1, *p);
     } else {
       ++i;  // another cycle took over: leave this pair as it is
     }
   }
-  // The lowest run already past -180 deg: a crossing lies below the band, where
-  // it cannot be measured in this record.
-  if (scan.empty() || scan.front().g < 0.0) {
-    r.below_band = true;
-    r.relay_runs = runs + 1;
-    return r;
-  }
-  // A dip: the phase comes within 10 deg of -180 deg and turns back between
-  // two scan runs. Successive parabolic steps towards its extremum look for a
-  // run on the other side, which makes two brackets of a close pair of crossings.
+  return scan;
+}
+
+// A dip: the phase comes within 10 deg of -180 deg and turns back between two
+// scan runs. Successive parabolic steps towards its extremum look for a run
+// on the other side, which makes two brackets of a close pair of crossings.
+void SteeredSearch::ProbeDips(std::vector<Point>& scan) {
   for (size_t i = 1; i + 1 < scan.size(); ++i) {
     const double sgn = scan[i].g > 0.0 ? 1.0 : -1.0;
     auto depth = [&](const Point& q) { return sgn * q.g; };  // > 0 on the dip's side
@@ -389,10 +454,10 @@ RelayResult SimulateRelay(const Plant& plant, const RelayOptions& o) {
       const double den = (xb - xa) * (db - dc) - (xb - xc) * (db - da);
       if (!(std::abs(den) > 0.0)) break;
       const double xv = std::clamp(xb - 0.5 * num / den, xa + 0.01 * (xc - xa), xc - 0.01 * (xc - xa));
-      const auto q = measure(std::exp(xv) * b.centre / b.theta);
+      const auto q = Measure(std::exp(xv) * b.centre / b.theta);
       if (!q || !(q->theta > a.theta && q->theta < c.theta) || std::abs(q->theta / b.theta - 1.0) < 1e-5) break;
       if (depth(*q) <= 0.0) {  // through -180 deg: two crossings
-        scan.insert(std::upper_bound(scan.begin(), scan.end(), *q, by_theta), *q);
+        scan.insert(std::upper_bound(scan.begin(), scan.end(), *q, ByTheta), *q);
         break;
       }
       if (depth(*q) < db) {
@@ -403,22 +468,29 @@ RelayResult SimulateRelay(const Plant& plant, const RelayOptions& o) {
       }
     }
   }
-  // A -180 deg crossing: g changes sign without a jump of 2 pi (that is a 0 deg
-  // one). The scan split brackets where |L| changed by over 2x, so a bracket
-  // whose ends both lie over twice the best K found is taken not to hold the
-  // smallest and skipped; the likeliest are refined first.
-  auto k_at = [](const Point& lo, const Point& hi, double* f) {
-    const double t = lo.g == hi.g ? 0.0 : lo.g / (lo.g - hi.g);
-    *f = lo.theta + t * (hi.theta - lo.theta);
-    return std::exp(-(std::log(std::abs(lo.L)) + t * (std::log(std::abs(hi.L)) - std::log(std::abs(lo.L)))));
-  };
+}
+
+// K and f [rad/sample] at the crossing, interpolated linearly in f between
+// two runs on either side (phase error and log |L|).
+double KAtCrossing(const Point& lo, const Point& hi, double* f) {
+  const double t = lo.g == hi.g ? 0.0 : lo.g / (lo.g - hi.g);
+  *f = lo.theta + t * (hi.theta - lo.theta);
+  return std::exp(-(std::log(std::abs(lo.L)) + t * (std::log(std::abs(hi.L)) - std::log(std::abs(lo.L)))));
+}
+
+// A -180 deg crossing: g changes sign without a jump of 2 pi (that is a 0 deg
+// one). The scan split brackets where |L| changed by over 2x, so a bracket
+// whose ends both lie over twice the best K found is taken not to hold the
+// smallest and skipped; the likeliest are refined first (Illinois on the
+// centre: the end kept twice running has its phase error halved).
+bool SteeredSearch::RefineCrossings(const std::vector<Point>& scan, double to_hz, RelayResult& r) {
   std::vector<std::pair<double, size_t>> brackets;  // (interpolated K, index of the lower end)
   for (size_t i = 0; i + 1 < scan.size(); ++i) {
     const Point& lo = scan[i];
     const Point& hi = scan[i + 1];
     if ((lo.g > 0.0) == (hi.g > 0.0) || std::abs(hi.g - lo.g) >= std::numbers::pi) continue;
     double f;
-    brackets.emplace_back(k_at(lo, hi, &f), i);
+    brackets.emplace_back(KAtCrossing(lo, hi, &f), i);
   }
   std::sort(brackets.begin(), brackets.end());
   bool found = false;
@@ -429,11 +501,10 @@ RelayResult SimulateRelay(const Plant& plant, const RelayOptions& o) {
     const double span = std::log(hi.theta / lo.theta);
     const double slope_g = std::abs(hi.g - lo.g) / span;
     const double slope_m = std::abs(std::log(std::abs(hi.L) / std::abs(lo.L))) / span;
-    // Illinois: the end kept twice running has its phase error halved.
     double g_lo = lo.g, g_hi = hi.g;
     int kept = 0;  // +1: lo kept last time, -1: hi kept
     for (int it = 0; it < kMaxRefineRuns && hi.theta - lo.theta > 1e-4 * hi.theta; ++it) {
-      const auto p = measure(lo.centre + (hi.centre - lo.centre) * g_lo / (g_lo - g_hi));
+      const auto p = Measure(lo.centre + (hi.centre - lo.centre) * g_lo / (g_lo - g_hi));
       if (!p || !(p->theta > lo.theta && p->theta < hi.theta) || std::abs(p->g) >= std::numbers::pi / 2) {
         break;  // no narrower bracket
       }
@@ -454,7 +525,7 @@ RelayResult SimulateRelay(const Plant& plant, const RelayOptions& o) {
       }
     }
     double f;
-    const double K = k_at(lo, hi, &f);
+    const double K = KAtCrossing(lo, hi, &f);
     if (!found || K < r.K_cr) {
       r.K_cr = K;
       r.f_cr_hz = f * to_hz;
@@ -471,8 +542,55 @@ RelayResult SimulateRelay(const Plant& plant, const RelayOptions& o) {
     }
     found = true;
   }
-  r.refined = found;
-  r.relay_runs = runs + 1;
+  return found;
+}
+
+// The sampled plant of the relay's loop: the model (with the hand when one is
+// given, as ZWidth samples it) by exact ZOH, its input delay moved into d.
+StateSpace RelayPlant(const Plant& plant, const RelayOptions& o) {
+  StateSpace ss = o.loop.hand.IsNone()
+                      ? DiscretizeZoh(plant, o.period_s)
+                      : DiscretizeZohStateSpace(ContinuousStateSpaceWithHand(plant, o.loop.hand), o.period_s);
+  ss.delay_samples = 0;
+  return ss;
+}
+
+}  // namespace
+
+RelayResult SimulateRelay(const Plant& plant, const RelayOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) throw InputError(why);
+  plant.Validate();
+  const StateSpace ss = RelayPlant(plant, o);
+  const int d = o.delay_samples + plant.delay_samples;
+  WindowCache windows;
+  Run base = RunOnce(ss, d, o, 0.0, windows);  // the plain relay
+  RelayResult r = std::move(base.r);
+  if (!r.oscillating()) {
+    if (r.status == RelayStatus::kDiverged) r.K_cr = r.K_cr_peak = 0.0;  // no K > 0 is stable
+    return r;
+  }
+  const double to_hz = 1.0 / (2.0 * std::numbers::pi * o.period_s);
+  // The paper's reading: the spectral peak, and |F1|/|X1| there.
+  r.K_cr_peak = 1.0 / std::abs(base.L);
+  r.f_cr_peak_hz = base.theta * to_hz;
+  r.K_cr = r.K_cr_peak;
+  r.f_cr_hz = r.f_cr_peak_hz;
+  r.unsettled = base.unsettled;
+  const size_t steady = r.position.size() - static_cast<size_t>(o.settle_fraction * r.position.size());
+  const double theta_min = 2.0 * std::numbers::pi * 20.0 / static_cast<double>(steady);
+  r.band_low_hz = theta_min * to_hz;
+  SteeredSearch search(ss, d, o, windows);
+  std::vector<Point> scan = search.Scan(theta_min, 0.9 * std::numbers::pi);
+  // The lowest run already past -180 deg: a crossing lies below the band, where
+  // it cannot be measured in this record.
+  if (scan.empty() || scan.front().g < 0.0) {
+    r.status = RelayStatus::kBelowBand;
+  } else {
+    search.ProbeDips(scan);
+    r.status = search.RefineCrossings(scan, to_hz, r) ? RelayStatus::kRefined : RelayStatus::kPeakReading;
+  }
+  r.relay_runs = search.runs() + 1;
   return r;
 }
 

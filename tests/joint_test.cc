@@ -137,7 +137,9 @@ TEST(Joint, ClosedLoopFitOfDampingIsUnbiased) {
                 (fj.plant.m - p.m) / fj.std_errors.m);
     EXPECT_LT(std::abs(zj), 3.0);
     EXPECT_LT(std::abs((fj.plant.m - p.m) / fj.std_errors.m), 3.0);
-    EXPECT_GT(std::abs(zh), 3.0) << "the scenario no longer biases H1: the test shows nothing";
+    // H1's bias against the joint estimate's std (H1's own std grows with the
+    // correlated misfit the bias leaves, fit/bin_correlated_covariance.h).
+    EXPECT_GT(std::abs(fh.plant.b - p.b), 3.0 * fj.std_errors.b) << "the scenario no longer biases H1: the test shows nothing";
   }
 }
 

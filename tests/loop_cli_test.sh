@@ -30,5 +30,22 @@ if "$ZW" boundary "$M" -o "$T/ok.csv" --delays 4 --velocity-filter-coeffs "$T/f.
 else
   echo "FAIL filter file and hand"; fail=$((fail+1))
 fi
+# relay with the haptic loop: two hands refused (exit 2); one filter and one hand
+# give K_cr within 1e-3 of the exact answer of the same loop (printed beside).
+if "$ZW" relay "$M" --delay 4 --damping 0.005 --hand 0,0,0 --hand 1e-4,0,0 >/dev/null 2>"$T/stderr"; then
+  echo "FAIL relay two hands accepted"; fail=$((fail+1))
+elif [ $? -eq 2 ] && grep -q "at most one --hand" "$T/stderr"; then
+  echo "ok   relay two hands refused"; pass=$((pass+1))
+else
+  echo "FAIL relay two hands: $(cat "$T/stderr")"; fail=$((fail+1))
+fi
+if "$ZW" relay "$M" --delay 4 --damping 0.005 --velocity-filter-hz 50 --hand 1e-3,2e-3,0.5 --seconds 20 --json \
+     2>/dev/null | python3 -c 'import json,sys; j=json.load(sys.stdin); \
+       sys.exit(0 if j["status"]=="refined" and abs(j["K_cr"]/j["K_cr_exact"]-1)<1e-3 \
+                and abs(j["f_cr_hz"]/j["f_cr_exact_hz"]-1)<1e-3 else 1)'; then
+  echo "ok   relay with filter and hand matches the exact loop"; pass=$((pass+1))
+else
+  echo "FAIL relay with filter and hand"; fail=$((fail+1))
+fi
 echo "$pass passed, $fail failed"
 [ $fail -eq 0 ]

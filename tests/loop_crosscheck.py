@@ -9,7 +9,13 @@ SciPy's cont2discrete (ZOH); the filter F(z) by tf2ss of its coefficients; the
 loop u = -z^-D (K y + B F (y_k - y_{k-1})/T) as one matrix and its eigenvalues.
 Points: 40 B values x ~70 K values per device, classified by the CSV's intervals
 and by the eigenvalues; they must agree wherever the eigenvalues' verdict is the
-same at K (1 +- 1e-6). Exit 77 (skipped) when NumPy/SciPy are missing.
+same at K (1 +- 1e-6).
+The CSV's K_passive (issue 16 item 3) against Colgate and Schenkel's condition
+evaluated here in its own form, b > (T/2)/(1 - cos wT) Re{(1 - e^{-jwT}) H},
+H = z^-D (K + B F (1 - z^-1)/T), F by scipy.signal.freqz: affine in K, so the
+largest passive K is the minimum over w of (b - q)/p where p > 0 (2e5
+frequencies, then 2000 sub-points around the minimum); within 1e-6.
+Exit 77 (skipped) when NumPy/SciPy are missing.
 """
 import json, os, shutil, subprocess, sys, tempfile
 try:
@@ -107,6 +113,44 @@ for n, (model, d, (fb, fa), hand) in enumerate(cases):
         return np.max(np.abs(np.linalg.eigvals(Mx))) < 1.0
 
     rows = np.genfromtxt(csv, delimiter=",", names=True)
+    def k_passive(B, th):
+        zi = np.exp(-1j * th)
+        _, F = ss.freqz(fb, fa, worN=th)
+        sh = np.sin(th / 2)  # 1 - e^{-jt} = 2j sin(t/2) e^{-jt/2}, 1 - cos t = 2 sin^2(t/2): digits kept near 0
+        g = T / 2 / (2 * sh * sh)
+        diff = 2j * sh * np.exp(-0.5j * th)
+        p = g * np.real(diff * zi ** d)
+        q = g * np.real(diff * zi ** d * B * F * diff / T)
+        ratio = np.where(p > 0, (model["b"] - q) / np.where(p > 0, p, 1), np.inf)
+        if np.any((p <= 0) & (q >= model["b"])):
+            return 0.0, None
+        return ratio.min(), th[np.argmin(ratio)]
+
+    worst_p = 0.0
+    bs = sorted(set(rows["B"]))
+    b_pass = [B for B in bs if rows["K_passive"][rows["B"] == B][0] > 0]
+    checked_b = positive_b = 0
+    # every passive B (K_passive > 0) and every fourth of the others
+    for B in b_pass + [B for B in bs[::4] if B not in b_pass]:
+        kp_csv = rows["K_passive"][rows["B"] == B][0]
+        th = np.pi * np.arange(1, 200001) / 200000
+        kp, t0 = k_passive(B, th)
+        if t0 is not None:
+            kp2, _ = k_passive(B, np.linspace(max(t0 - 2 * np.pi / 200000, 1e-9), min(t0 + 2 * np.pi / 200000, np.pi), 2001))
+            kp = min(kp, kp2)
+        kp = max(kp, 0.0)
+        checked_b += 1
+        positive_b += kp > 0
+        err = abs(kp_csv - kp) / max(kp, 1e-300) if kp > 0 else abs(kp_csv)
+        worst_p = max(worst_p, err)
+        if err > 1e-6:
+            failures += 1
+            print(f"FAIL case {n} d={d} B={B}: K_passive {kp_csv}, Colgate-Schenkel evaluated here {kp}")
+    print(f"case {n}: K_passive at {checked_b} B values ({positive_b} with passive K), worst relative difference "
+          f"{worst_p:.1e}")
+    if positive_b == 0:
+        failures += 1
+        print(f"FAIL case {n}: no B value with passive K was checked")
     by_b = {}
     for r in rows:
         by_b.setdefault(r["B"], [])

@@ -36,8 +36,8 @@ Plant RandomModel(std::mt19937_64& rng, int nm, double T) {
 // Right (refined, K_cr and f_cr within 1e-3 of the exact values) or flagged
 // (the crossing below the record's band, or an uncertainty over 1e-3).
 ::testing::AssertionResult RightOrFlagged(const RelayResult& r, const CriticalPoint& c) {
-  if (r.below_band || !(r.uncertainty <= 1e-3)) return ::testing::AssertionSuccess();
-  if (r.refined && std::abs(r.K_cr / c.K_cr - 1.0) < 1e-3 && std::abs(r.f_cr_hz / c.f_cr_hz - 1.0) < 1e-3) {
+  if (r.status == RelayStatus::kBelowBand || !(r.uncertainty <= 1e-3)) return ::testing::AssertionSuccess();
+  if (r.refined() && std::abs(r.K_cr / c.K_cr - 1.0) < 1e-3 && std::abs(r.f_cr_hz / c.f_cr_hz - 1.0) < 1e-3) {
     return ::testing::AssertionSuccess();
   }
   return ::testing::AssertionFailure() << "exact " << c.K_cr << " at " << c.f_cr_hz << " Hz, relay " << r.K_cr
@@ -109,7 +109,7 @@ TEST(Relay, StressRandomModelsFindTheCriticalCrossing) {
       o.seconds = std::clamp(10.0 * p.m / p.b + 40.0 / c.f_cr_hz, 30.0, 300.0);
       const RelayResult r = SimulateRelay(p, o);
       EXPECT_TRUE(RightOrFlagged(r, c)) << "trial " << trial << " d " << d << " B " << o.damping;
-      flagged += r.below_band || !(r.uncertainty <= 1e-3);
+      flagged += r.status == RelayStatus::kBelowBand || !(r.uncertainty <= 1e-3);
       ++checked;
     }
   }
@@ -137,8 +137,8 @@ TEST(Relay, StressShortRecordsAreFlaggedNotWrong) {
     o.delay_samples = d;
     const RelayResult r = SimulateRelay(p, o);
     EXPECT_TRUE(RightOrFlagged(r, c)) << "trial " << trial << " d " << d;
-    if (r.below_band) EXPECT_LT(c.f_cr_hz, r.band_low_hz) << trial;  // the flag's claim holds
-    flagged += r.below_band || !(r.uncertainty <= 1e-3);
+    if (r.status == RelayStatus::kBelowBand) EXPECT_LT(c.f_cr_hz, r.band_low_hz) << trial;  // the flag's claim holds
+    flagged += r.status == RelayStatus::kBelowBand || !(r.uncertainty <= 1e-3);
     ++checked;
   }
   EXPECT_GT(checked, 20);

@@ -123,9 +123,9 @@ TEST(Relay, SteeredRunsFindTheExactCrossingBelowTheTransition) {
       o.damping = frac * bt;
       const RelayResult r = SimulateRelay(p, o);
       const CriticalPoint c = z.At(o.damping);
-      ASSERT_TRUE(r.oscillating);
-      EXPECT_TRUE(r.refined) << d << " " << o.damping;
-      EXPECT_FALSE(r.below_band || r.diverged) << d << " " << o.damping;
+      ASSERT_TRUE(r.oscillating());
+      EXPECT_TRUE(r.refined()) << d << " " << o.damping;
+      EXPECT_EQ(r.status, RelayStatus::kRefined) << d << " " << o.damping;
       EXPECT_NEAR(r.K_cr / c.K_cr, 1.0, 1e-4) << d << " " << o.damping;
       EXPECT_NEAR(r.f_cr_hz / c.f_cr_hz, 1.0, 1e-4) << d << " " << o.damping;
       EXPECT_LT(r.uncertainty, 1e-3) << d << " " << o.damping;
@@ -230,16 +230,16 @@ TEST(Relay, PastBMaxTheLoopDivergesAndKcrIsZero) {
   o.delay_samples = 2;
   o.damping = 1.01 * b_max;
   RelayResult r = SimulateRelay(p, o);
-  EXPECT_TRUE(r.diverged);
-  EXPECT_FALSE(r.oscillating);
+  EXPECT_EQ(r.status, RelayStatus::kDiverged);
+  EXPECT_FALSE(r.oscillating());
   EXPECT_EQ(r.K_cr, 0.0);
   EXPECT_EQ(z.At(o.damping).K_cr, 0.0);
   // Just below B_max the loop still oscillates, but too slowly settling for
   // 30 s: the estimate says so (measured 7.9% off, uncertainty 26%).
   o.damping = b_max - 1e-4;
   r = SimulateRelay(p, o);
-  EXPECT_FALSE(r.diverged);
-  EXPECT_TRUE(r.oscillating);
+  EXPECT_NE(r.status, RelayStatus::kDiverged);
+  EXPECT_TRUE(r.oscillating());
   EXPECT_GT(r.uncertainty, 1e-2);
 }
 
@@ -253,8 +253,8 @@ TEST(Relay, ACrossingBelowTheRecordsBandIsFlaggedNotGuessed) {
   const RelayResult r = SimulateRelay(p, o);
   const CriticalPoint c = ZWidth(p, 1e-3, 10).At(0.0);
   ASSERT_LT(c.f_cr_hz, 20.0);
-  EXPECT_TRUE(r.below_band);
-  EXPECT_FALSE(r.refined);
+  EXPECT_EQ(r.status, RelayStatus::kBelowBand);
+  EXPECT_FALSE(r.refined());
   EXPECT_NEAR(r.band_low_hz, 20.0, 1e-9);
   o.seconds = 30.0;  // band from 1.33 Hz
   EXPECT_NEAR(SimulateRelay(p, o).K_cr / c.K_cr, 1.0, 1e-4);

@@ -2,20 +2,32 @@
 """The Z-width's uncertainty checked from outside (issue 13), run by ctest.
 
 1. Repeated simulated logs of one device (Table I, `zwidth simulate`, seeds
-   1..30, 30 s each) are each fitted (`zwidth fit --modes 2`) and passed to
-   `zwidth boundary --summary`: the scatter (sample std) of the 30 fitted values
-   of K_cr(0), B_t, K_cr^max and B_max at d = 2 and 4 must agree with the median
-   delta-method std the summaries report. Measured ratios (std / scatter):
-   B_t, B_max 0.93-0.98, K_cr^max 1.24-1.43, K_cr(0) 1.50-1.54: the fit's
-   covariance (fit/fit.cc: chi2/dof times the Welch bin correlation) is
-   conservative for the low-frequency parameters m and b, which set K_cr(0).
-   Propagation itself is checked by 2.; this part allows a factor 2 and prints
-   the ratios.
+   1..N, N = 60, 30 s each) are each fitted (`zwidth fit --modes 2`) and passed
+   to `zwidth boundary --summary`: the scatter (sample std) of the N fitted
+   values of K_cr(0), B_t, K_cr^max and B_max at d = 2 and 4 must agree with
+   the median delta-method std the summaries report within a factor 1.5.
+   Why N = 60: the sample std of N draws has a relative std of about
+   1/sqrt(2 (N - 1)) = 0.092 (normal values; the ratio's noise is that, the
+   median of 60 delta-method std being far steadier), so a factor 1.5
+   (ln 1.5 = 0.405) is 4.4 of those: a calibrated std fails with odds below
+   1e-4 per quantity, and a ratio near 1.5 is a miscalibration, not the
+   scatter's own noise (with N = 30 the noise is 0.13 and 1.5 only 3 of it).
+   Measured (seeds 1..60): K_cr(0) 0.90-0.91, B_t 0.89-0.90, K_cr^max
+   1.06-1.10, B_max 0.89-0.92. The fit's covariance uses the correlation of
+   neighbouring bins measured from its residuals, locally
+   (fit/bin_correlated_covariance.h); with the window's kappa (1.94) for every
+   parameter it was 1.50-1.54 for K_cr(0) (the std of m and b 1.45x their
+   scatter over 40 fits, the modes' 0.8-1.1x): at low frequencies the error
+   of H is leakage, whose bins correlate by rho_X(l) (-2/3 at lag 1), not
+   |rho_X(l)|^2 as noise's do.
 2. `--monte-carlo 200` on one fitted model: the sample std agrees with the
-   delta-method std within a factor 1.5.
+   delta-method std within a factor 1.5 (200 draws: relative noise 0.05).
+   Measured 0.93-1.08.
+3. The stored covariance reproduces the fit's std.
 Exit 77 (skipped) when NumPy is missing.
 """
 import json, os, shutil, subprocess, sys, tempfile
+from concurrent.futures import ThreadPoolExecutor
 try:
     import numpy as np
 except ImportError as e:
@@ -29,14 +41,22 @@ keys = ["K_cr_at_zero_B", "B_t", "K_cr_max", "B_max"]
 vals = {d: {k: [] for k in keys} for d in (2, 4)}
 stds = {d: {k: [] for k in keys} for d in (2, 4)}
 failures = 0
-N = 30
-for seed in range(1, N + 1):
+N = 60
+
+
+def one(seed):
     log, fit, csv, summ = (os.path.join(tmp, f"{n}{seed}") for n in ("l.h5", "f.json", "b.csv", "s.json"))
     subprocess.run([zw, "simulate", "--model", model, "-o", log, "--seconds", "30", "--seed", str(seed)],
                    check=True, capture_output=True)
     subprocess.run([zw, "fit", log, "--modes", "2", "-o", fit], check=True, capture_output=True)
     subprocess.run([zw, "boundary", fit, "--delays", "2,4", "-o", csv, "--summary", summ, "--b-points", "50"],
                    check=True, capture_output=True)
+    return summ
+
+
+with ThreadPoolExecutor(max_workers=2) as pool:
+    summaries = list(pool.map(one, range(1, N + 1)))
+for summ in summaries:
     for e in json.load(open(summ))["delays"]:
         for k in keys:
             vals[e["delay_samples"]][k].append(e[k])
@@ -47,9 +67,9 @@ for d in (2, 4):
         delta = float(np.median(stds[d][k]))
         r = delta / scatter
         print(f"d={d} {k:15s} scatter of {N} fits {scatter:.4g}, median delta-method std {delta:.4g}, ratio {r:.3f}")
-        if not (1 / 2 < r < 2):
+        if not (1 / 1.5 < r < 1.5):
             failures += 1
-            print("FAIL: outside a factor 2")
+            print("FAIL: outside a factor 1.5")
 out = subprocess.run([zw, "boundary", os.path.join(tmp, "f.json1"), "--delays", "2,4", "-o",
                       os.path.join(tmp, "mc.csv"), "--summary", os.path.join(tmp, "mc.json"), "--b-points", "50",
                       "--monte-carlo", "200", "--seed", "3"], check=True, capture_output=True, text=True)

@@ -343,6 +343,17 @@ def test_relay_equals_cli(cli, table1_json):
     assert ref["K_cr_exact"] == K_exact
 
 
+def test_relay_with_filter_and_hand_equals_cli(cli, table1_json):
+    ref = json.loads(cli("relay", table1_json, "--delay", "4", "--damping", "0.005", "--seconds", "10",
+                         "--velocity-filter-hz", "50", "--hand", "1e-3,2e-3,0.5", "--json").stdout)
+    r = zwidth.relay(zwidth.Model.load(table1_json), 4, 0.005, seconds=10, velocity_filter_hz=50,
+                     hand=(1e-3, 2e-3, 0.5))
+    for key in ("K_cr", "f_cr_hz", "K_cr_peak", "status", "relay_runs", "below_band"):
+        assert getattr(r, key) == ref[key], key
+    assert r.status == "refined"
+    assert abs(r.K_cr / ref["K_cr_exact"] - 1) < 1e-3
+
+
 def test_long_calls_release_the_gil():
     z = zwidth.ZWidth(zwidth.Model.table1(), T, 2)
     B = np.linspace(0, 0.1, 40000)
