@@ -75,8 +75,33 @@ class ZohResidual : public ceres::CostFunction {
     mutable_parameter_block_sizes()->push_back(p_);
   }
 
+  // Ceres' bounded trust region evaluates each accepted point three times
+  // (cost and gradient in its projected line search, cost as the candidate,
+  // then cost and Jacobian once accepted): the last evaluation is kept and
+  // reused when x is bitwise the same.
   bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
     const double* x = params[0];
+    const bool want_jac = jacobians != nullptr && jacobians[0] != nullptr;
+    const size_t nr = 2 * bins_->z.size();
+    if (cache_valid_ && std::equal(x, x + p_, cache_x_.begin()) && (!want_jac || cache_has_jac_)) {
+      if (!cache_ok_) return false;
+      std::copy(cache_r_.begin(), cache_r_.end(), residuals);
+      if (want_jac) std::copy(cache_j_.begin(), cache_j_.end(), jacobians[0]);
+      return true;
+    }
+    cache_x_.assign(x, x + p_);
+    cache_has_jac_ = want_jac;
+    cache_ok_ = EvaluateUncached(x, residuals, want_jac ? jacobians[0] : nullptr);
+    cache_valid_ = true;
+    if (cache_ok_) {
+      cache_r_.assign(residuals, residuals + nr);
+      if (want_jac) cache_j_.assign(jacobians[0], jacobians[0] + nr * p_);
+    }
+    return cache_ok_;
+  }
+
+ private:
+  bool EvaluateUncached(const double* x, double* residuals, double* jacobian) const {
     const int nb = static_cast<int>(bins_->z.size());
     ZohModalForm<double> f;
     {
@@ -85,7 +110,7 @@ class ZohResidual : public ceres::CostFunction {
       Physical(x, n_, &m, &b, &sec);
       if (!f.Build(m, b, sec.data(), n_, bins_->period_s)) return false;
     }
-    const bool want_j = jacobians != nullptr && jacobians[0] != nullptr;
+    const bool want_j = jacobian != nullptr;
     // Gradients of each coefficient with respect to x.
     std::vector<double> dI, dea, dca;
     std::vector<cd> dE, dC;  // [mode * p_ + param]
@@ -148,7 +173,7 @@ class ZohResidual : public ceres::CostFunction {
       residuals[2 * k + 1] = r.imag();
       if (want_j) {
         const cd scale = -w * bins_->delay[k];
-        double* row_re = jacobians[0] + (2 * k) * p_;
+        double* row_re = jacobian + (2 * k) * p_;
         double* row_im = row_re + p_;
         for (int q = 0; q < p_; ++q) {
           const cd jq = scale * grad[q];
@@ -161,9 +186,10 @@ class ZohResidual : public ceres::CostFunction {
     return true;
   }
 
- private:
   const Bins* bins_;
   int n_, p_;
+  mutable bool cache_valid_ = false, cache_has_jac_ = false, cache_ok_ = false;
+  mutable std::vector<double> cache_x_, cache_r_, cache_j_;
 };
 
 std::vector<double> ToLog(const Plant& p) {
@@ -332,6 +358,10 @@ std::optional<Plant> LinearRationalStart(const ident::FrequencyResponse& frf, in
   if (n < 1 || static_cast<int>(2 * nb) <= unknowns + 4) return std::nullopt;
   const double T = 1.0 / frf.sample_rate_hz;
   const double w0 = kTwoPi * frf.f_hz.back();
+  auto weight = [&](size_t k) {  // 1 / (w s_k): F = s H below has std w s_k
+    const double s = std::max(frf.H_std[k], 1e-3 * std::abs(frf.H[k]));
+    return (s > 0 && std::isfinite(s)) ? 1.0 / (kTwoPi * frf.f_hz[k] * s) : 0.0;
+  };
   // F = s H with the delay and the ZOH's half sample taken out: a strictly
   // proper rational N / D' in sigma = s / w0.
   std::vector<cd> F(nb), sig(nb);
@@ -340,8 +370,7 @@ std::optional<Plant> LinearRationalStart(const ident::FrequencyResponse& frf, in
     const double w = kTwoPi * frf.f_hz[k];
     sig[k] = cd(0.0, w / w0);
     F[k] = cd(0.0, w) * frf.H[k] * std::polar(1.0, w * T * (delay + 0.5));
-    const double s = std::max(frf.H_std[k], 1e-3 * std::abs(frf.H[k]));
-    wt[k] = (s > 0 && std::isfinite(s)) ? 1.0 / (w * s) : 0.0;
+    wt[k] = weight(k);
   }
   std::vector<double> den_prev(dd + 1, 0.0);
   den_prev[0] = 1.0;  // first pass: D'_prev = 1
@@ -412,7 +441,7 @@ std::optional<Plant> LinearRationalStart(const ident::FrequencyResponse& frf, in
   for (size_t k = 0; k < nb; ++k) {
     const double w = kTwoPi * frf.f_hz[k];
     const cd g1 = ContinuousResponse(p, w) * std::polar(1.0, -w * T * (delay + 0.5));
-    const double q = wt[k] * w;
+    const double q = weight(k) * w;
     num_m += q * q * (std::conj(g1) * frf.H[k]).real();
     den_m += q * q * std::norm(g1);
   }
@@ -508,6 +537,34 @@ std::vector<Plant> AutomaticStarts(const ident::FrequencyResponse& frf, int n, i
 
 namespace {
 
+// (J^T J)^-1 of the weighted residual at x, row-major p x p, as Ceres'
+// DENSE_SVD covariance computes it (null_space_rank 0: refused when
+// (sigma_min / sigma_max)^2 < 1e-14), but from the SVD of R of J = QR (p x p)
+// instead of the SVD of the tall J with its thin U: J and R have the same
+// singular values and right vectors. false when J is near rank deficient or
+// cannot be evaluated.
+bool LogCovariance(const Bins& bins, int n, const std::vector<double>& x, std::vector<double>* cov) {
+  const int p = 2 + 4 * n;
+  const int rows = 2 * static_cast<int>(bins.z.size());
+  if (rows < p) return false;
+  const ZohResidual cost(&bins, n);
+  std::vector<double> residuals(rows);
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(rows, p);
+  const double* params[] = {x.data()};
+  double* jacobians[] = {J.data()};
+  if (!cost.Evaluate(params, residuals.data(), jacobians)) return false;
+  Eigen::HouseholderQR<Eigen::MatrixXd> qr(J);
+  const Eigen::MatrixXd R = qr.matrixQR().topRows(p).triangularView<Eigen::Upper>();
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(R, Eigen::ComputeFullV);
+  const Eigen::VectorXd sv = svd.singularValues();
+  if (!(sv(0) > 0) || !sv.allFinite()) return false;
+  const double ratio = sv(p - 1) / sv(0);
+  if (ratio * ratio < 1e-14) return false;
+  const Eigen::MatrixXd C = svd.matrixV() * sv.cwiseAbs2().cwiseInverse().asDiagonal() * svd.matrixV().transpose();
+  cov->assign(C.data(), C.data() + p * p);  // symmetric: row- = column-major
+  return true;
+}
+
 struct SingleFit {
   bool converged = false;
   std::vector<double> x;
@@ -516,12 +573,11 @@ struct SingleFit {
   std::string message;
 };
 
-// Solves from the log-space parameters x (clamped into the box, then updated
-// in place) on a problem the caller owns, so that it can ask for the
-// covariance afterwards.
-SingleFit Solve(const Bins& bins, int n, std::vector<double>& xs, const FitOptions& o,
-                ceres::Problem& problem) {
+// Solves from the log-space parameters xs (clamped into the box, then updated
+// in place).
+SingleFit Solve(const Bins& bins, int n, std::vector<double>& xs, const FitOptions& o) {
   SingleFit out;
+  ceres::Problem problem;
   const double nyq_w = std::numbers::pi / bins.period_s;
   const double w_hi = std::log(o.max_frequency_fraction * nyq_w);
   const double w_lo = std::log(2.0 * std::numbers::pi * 1e-3);
@@ -558,6 +614,9 @@ SingleFit Solve(const Bins& bins, int n, std::vector<double>& xs, const FitOptio
   so.parameter_tolerance = 1e-9;
   so.logging_type = ceres::SILENT;
   so.num_threads = 1;
+  // The projected line search that bounds bring (every step) needs no
+  // gradient with quadratic interpolation: one Jacobian per iteration, not two.
+  so.line_search_interpolation_type = ceres::CUBIC;
   ceres::Solver::Summary sum;
   ceres::Solve(so, &problem, &sum);
   out.converged = sum.termination_type == ceres::CONVERGENCE && sum.IsSolutionUsable();
@@ -660,8 +719,7 @@ Fixed FitFixed(const ident::FrequencyResponse& sub, const FitOptions& o, int n, 
     for (const Plant& s : starts) {
       ++res.starts_tried;
       std::vector<double> xs = ToLog(s);
-      ceres::Problem screen_problem;
-      const SingleFit f = Solve(coarse, n, xs, screen, screen_problem);
+      const SingleFit f = Solve(coarse, n, xs, screen);
       res.iterations += f.iterations;
       best_here = std::min(best_here, f.cost);
       if (std::isfinite(f.cost)) screened.push_back({f, d});
@@ -700,31 +758,25 @@ Fixed FitFixed(const ident::FrequencyResponse& sub, const FitOptions& o, int n, 
   // Converge from the best screened point and from the runners-up whose
   // screened cost is within o.runner_up_cost_ratio of it (at most
   // o.max_converged_starts in all): eight iterations on a sixth of the bins do
-  // not always rank nearby basins right (closely spaced modes). The problem of
-  // the winner is kept for the covariance.
+  // not always rank nearby basins right (closely spaced modes).
   std::sort(screened.begin(), screened.end(), [](const auto& a, const auto& b) { return a.first.cost < b.first.cost; });
-  std::vector<std::unique_ptr<ceres::Problem>> problems;
-  std::vector<std::unique_ptr<std::vector<double>>> xs_final;
-  std::vector<std::unique_ptr<Bins>> bins_final;
+  Bins bins;
   SingleFit fin;
-  int win = -1;
-  for (size_t i = 0; i < screened.size() && static_cast<int>(problems.size()) < o.max_converged_starts; ++i) {
+  int converged_starts = 0;
+  for (size_t i = 0; i < screened.size() && converged_starts < o.max_converged_starts; ++i) {
     if (i > 0 && screened[i].first.cost > o.runner_up_cost_ratio * screened[0].first.cost) break;
-    bins_final.push_back(std::make_unique<Bins>(MakeBins(sub, screened[i].second, o.relative_std_floor)));
-    problems.push_back(std::make_unique<ceres::Problem>());
-    xs_final.push_back(std::make_unique<std::vector<double>>(screened[i].first.x));
-    const SingleFit f = Solve(*bins_final.back(), n, *xs_final.back(), o, *problems.back());
+    ++converged_starts;
+    Bins here = MakeBins(sub, screened[i].second, o.relative_std_floor);
+    std::vector<double> xs = screened[i].first.x;
+    const SingleFit f = Solve(here, n, xs, o);
     res.iterations += f.iterations;
-    if (win < 0 || (f.converged && !fin.converged) || (f.converged == fin.converged && f.cost < fin.cost)) {
+    if (i == 0 || (f.converged && !fin.converged) || (f.converged == fin.converged && f.cost < fin.cost)) {
       fin = f;
-      win = static_cast<int>(problems.size()) - 1;
+      bins = std::move(here);
       best_delay = screened[i].second;
     }
   }
-  const Bins& bins = *bins_final[win];
-  ceres::Problem& problem = *problems[win];
-  std::vector<double>& x = *xs_final[win];
-  res.iterations += fin.iterations;
+  const std::vector<double>& x = fin.x;
   res.status = fin.converged ? FitStatus::kConverged : FitStatus::kNoConvergence;
   res.message = fin.message;
   res.cost = fin.cost;
@@ -735,42 +787,32 @@ Fixed FitFixed(const ident::FrequencyResponse& sub, const FitOptions& o, int n, 
   res.chi2_per_dof = 2.0 * res.cost / dof;
   res.std_scale = res.chi2_per_dof * std::max(1.0, sub.bin_correlation);
 
-  // Standard errors: Ceres covariance in log space, scaled, then the delta
+  // Standard errors: covariance in log space (LogCovariance), scaled, then the delta
   // method to (m, b, w, c, v, d).
   res.std_errors = res.plant;
   const double inf = std::numeric_limits<double>::infinity();
   res.std_errors.m = res.std_errors.b = inf;
   for (Mode& md : res.std_errors.modes) md = {inf, inf, inf, inf};
   std::vector<double> fit_cov;  // scaled, in the solver's log space
-  {
-    ceres::Covariance::Options co;
-    co.algorithm_type = ceres::DENSE_SVD;
-    co.null_space_rank = 0;
-    co.min_reciprocal_condition_number = 1e-14;
-    ceres::Covariance cov(co);
-    std::vector<std::pair<const double*, const double*>> blocks = {{x.data(), x.data()}};
-    if (cov.Compute(blocks, &problem)) {
-      std::vector<double> S(p * p);
-      cov.GetCovarianceBlock(x.data(), x.data(), S.data());
-      auto s = [&](int i, int j) { return S[i * p + j] * res.std_scale; };
-      res.covariance_ok = true;
-      fit_cov.resize(S.size());
-      for (size_t k = 0; k < S.size(); ++k) fit_cov[k] = S[k] * res.std_scale;
-      res.std_errors.m = res.plant.m * std::sqrt(s(0, 0));
-      res.std_errors.b = res.plant.b * std::sqrt(s(1, 1));
-      for (int i = 0; i < n; ++i) {
-        const int w = 2 + 4 * i, zc = 3 + 4 * i, v = 4 + 4 * i, zd = 5 + 4 * i;
-        Mode& e = res.std_errors.modes[i];
-        const Mode& m = res.plant.modes[i];
-        e.omega = m.omega * std::sqrt(s(w, w));
-        e.c = m.c * std::sqrt(std::max(0.0, s(zc, zc) + s(w, w) + 2 * s(zc, w)));
-        e.v = m.v * std::sqrt(s(v, v));
-        e.d = m.d * std::sqrt(std::max(0.0, s(zd, zd) + s(v, v) + 2 * s(zd, v)));
-      }
-    } else {
-      res.warnings.push_back("the covariance could not be computed (the Jacobian is rank deficient): "
-                             "some parameters are not identifiable from this response; std set to inf");
+  if (std::vector<double> S; LogCovariance(bins, n, x, &S)) {
+    auto s = [&](int i, int j) { return S[i * p + j] * res.std_scale; };
+    res.covariance_ok = true;
+    fit_cov.resize(S.size());
+    for (size_t k = 0; k < S.size(); ++k) fit_cov[k] = S[k] * res.std_scale;
+    res.std_errors.m = res.plant.m * std::sqrt(s(0, 0));
+    res.std_errors.b = res.plant.b * std::sqrt(s(1, 1));
+    for (int i = 0; i < n; ++i) {
+      const int w = 2 + 4 * i, zc = 3 + 4 * i, v = 4 + 4 * i, zd = 5 + 4 * i;
+      Mode& e = res.std_errors.modes[i];
+      const Mode& m = res.plant.modes[i];
+      e.omega = m.omega * std::sqrt(s(w, w));
+      e.c = m.c * std::sqrt(std::max(0.0, s(zc, zc) + s(w, w) + 2 * s(zc, w)));
+      e.v = m.v * std::sqrt(s(v, v));
+      e.d = m.d * std::sqrt(std::max(0.0, s(zd, zd) + s(v, v) + 2 * s(zd, v)));
     }
+  } else {
+    res.warnings.push_back("the covariance could not be computed (the Jacobian is rank deficient): "
+                           "some parameters are not identifiable from this response; std set to inf");
   }
   // Diagnostics in the measured units.
   {
