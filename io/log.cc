@@ -19,6 +19,7 @@
 
 #include "io/atomic_file.h"
 #include "io/h5_safety.h"
+#include "io/io_internal.h"
 #include "io/isolated.h"
 #include "model/error.h"
 
@@ -210,13 +211,8 @@ void Split(std::string_view sv, const Delim& d, std::vector<std::string_view>* o
     }
     return;
   }
-  size_t start = 0;
-  while (true) {
-    const size_t p = sv.find(d.c, start);
-    out->push_back(TrimView(sv.substr(start, p == std::string_view::npos ? sv.npos : p - start)));
-    if (p == std::string_view::npos) break;
-    start = p + 1;
-  }
+  internal::SplitFields(sv, d.c, out);
+  for (std::string_view& f : *out) f = TrimView(f);
   // A trailing delimiter (spreadsheet exports) ends the row, it adds no field.
   if (out->size() > 1 && out->back().empty()) out->pop_back();
 }
@@ -1010,13 +1006,10 @@ void WriteHdf5Log(const std::string& tmp, double rate, const std::vector<double>
     H5::Group go = file.createGroup("/output");
     write(gi, "torque", u, "N m");
     write(go, "position", y, "rad");
-    H5::Attribute a = root.createAttribute("sample_rate_hz", H5::PredType::IEEE_F64LE,
-                                           H5::DataSpace(H5S_SCALAR));
-    a.write(H5::PredType::NATIVE_DOUBLE, &rate);
+    internal::WriteDoubleAttr(root, "sample_rate_hz", rate);
     WriteStringAttr(root, "sample_rate_units", "Hz");
     // Closed here, inside the try: an error at flush or close (a full disk)
     // must fail the write, not vanish in a destructor.
-    a.close();
     gi.close();
     go.close();
     root.close();
