@@ -267,19 +267,28 @@ double TimeScale(const std::string& unit) {
   throw InputError("--time-unit '" + unit.substr(0, 20) + "' is not one of s, ms, us");
 }
 
-LogInfo StreamCsv(const std::string& path, const LogSelect& sel, const LogSink& sink) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open log file (does it exist?)");
-  const double time_scale = TimeScale(sel.time_unit);
-  LineReader reader(in, path);
-  std::string line;
-  std::vector<std::string_view> fields;
+// A line of a text log's preamble.
+struct CsvPreLine { size_t no; std::string text; bool comment; };
 
-  // 1. Preamble: comment, blank and other lines up to the first data line.
-  struct Pre { size_t no; std::string text; bool comment; };
-  std::optional<Pre> last;  // the last non-blank line before the data
+// What the preamble of a text log says: its last non-blank line before the
+// data (the header candidate) and the delimiter that splits the first data
+// line (in *line, split into *fields) into numbers.
+struct CsvPreamble {
+  std::optional<CsvPreLine> last;
+  std::optional<Delim> delim;
+};
+
+// Reads comment, blank and other lines up to the first data line.
+CsvPreamble ReadPreamble(LineReader& reader, const std::string& path, const LogSelect& sel, std::string* line_ptr,
+                         std::vector<std::string_view>* fields_ptr) {
+  CsvPreamble result;
+  CsvPreamble* out = &result;
+  std::string& line = *line_ptr;
+  std::vector<std::string_view>& fields = *fields_ptr;
   size_t skipped = 0;       // non-blank lines before it
-  std::optional<Delim> delim = GivenDelim(sel.delimiter);
+  std::optional<Delim>& delim = out->delim;
+  std::optional<CsvPreLine>& last = out->last;
+  delim = GivenDelim(sel.delimiter);
   bool found = false;
   while (reader.Next(&line)) {
     if (reader.line_no() == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);  // UTF-8 BOM
@@ -312,7 +321,7 @@ LogInfo StreamCsv(const std::string& path, const LogSelect& sel, const LogSink& 
       }
     }
     if (last) ++skipped;
-    last = Pre{reader.line_no(), line, IsComment(line)};
+    last = CsvPreLine{reader.line_no(), line, IsComment(line)};
     if (reader.line_no() > kMaxPreambleLines) {
       throw InputError(path + ": no numeric data row in the first " + std::to_string(kMaxPreambleLines) +
                        " lines (line " + std::to_string(reader.line_no()) + ": " + Shown(line) + "); not a text log?");
@@ -324,16 +333,20 @@ LogInfo StreamCsv(const std::string& path, const LogSelect& sel, const LogSink& 
                      Shown(last->text) + ")" +
                      (sel.delimiter.empty() ? "" : "; is --delimiter " + sel.delimiter + " right?"));
   }
-  const size_t first_data = reader.line_no();
-  const size_t ncols = fields.size();
-  const std::vector<double> first_values = [&] {
-    std::vector<double> v(ncols);
-    for (size_t i = 0; i < ncols; ++i) ParseNumber(fields[i], &v[i]);
-    return v;
-  }();
+  return result;
+}
 
-  // 2. Header: the last line before the data, comment mark stripped, when it
-  // has as many fields as the data.
+// The column names (from the header: the last line before the data, comment
+// mark stripped, when it has as many fields as the data) and the layout
+// sentence that every message about the file quotes.
+struct CsvHeader {
+  std::vector<std::string> names;
+  std::string layout;
+};
+
+CsvHeader ReadHeader(const std::optional<CsvPreLine>& last, const Delim& delim_value, size_t ncols,
+                     size_t first_data, const std::string& path) {
+  const std::optional<Delim> delim = delim_value;
   std::vector<std::string> names;
   size_t header_line = 0;
   bool header_comment = false;
@@ -369,22 +382,95 @@ LogInfo StreamCsv(const std::string& path, const LogSelect& sel, const LogSink& 
   }
   layout += ", data from line " + std::to_string(first_data);
 
-  auto find_col = [&](const std::string& spec, bool required, const char* flag) -> int {
-    if (!required && (spec.empty() || spec == "none")) return -1;
-    for (size_t i = 0; i < names.size(); ++i) if (names[i] == spec) return static_cast<int>(i);
-    int match = -1, count = 0;
-    for (size_t i = 0; i < names.size(); ++i) {
-      if (Lower(names[i]) == Lower(spec)) { match = static_cast<int>(i); ++count; }
+  return {names, layout};
+}
+
+// The column that spec names (exact name, then a unique case-insensitive
+// match, then a position from 1); -1 when absent and not required.
+int FindColumn(const std::string& spec, bool required, const char* flag, const std::vector<std::string>& names,
+               size_t ncols, const std::string& path, const std::string& layout) {
+  if (!required && (spec.empty() || spec == "none")) return -1;
+  for (size_t i = 0; i < names.size(); ++i) if (names[i] == spec) return static_cast<int>(i);
+  int match = -1, count = 0;
+  for (size_t i = 0; i < names.size(); ++i) {
+    if (Lower(names[i]) == Lower(spec)) { match = static_cast<int>(i); ++count; }
+  }
+  if (count == 1) return match;
+  const int pos = Position(spec);
+  if (pos >= 1 && static_cast<size_t>(pos) <= ncols) return pos - 1;
+  if (!required) return -1;
+  std::string msg = path + ": no column '" + spec.substr(0, 40) + "' (" + layout + "); ";
+  if (pos > 0) msg += "position " + std::to_string(pos) + " is past the last column; ";
+  msg += std::string("choose with ") + flag + " NAME or a position 1.." + std::to_string(ncols);
+  if (std::string(flag) == "--time-column") msg += ", or --time-column none with --rate";
+  throw InputError(msg);
+}
+
+// The sample rate: --rate (with a warning when the time column disagrees),
+// or the time column's (refused when implausible for a device log).
+void ResolveRate(const std::string& path, const LogSelect& sel, const TimeChecker& times, int ct, size_t rows,
+                 const std::string& time_col_name, LogInfo* out) {
+  LogInfo& info = *out;
+  const bool rate_given = sel.sample_rate_hz > 0.0;
+  if (rate_given) {
+    info.sample_rate_hz = sel.sample_rate_hz;
+    if (ct >= 0 && rows >= 2) {
+      const double T = 1.0 / sel.sample_rate_hz;
+      const double jitter = std::max(std::abs(times.MaxInterval() - T), std::abs(times.MinInterval() - T));
+      std::ostringstream os;
+      os.precision(3);
+      os << "--rate " << std::to_string(sel.sample_rate_hz).substr(0, 12) << " Hz used; the time column's intervals deviate from 1/rate by up to "
+         << jitter << " s (" << 100.0 * jitter / T << " % of an interval)";
+      const double tr = times.Rate();
+      if (std::abs(tr - sel.sample_rate_hz) > 0.01 * sel.sample_rate_hz) {
+        os << " and imply " << tr << " Hz on average: check --rate";
+      }
+      if (jitter > 1e-6 * T) info.warnings.push_back(os.str());
     }
-    if (count == 1) return match;
-    const int pos = Position(spec);
-    if (pos >= 1 && static_cast<size_t>(pos) <= ncols) return pos - 1;
-    if (!required) return -1;
-    std::string msg = path + ": no column '" + spec.substr(0, 40) + "' (" + layout + "); ";
-    if (pos > 0) msg += "position " + std::to_string(pos) + " is past the last column; ";
-    msg += std::string("choose with ") + flag + " NAME or a position 1.." + std::to_string(ncols);
-    if (std::string(flag) == "--time-column") msg += ", or --time-column none with --rate";
-    throw InputError(msg);
+  } else {
+    info.sample_rate_hz = times.Rate();
+    if (!(info.sample_rate_hz > 0.0) || !std::isfinite(info.sample_rate_hz)) {
+      throw InputError(path + ": cannot tell the sample rate (fewer than 2 rows?); pass --rate");
+    }
+    if (sel.time_unit.empty() && (info.sample_rate_hz < 10.0 || info.sample_rate_hz > 1e6)) {
+      std::ostringstream os;
+      os.precision(4);
+      os << path << ": the time " << time_col_name << " implies a sample rate of " << info.sample_rate_hz
+         << " Hz (mean interval " << 1.0 / info.sample_rate_hz << " s), implausible for a device log: ";
+      if (info.sample_rate_hz * 1e3 >= 10.0 && info.sample_rate_hz * 1e3 <= 1e6) {
+        os << "is it in milliseconds? pass --time-unit ms (" << info.sample_rate_hz * 1e3 << " Hz)";
+      } else if (info.sample_rate_hz * 1e6 >= 10.0 && info.sample_rate_hz * 1e6 <= 1e6) {
+        os << "is it in microseconds? pass --time-unit us (" << info.sample_rate_hz * 1e6 << " Hz)";
+      } else {
+        os << "is it a sample index or another quantity? choose the time column with --time-column, or give --rate";
+      }
+      os << "; --time-unit s accepts it as is";
+      throw InputError(os.str());
+    }
+  }
+}
+
+LogInfo StreamCsv(const std::string& path, const LogSelect& sel, const LogSink& sink) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open log file (does it exist?)");
+  const double time_scale = TimeScale(sel.time_unit);
+  LineReader reader(in, path);
+  std::string line;
+  std::vector<std::string_view> fields;
+  const CsvPreamble pre = ReadPreamble(reader, path, sel, &line, &fields);
+  const std::optional<Delim> delim = pre.delim;
+  const size_t first_data = reader.line_no();
+  const size_t ncols = fields.size();
+  const std::vector<double> first_values = [&] {
+    std::vector<double> v(ncols);
+    for (size_t i = 0; i < ncols; ++i) ParseNumber(fields[i], &v[i]);
+    return v;
+  }();
+  const CsvHeader header = ReadHeader(pre.last, *delim, ncols, first_data, path);
+  const std::vector<std::string>& names = header.names;
+  std::string layout = header.layout;
+  auto find_col = [&](const std::string& spec, bool required, const char* flag) {
+    return FindColumn(spec, required, flag, names, ncols, path, layout);
   };
   const int ci = find_col(sel.input_column, true, "--input-column");
   const int co = find_col(sel.output_column, true, "--output-column");
@@ -448,42 +534,7 @@ LogInfo StreamCsv(const std::string& path, const LogSelect& sel, const LogSink& 
   info.source = path;
   info.num_samples = rows;
   info.layout = layout;
-  if (rate_given) {
-    info.sample_rate_hz = sel.sample_rate_hz;
-    if (ct >= 0 && rows >= 2) {
-      const double T = 1.0 / sel.sample_rate_hz;
-      const double jitter = std::max(std::abs(times.MaxInterval() - T), std::abs(times.MinInterval() - T));
-      std::ostringstream os;
-      os.precision(3);
-      os << "--rate " << std::to_string(sel.sample_rate_hz).substr(0, 12) << " Hz used; the time column's intervals deviate from 1/rate by up to "
-         << jitter << " s (" << 100.0 * jitter / T << " % of an interval)";
-      const double tr = times.Rate();
-      if (std::abs(tr - sel.sample_rate_hz) > 0.01 * sel.sample_rate_hz) {
-        os << " and imply " << tr << " Hz on average: check --rate";
-      }
-      if (jitter > 1e-6 * T) info.warnings.push_back(os.str());
-    }
-  } else {
-    info.sample_rate_hz = times.Rate();
-    if (!(info.sample_rate_hz > 0.0) || !std::isfinite(info.sample_rate_hz)) {
-      throw InputError(path + ": cannot tell the sample rate (fewer than 2 rows?); pass --rate");
-    }
-    if (sel.time_unit.empty() && (info.sample_rate_hz < 10.0 || info.sample_rate_hz > 1e6)) {
-      std::ostringstream os;
-      os.precision(4);
-      os << path << ": the time " << col_name(ct) << " implies a sample rate of " << info.sample_rate_hz
-         << " Hz (mean interval " << 1.0 / info.sample_rate_hz << " s), implausible for a device log: ";
-      if (info.sample_rate_hz * 1e3 >= 10.0 && info.sample_rate_hz * 1e3 <= 1e6) {
-        os << "is it in milliseconds? pass --time-unit ms (" << info.sample_rate_hz * 1e3 << " Hz)";
-      } else if (info.sample_rate_hz * 1e6 >= 10.0 && info.sample_rate_hz * 1e6 <= 1e6) {
-        os << "is it in microseconds? pass --time-unit us (" << info.sample_rate_hz * 1e6 << " Hz)";
-      } else {
-        os << "is it a sample index or another quantity? choose the time column with --time-column, or give --rate";
-      }
-      os << "; --time-unit s accepts it as is";
-      throw InputError(os.str());
-    }
-  }
+  ResolveRate(path, sel, times, ct, rows, ct >= 0 ? col_name(ct) : std::string(), &info);
   return info;
 }
 
