@@ -10,6 +10,7 @@
 // log zeta_c, log v, log zeta_d (c = 2 zeta_c w, d = 2 zeta_d v), with bounds.
 #pragma once
 
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -138,23 +139,12 @@ struct FitResult {
 // Nyquist unknown). A fit that does not converge returns kNoConvergence.
 FitResult FitModel(const ident::FrequencyResponse& frf, const FitOptions& options);
 
-// The automatic starting points tried by FitModel (exposed for tests).
-std::vector<Plant> AutomaticStarts(const ident::FrequencyResponse& frf, int num_modes,
-                                   int delay_samples, int max_starts);
-
 // Reasons the fitted sections may be spurious: a pole that its nearest zero
 // cancels (|N/D - 1| < 0.05 at s = j omega, or < 0.5 with the two frequencies
 // within 2 % and within two std of each other), a damping ratio at its bound, a
 // std larger than the value, a section outside the used band. Sections are
 // named as printed: canonical order, from 1.
 std::vector<std::string> SpuriousSections(const FitResult& r, const FitOptions& o);
-
-// A start from a linear rational fit (Sanathanan & Koerner 1963: `iterations`
-// reweighted linear least-squares passes of N(s) - s H(s) D'(s), the delay and
-// the ZOH's half sample taken out), factored into eq. (1). nullopt when the
-// rational fit has real poles or zeros that do not pair into n sections.
-std::optional<Plant> LinearRationalStart(const ident::FrequencyResponse& frf, int num_modes, int delay_samples,
-                                         int iterations = 6);
 
 // Sorts pole pairs by omega and zero pairs by v (G is unchanged); permutes
 // std_errors alike when given.

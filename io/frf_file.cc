@@ -12,6 +12,7 @@
 
 #include "io/atomic_file.h"
 #include "io/h5_safety.h"
+#include "io/io_internal.h"
 #include "io/isolated.h"
 #include "io/log.h"
 #include "model/error.h"
@@ -57,11 +58,7 @@ void WriteH5(const std::string& tmp, const ident::FrequencyResponse& r) {
     put("coherence", r.coherence); put("H_std", r.H_std); put("S_uu", r.S_uu); put("S_yy", r.S_yy);
     if (r.used_by_fit.size() == n) put("used_by_fit", std::vector<double>(r.used_by_fit.begin(), r.used_by_fit.end()));
     H5::Group root = file.openGroup("/");
-    auto attr = [&](const char* name, double v) {
-      H5::Attribute a = root.createAttribute(name, H5::PredType::IEEE_F64LE, H5::DataSpace(H5S_SCALAR));
-      a.write(H5::PredType::NATIVE_DOUBLE, &v);
-      a.close();
-    };
+    auto attr = [&](const char* name, double v) { internal::WriteDoubleAttr(root, name, v); };
     attr("sample_rate_hz", r.sample_rate_hz);
     attr("num_averages", r.num_averages);
     attr("effective_averages", r.effective_averages);
@@ -104,21 +101,16 @@ ident::FrequencyResponse ReadCsv(const std::string& path) {
   if (!std::getline(in, line)) throw InputError(path + ": empty file");
   std::map<std::string, int> col;
   size_t num_columns = 0;
-  {
-    size_t start = 0;
-    int idx = 0;
-    while (true) {
-      size_t c = line.find(',', start);
-      std::string name = line.substr(start, c == std::string::npos ? std::string::npos : c - start);
-      while (!name.empty() && (name.back() == '\r' || name.back() == ' ')) name.pop_back();
-      if (!col.emplace(name, idx++).second) {
-        throw InputError(path + ": line 1: column '" + name + "' appears twice in the header; "
-                         "each column name must be unique");
-      }
-      ++num_columns;
-      if (c == std::string::npos) break;
-      start = c + 1;
+  std::vector<std::string_view> fields;
+  internal::SplitFields(line, ',', &fields);
+  for (std::string_view f : fields) {
+    std::string name(f);
+    while (!name.empty() && (name.back() == '\r' || name.back() == ' ')) name.pop_back();
+    if (!col.emplace(name, static_cast<int>(num_columns)).second) {
+      throw InputError(path + ": line 1: column '" + name + "' appears twice in the header; "
+                       "each column name must be unique");
     }
+    ++num_columns;
   }
   for (const char* need : {"f_hz", "H_re", "H_im"}) {
     if (!col.count(need)) throw InputError(path + ": no column '" + std::string(need) + "' in the header");
@@ -140,19 +132,15 @@ ident::FrequencyResponse ReadCsv(const std::string& path) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.empty()) continue;
     v.clear();
-    size_t start = 0;
-    while (true) {
-      size_t c = line.find(',', start);
-      const size_t end = c == std::string::npos ? line.size() : c;
+    internal::SplitFields(line, ',', &fields);
+    for (std::string_view f : fields) {
       double x = 0.0;
-      auto [p, ec] = std::from_chars(line.data() + start, line.data() + end, x);
-      if (ec != std::errc() || p != line.data() + end) {
+      auto [p, ec] = std::from_chars(f.data(), f.data() + f.size(), x);
+      if (ec != std::errc() || p != f.data() + f.size()) {
         throw InputError(path + ": line " + std::to_string(line_no) + ", field " +
                          std::to_string(v.size() + 1) + ": not a number");
       }
       v.push_back(x);
-      if (c == std::string::npos) break;
-      start = c + 1;
     }
     if (v.size() != num_columns) {
       throw InputError(path + ": line " + std::to_string(line_no) + " has " + std::to_string(v.size()) +

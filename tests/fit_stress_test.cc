@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "fit/fit.h"
+#include "fit/fit_internal.h"
 #include "ident/welch.h"
 #include "model/simulate.h"
 #include "stability/zwidth.h"
@@ -156,7 +157,7 @@ TEST(FitStress, HundredRandomDevicesNoWrongMinimumAndKcrWithinFivePercent) {
     const bool k_ok = std::abs(k_fit / k_true - 1) < 0.05;
     kcr_ok += k_ok;
     if (std::getenv("ZW_DIAG") && (is_wrong || !k_ok)) {
-      auto sk = LinearRationalStart(frf, o.num_modes, 0);
+      auto sk = internal::LinearRationalStart(frf, o.num_modes, 0);
       std::printf("  truth:");
       for (auto& md : p.modes) std::printf(" [%.1f %.3f %.1f %.3f]", md.omega / 6.283, md.c / (2 * md.omega), md.v / 6.283, md.d / (2 * md.v));
       std::printf("\n  fit:  ");

@@ -1,0 +1,173 @@
+// The quality verdict of a converged fit (FitResult::quality) and the
+// spurious-section tests shared with the order search.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "fit/fit_internal.h"
+
+namespace zwidth::fit {
+namespace internal {
+
+std::string Fmt(const char* fmt, double a, double b, double c, double d) {
+  char s[300];
+  std::snprintf(s, sizeof s, fmt, a, b, c, d);
+  return s;
+}
+
+// chi2/dof above which the model does not explain the response: 1.5 (on
+// correct models with >= 8 averages chi2/dof is 1.0-1.4, the per-bin std
+// being estimated from the same averages) plus 4 standard deviations of
+// chi2/dof for correlated bins, 4 sqrt(2 kappa / dof).
+double Chi2Limit(const FitResult& r, double kappa) {
+  const int dof = std::max(1, r.num_residuals - r.num_parameters);
+  return 1.5 + 4.0 * std::sqrt(2.0 * std::max(1.0, kappa) / dof);
+}
+
+// The quality tests (see FitResult::quality).
+void JudgeQuality(const Fixed& fx, const ident::FrequencyResponse& sub, const FitOptions& o, FitResult* res) {
+  auto add = [&](std::string code, std::string msg, std::string advice) {
+    res->reasons.push_back({std::move(code), std::move(msg), std::move(advice)});
+  };
+  const double kappa = std::max(1.0, sub.bin_correlation);
+  const double chi_limit = Chi2Limit(*res, sub.bin_correlation);
+  if (res->chi2_per_dof > chi_limit) {
+    add("chi2_per_dof", Fmt("chi2/dof %.3g is above %.3g: the model does not explain the response within its std",
+                            res->chi2_per_dof, chi_limit),
+        "try more modes (--modes auto), --delay-samples auto, or a band where the device is linear (--fmin/--fmax)");
+  }
+  // Runs test on every 3rd bin (Hann bins 3 apart are uncorrelated).
+  const int stride = kappa > 1.2 ? 3 : 1;
+  double z_min = 0;
+  for (int part = 0; part < 2; ++part) {
+    int n1 = 0, n2 = 0, runs = 0, last = 0;
+    for (size_t k = 0; k < fx.r.size(); k += stride) {
+      const double v = part == 0 ? fx.r[k].real() : fx.r[k].imag();
+      const int s = v >= 0 ? 1 : -1;
+      (s > 0 ? n1 : n2)++;
+      if (s != last) ++runs;
+      last = s;
+    }
+    const double nn = n1 + n2;
+    if (n1 < 2 || n2 < 2) { z_min = std::min(z_min, -10.0); continue; }
+    const double mu = 2.0 * n1 * n2 / nn + 1.0;
+    const double var = (mu - 1.0) * (mu - 2.0) / (nn - 1.0);
+    if (var > 0) z_min = std::min(z_min, (runs - mu) / std::sqrt(var));
+  }
+  res->runs_z = z_min;
+  if (z_min < -4.0) {
+    add("residual_runs", Fmt("the residual has long runs of one sign (runs test z = %.3g < -4): systematic misfit", z_min),
+        "the model misses a feature of the response: more modes (--modes auto), a delay (--delay-samples auto)");
+  }
+  // Misfit concentrated in one octave.
+  if (!fx.r.empty()) {
+    const double f0 = fx.f_hz.front();
+    const int nbands = std::max(1, static_cast<int>(std::ceil(std::log2(fx.f_hz.back() / f0 + 1e-12))));
+    std::vector<double> s2(nbands + 1, 0.0);
+    std::vector<int> cnt(nbands + 1, 0);
+    double tot = 0;
+    for (size_t k = 0; k < fx.r.size(); ++k) {
+      const int b = std::clamp(static_cast<int>(std::floor(std::log2(fx.f_hz[k] / f0))), 0, nbands);
+      s2[b] += std::norm(fx.r[k]);
+      cnt[b] += 1;
+      tot += std::norm(fx.r[k]);
+    }
+    int worst = -1;
+    double worst_chi = 0, rest_chi = 0;
+    for (int b = 0; b <= nbands; ++b) {
+      if (cnt[b] < 8 || cnt[b] == static_cast<int>(fx.r.size())) continue;
+      const double c = s2[b] / (2.0 * cnt[b]);
+      const double rest = (tot - s2[b]) / (2.0 * (fx.r.size() - cnt[b]));
+      if (c > 4.0 && c > 3.0 * rest && c > worst_chi) { worst = b; worst_chi = c; rest_chi = rest; }
+    }
+    if (worst >= 0) {
+      const double a = f0 * std::exp2(worst), b = std::min(f0 * std::exp2(worst + 1), fx.f_hz.back());
+      res->misfit_band_hz = {a, b};
+      add("misfit_band", Fmt("the misfit is concentrated in %.4g-%.4g Hz (chi2/dof %.3g there, %.3g elsewhere)", a, b,
+                             worst_chi, rest_chi),
+          "a mode there is missing or wrong: more modes, or leave that band out (--fmin/--fmax)");
+    }
+  }
+  if (sub.num_averages < o.min_averages) {
+    add("few_averages", "the response averages " + std::to_string(sub.num_averages) +
+                            " Welch segment(s): its per-bin std, hence the weights and the standard errors, mean little",
+        "record a longer log or use a shorter --window-length");
+  }
+  for (const std::string& s : SpuriousSections(*res, o)) {
+    const bool bound = s.find("bound") != std::string::npos;
+    add(bound ? "parameter_at_bound" : "spurious_section", s,
+        bound ? "the data may not support this many modes: fewer modes (--modes auto)"
+              : "fewer modes (--modes auto) or a wider band");
+  }
+}
+
+}  // namespace internal
+
+using namespace internal;
+
+std::string ToString(FitQuality q) {
+  switch (q) {
+    case FitQuality::kNotJudged: return "not judged";
+    case FitQuality::kGood: return "good";
+    case FitQuality::kPoor: return "poor";
+  }
+  return "?";
+}
+
+std::vector<std::string> SpuriousSections(const FitResult& r, const FitOptions& o) {
+  std::vector<std::string> out;
+  const Plant& p = r.plant;
+  const double nyq_w = std::numbers::pi * r.band_sample_rate_hz;
+  for (size_t i = 0; i < p.modes.size(); ++i) {
+    const std::string name = "section " + std::to_string(i + 1);
+    const Mode& md = p.modes[i];
+    // Nearest zero to this pole.
+    size_t j = 0;
+    for (size_t q = 1; q < p.modes.size(); ++q) {
+      if (std::abs(std::log(p.modes[q].v / md.omega)) < std::abs(std::log(p.modes[j].v / md.omega))) j = q;
+    }
+    const Mode& mz = p.modes[j];
+    const cd s(0.0, md.omega);
+    const cd ratio = (s * s + mz.d * s + mz.v * mz.v) / (s * s + md.c * s + md.omega * md.omega);
+    // Cancelled: the pair changes G by less than 5 % at the pole, or by less
+    // than 50 % with the two frequencies within 2 % and within two standard
+    // deviations of each other (a lightly damped pair that only fits noise).
+    bool same_frequency = false;
+    if (r.std_errors.modes.size() == p.modes.size()) {
+      const double sw = r.std_errors.modes[i].omega, sv = r.std_errors.modes[j].v;
+      same_frequency = std::abs(ratio - 1.0) < 0.5 && std::abs(md.omega - mz.v) < 0.02 * md.omega &&
+                       std::abs(md.omega - mz.v) < 2.0 * std::sqrt(sw * sw + sv * sv);
+    }
+    if (std::abs(ratio - 1.0) < 0.05 || same_frequency) {
+      out.push_back(name + Fmt(": its pole at %.4g Hz is cancelled by the zero at %.4g Hz", md.omega / kHz, mz.v / kHz));
+    }
+    const double zc = md.c / (2 * md.omega), zd = md.d / (2 * md.v);
+    if (zc > 0.999 * o.max_pole_damping_ratio || zc < 1.001 * o.min_damping_ratio) {
+      out.push_back(name + Fmt(": the pole damping ratio %.3g is at its bound", zc));
+    }
+    if (zd > 0.999 * o.max_zero_damping_ratio || zd < 1.001 * o.min_damping_ratio) {
+      out.push_back(name + Fmt(": the zero damping ratio %.3g is at its bound", zd));
+    }
+    if (nyq_w > 0 && (md.omega > 0.999 * o.max_frequency_fraction * nyq_w || md.v > 0.999 * o.max_frequency_fraction * nyq_w)) {
+      out.push_back(name + ": a frequency is at its bound (near Nyquist)");
+    }
+    if (r.std_errors.modes.size() == p.modes.size()) {
+      const Mode& e = r.std_errors.modes[i];
+      if (!(e.omega < md.omega && e.c < md.c && e.v < md.v && e.d < md.d)) {
+        out.push_back(name + ": a parameter's std is larger than its value (or unknown)");
+      }
+    }
+    if (r.band.num_used > 0) {
+      const double lo = kHz * r.band.f_lo_hz / 1.05, hi = kHz * r.band.f_hi_hz * 1.05;
+      if (md.omega < lo || md.omega > hi || md.v < lo || md.v > hi) {
+        out.push_back(name + Fmt(": pole %.4g Hz or zero %.4g Hz is outside the used band", md.omega / kHz, md.v / kHz));
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace zwidth::fit

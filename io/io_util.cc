@@ -1,0 +1,24 @@
+#include <H5Cpp.h>
+
+#include "io/io_internal.h"
+
+namespace zwidth::io::internal {
+
+void SplitFields(std::string_view line, char sep, std::vector<std::string_view>* out) {
+  out->clear();
+  size_t start = 0;
+  while (true) {
+    const size_t p = line.find(sep, start);
+    out->push_back(line.substr(start, p == std::string_view::npos ? std::string_view::npos : p - start));
+    if (p == std::string_view::npos) return;
+    start = p + 1;
+  }
+}
+
+void WriteDoubleAttr(H5::H5Object& obj, const std::string& name, double v) {
+  H5::Attribute a = obj.createAttribute(name, H5::PredType::IEEE_F64LE, H5::DataSpace(H5S_SCALAR));
+  a.write(H5::PredType::NATIVE_DOUBLE, &v);
+  a.close();
+}
+
+}  // namespace zwidth::io::internal

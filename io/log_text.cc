@@ -1,0 +1,479 @@
+#include "io/log.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <optional>
+#include <memory>
+#include <sstream>
+
+#include <sys/stat.h>
+
+#include <H5Cpp.h>
+#include <matio.h>
+
+#include "io/atomic_file.h"
+#include "io/h5_safety.h"
+#include "io/io_internal.h"
+#include "io/log_internal.h"
+#include "io/isolated.h"
+#include "model/error.h"
+
+
+namespace zwidth::io::internal {
+namespace {
+
+// ---- Delimited text -------------------------------------------------------
+
+constexpr size_t kMaxLine = 1 << 20;         // longer lines: not a text log
+constexpr size_t kMaxPreambleLines = 10000;  // lines before the first data row
+constexpr size_t kShown = 80;                // characters of a line a message may show
+
+// At most kShown characters of one line, non-printables escaped.
+std::string Shown(std::string_view s) {
+  std::string o;
+  for (size_t i = 0; i < s.size() && o.size() < kShown; ++i) {
+    const unsigned char c = s[i];
+    if (c >= 0x20 && c < 0x7f) o += static_cast<char>(c);
+    else if (c == '\t') o += "\\t";
+    else {
+      char b[8];
+      std::snprintf(b, sizeof b, "\\x%02x", c);
+      o += b;
+    }
+  }
+  if (o.size() >= kShown || s.size() > kShown) o += "...";
+  return "'" + o + "'";
+}
+
+// Lines ending in LF, CRLF or CR, read in blocks.
+class LineReader {
+ public:
+  LineReader(std::istream& in, std::string path) : in_(in), path_(std::move(path)), buf_(1 << 16) {}
+  bool Next(std::string* line) {
+    line->clear();
+    bool any = false;
+    while (true) {
+      if (pos_ == end_) {
+        if (!in_) break;
+        in_.read(buf_.data(), static_cast<std::streamsize>(buf_.size()));
+        end_ = static_cast<size_t>(in_.gcount());
+        pos_ = 0;
+        if (in_.bad()) throw InputError(path_ + ": read error");
+        if (end_ == 0) break;
+      }
+      if (skip_lf_) {
+        skip_lf_ = false;
+        if (buf_[pos_] == '\n') { ++pos_; continue; }
+      }
+      size_t i = pos_;
+      while (i < end_ && buf_[i] != '\n' && buf_[i] != '\r') ++i;
+      line->append(buf_.data() + pos_, i - pos_);
+      any = true;
+      if (line->size() > kMaxLine) {
+        throw InputError(path_ + ": line " + std::to_string(line_no_ + 1) + " is longer than " +
+                         std::to_string(kMaxLine) + " bytes: not a text log (binary file?)");
+      }
+      if (i < end_) {
+        skip_lf_ = buf_[i] == '\r';
+        pos_ = i + 1;
+        ++line_no_;
+        return true;
+      }
+      pos_ = end_;
+    }
+    if (any) ++line_no_;
+    return any;
+  }
+  size_t line_no() const { return line_no_; }
+
+ private:
+  std::istream& in_;
+  std::string path_;
+  std::vector<char> buf_;
+  size_t pos_ = 0, end_ = 0, line_no_ = 0;
+  bool skip_lf_ = false;
+};
+
+// A field separator: one character, or runs of blanks (ws).
+struct Delim {
+  char c = ',';
+  bool ws = false;
+  std::string Name() const {
+    if (ws) return "whitespace";
+    if (c == '\t') return "tab";
+    return std::string("'") + c + "'";
+  }
+};
+
+std::string_view TrimView(std::string_view f) {
+  while (!f.empty() && (f.front() == ' ' || f.front() == '\t' || f.front() == '"')) f.remove_prefix(1);
+  while (!f.empty() && (f.back() == ' ' || f.back() == '\t' || f.back() == '"')) f.remove_suffix(1);
+  return f;
+}
+
+void Split(std::string_view sv, const Delim& d, std::vector<std::string_view>* out) {
+  out->clear();
+  if (d.ws) {
+    size_t i = 0;
+    while (true) {
+      while (i < sv.size() && (sv[i] == ' ' || sv[i] == '\t')) ++i;
+      if (i >= sv.size()) break;
+      size_t j = i;
+      while (j < sv.size() && sv[j] != ' ' && sv[j] != '\t') ++j;
+      out->push_back(TrimView(sv.substr(i, j - i)));
+      i = j;
+    }
+    return;
+  }
+  internal::SplitFields(sv, d.c, out);
+  for (std::string_view& f : *out) f = TrimView(f);
+  // A trailing delimiter (spreadsheet exports) ends the row, it adds no field.
+  if (out->size() > 1 && out->back().empty()) out->pop_back();
+}
+
+bool ParseNumber(std::string_view f, double* v) {
+  if (!f.empty() && f.front() == '+') f.remove_prefix(1);
+  if (f.empty()) return false;
+  auto [p, ec] = std::from_chars(f.data(), f.data() + f.size(), *v);
+  return ec == std::errc() && p == f.data() + f.size();
+}
+
+bool AllNumbers(const std::vector<std::string_view>& fields) {
+  double v;
+  for (auto f : fields) if (!ParseNumber(f, &v)) return false;
+  return true;
+}
+
+bool IsComment(std::string_view s) {
+  const size_t i = s.find_first_not_of(" \t");
+  return i != std::string_view::npos && s[i] == '#';
+}
+
+bool IsBlank(std::string_view s) { return s.find_first_not_of(" \t") == std::string_view::npos; }
+
+// The --delimiter flag, or nullopt to detect.
+std::optional<Delim> GivenDelim(const std::string& s) {
+  if (s.empty()) return std::nullopt;
+  const std::string l = Lower(s);
+  if (l == "tab" || s == "\t" || s == "\\t") return Delim{'\t', false};
+  if (l == "space" || l == "whitespace" || l == "ws" || s == " ") return Delim{' ', true};
+  if (l == "comma") return Delim{',', false};
+  if (l == "semicolon") return Delim{';', false};
+  if (s.size() == 1 && s[0] != '#' && s[0] != '.' && !std::isdigit(static_cast<unsigned char>(s[0])) &&
+      s[0] != '-' && s[0] != '+') {
+    return Delim{s[0], false};
+  }
+  throw InputError("--delimiter '" + s.substr(0, 20) +
+                   "' is not one of , ; tab space (or another single character that is not a digit, sign, '.' or '#')");
+}
+
+// 1-based positive integer, or 0.
+int Position(const std::string& s) {
+  if (s.empty() || s.size() > 6) return 0;
+  for (char c : s) if (!std::isdigit(static_cast<unsigned char>(c))) return 0;
+  return std::stoi(s);
+}
+
+}  // namespace
+
+double TimeScale(const std::string& unit) {
+  if (unit.empty() || unit == "s") return 1.0;
+  if (unit == "ms") return 1e-3;
+  if (unit == "us") return 1e-6;
+  throw InputError("--time-unit '" + unit.substr(0, 20) + "' is not one of s, ms, us");
+}
+
+namespace {
+
+// A line of a text log's preamble.
+struct CsvPreLine { size_t no; std::string text; bool comment; };
+
+// What the preamble of a text log says: its last non-blank line before the
+// data (the header candidate) and the delimiter that splits the first data
+// line (in *line, split into *fields) into numbers.
+struct CsvPreamble {
+  std::optional<CsvPreLine> last;
+  std::optional<Delim> delim;
+};
+
+// Reads comment, blank and other lines up to the first data line.
+CsvPreamble ReadPreamble(LineReader& reader, const std::string& path, const LogSelect& sel, std::string* line_ptr,
+                         std::vector<std::string_view>* fields_ptr) {
+  CsvPreamble result;
+  CsvPreamble* out = &result;
+  std::string& line = *line_ptr;
+  std::vector<std::string_view>& fields = *fields_ptr;
+  size_t skipped = 0;       // non-blank lines before it
+  std::optional<Delim>& delim = out->delim;
+  std::optional<CsvPreLine>& last = out->last;
+  delim = GivenDelim(sel.delimiter);
+  bool found = false;
+  while (reader.Next(&line)) {
+    if (reader.line_no() == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);  // UTF-8 BOM
+    if (IsBlank(line)) continue;
+    if (!IsComment(line)) {
+      std::string_view sv = TrimView(line);
+      const bool looks_numeric = !sv.empty() && (std::isdigit(static_cast<unsigned char>(sv[0])) ||
+                                                 sv[0] == '-' || sv[0] == '+' || sv[0] == '.');
+      if (delim) {
+        Split(line, *delim, &fields);
+        if (AllNumbers(fields)) { found = true; break; }
+      } else {
+        for (const Delim d : {Delim{';', false}, Delim{'\t', false}, Delim{',', false}, Delim{' ', true}}) {
+          Split(line, d, &fields);
+          if (fields.size() >= 2 && AllNumbers(fields)) { delim = d; break; }
+        }
+        if (delim) { found = true; break; }
+        Split(line, Delim{' ', true}, &fields);
+        if (looks_numeric && fields.size() == 1 && AllNumbers(fields)) {
+          throw InputError(path + ": line " + std::to_string(reader.line_no()) + " " + Shown(line) +
+                           " has a single number: a log needs an input and an output column");
+        }
+      }
+      if (looks_numeric) {
+        throw InputError(path + ": line " + std::to_string(reader.line_no()) + " " + Shown(line) +
+                         " looks like data, but " +
+                         (delim ? "the delimiter " + delim->Name() + " does not split it into numbers"
+                                : std::string("no delimiter (; tab , whitespace) splits it into numbers")) +
+                         " (decimal commas? a stray field?); pass --delimiter or repair the file");
+      }
+    }
+    if (last) ++skipped;
+    last = CsvPreLine{reader.line_no(), line, IsComment(line)};
+    if (reader.line_no() > kMaxPreambleLines) {
+      throw InputError(path + ": no numeric data row in the first " + std::to_string(kMaxPreambleLines) +
+                       " lines (line " + std::to_string(reader.line_no()) + ": " + Shown(line) + "); not a text log?");
+    }
+  }
+  if (!found) {
+    if (!last) throw InputError(path + ": empty file (expected a header line such as t,torque,position and numeric rows)");
+    throw InputError(path + ": no numeric data row (last line " + std::to_string(last->no) + ": " +
+                     Shown(last->text) + ")" +
+                     (sel.delimiter.empty() ? "" : "; is --delimiter " + sel.delimiter + " right?"));
+  }
+  return result;
+}
+
+// The column names (from the header: the last line before the data, comment
+// mark stripped, when it has as many fields as the data) and the layout
+// sentence that every message about the file quotes.
+struct CsvHeader {
+  std::vector<std::string> names;
+  std::string layout;
+};
+
+CsvHeader ReadHeader(const std::optional<CsvPreLine>& last, const Delim& delim_value, size_t ncols,
+                     size_t first_data, const std::string& path) {
+  const std::optional<Delim> delim = delim_value;
+  std::vector<std::string> names;
+  size_t header_line = 0;
+  bool header_comment = false;
+  if (last) {
+    std::string_view h = last->text;
+    if (last->comment) {
+      h.remove_prefix(h.find('#'));
+      while (!h.empty() && h.front() == '#') h.remove_prefix(1);
+    }
+    std::vector<std::string_view> hf;
+    Split(h, *delim, &hf);
+    if (hf.size() == ncols && !AllNumbers(hf)) {
+      for (auto f : hf) names.emplace_back(f);
+      header_line = last->no;
+      header_comment = last->comment;
+    } else if (!last->comment) {
+      throw InputError(path + ": the line before the data (line " + std::to_string(last->no) + ", " +
+                       Shown(last->text) + ") has " + std::to_string(hf.size()) + " fields separated by " +
+                       delim->Name() + ", the first data line " + std::to_string(first_data) + " has " +
+                       std::to_string(ncols) + "; mark it with '#' if it is not a header, or pass --delimiter");
+    }
+  }
+  std::string layout = "text, " + delim->Name() + "-separated, " + std::to_string(ncols) + " columns, ";
+  std::string name_list;
+  for (size_t i = 0; i < names.size() && i < 12; ++i) {
+    name_list += (i ? ", " : "") + names[i].substr(0, 24);
+  }
+  if (names.size() > 12) name_list += ", ...";
+  if (header_line) {
+    layout += "header at line " + std::to_string(header_line) + (header_comment ? " (comment)" : "") + ": " + name_list;
+  } else {
+    layout += "no header (columns by position 1.." + std::to_string(ncols) + ")";
+  }
+  layout += ", data from line " + std::to_string(first_data);
+
+  return {names, layout};
+}
+
+// The column that spec names (exact name, then a unique case-insensitive
+// match, then a position from 1); -1 when absent and not required.
+int FindColumn(const std::string& spec, bool required, const char* flag, const std::vector<std::string>& names,
+               size_t ncols, const std::string& path, const std::string& layout) {
+  if (!required && (spec.empty() || spec == "none")) return -1;
+  for (size_t i = 0; i < names.size(); ++i) if (names[i] == spec) return static_cast<int>(i);
+  int match = -1, count = 0;
+  for (size_t i = 0; i < names.size(); ++i) {
+    if (Lower(names[i]) == Lower(spec)) { match = static_cast<int>(i); ++count; }
+  }
+  if (count == 1) return match;
+  const int pos = Position(spec);
+  if (pos >= 1 && static_cast<size_t>(pos) <= ncols) return pos - 1;
+  if (!required) return -1;
+  std::string msg = path + ": no column '" + spec.substr(0, 40) + "' (" + layout + "); ";
+  if (pos > 0) msg += "position " + std::to_string(pos) + " is past the last column; ";
+  msg += std::string("choose with ") + flag + " NAME or a position 1.." + std::to_string(ncols);
+  if (std::string(flag) == "--time-column") msg += ", or --time-column none with --rate";
+  throw InputError(msg);
+}
+
+// The sample rate: --rate (with a warning when the time column disagrees),
+// or the time column's (refused when implausible for a device log).
+void ResolveRate(const std::string& path, const LogSelect& sel, const TimeChecker& times, int ct, size_t rows,
+                 const std::string& time_col_name, LogInfo* out) {
+  LogInfo& info = *out;
+  const bool rate_given = sel.sample_rate_hz > 0.0;
+  if (rate_given) {
+    info.sample_rate_hz = sel.sample_rate_hz;
+    if (ct >= 0 && rows >= 2) {
+      const double T = 1.0 / sel.sample_rate_hz;
+      const double jitter = std::max(std::abs(times.MaxInterval() - T), std::abs(times.MinInterval() - T));
+      std::ostringstream os;
+      os.precision(3);
+      os << "--rate " << std::to_string(sel.sample_rate_hz).substr(0, 12) << " Hz used; the time column's intervals deviate from 1/rate by up to "
+         << jitter << " s (" << 100.0 * jitter / T << " % of an interval)";
+      const double tr = times.Rate();
+      if (std::abs(tr - sel.sample_rate_hz) > 0.01 * sel.sample_rate_hz) {
+        os << " and imply " << tr << " Hz on average: check --rate";
+      }
+      if (jitter > 1e-6 * T) info.warnings.push_back(os.str());
+    }
+  } else {
+    info.sample_rate_hz = times.Rate();
+    if (!(info.sample_rate_hz > 0.0) || !std::isfinite(info.sample_rate_hz)) {
+      throw InputError(path + ": cannot tell the sample rate (fewer than 2 rows?); pass --rate");
+    }
+    if (sel.time_unit.empty() && (info.sample_rate_hz < 10.0 || info.sample_rate_hz > 1e6)) {
+      std::ostringstream os;
+      os.precision(4);
+      os << path << ": the time " << time_col_name << " implies a sample rate of " << info.sample_rate_hz
+         << " Hz (mean interval " << 1.0 / info.sample_rate_hz << " s), implausible for a device log: ";
+      if (info.sample_rate_hz * 1e3 >= 10.0 && info.sample_rate_hz * 1e3 <= 1e6) {
+        os << "is it in milliseconds? pass --time-unit ms (" << info.sample_rate_hz * 1e3 << " Hz)";
+      } else if (info.sample_rate_hz * 1e6 >= 10.0 && info.sample_rate_hz * 1e6 <= 1e6) {
+        os << "is it in microseconds? pass --time-unit us (" << info.sample_rate_hz * 1e6 << " Hz)";
+      } else {
+        os << "is it a sample index or another quantity? choose the time column with --time-column, or give --rate";
+      }
+      os << "; --time-unit s accepts it as is";
+      throw InputError(os.str());
+    }
+  }
+}
+
+}  // namespace
+
+LogInfo StreamCsv(const std::string& path, const LogSelect& sel, const LogSink& sink) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open log file (does it exist?)");
+  const double time_scale = TimeScale(sel.time_unit);
+  LineReader reader(in, path);
+  std::string line;
+  std::vector<std::string_view> fields;
+  const CsvPreamble pre = ReadPreamble(reader, path, sel, &line, &fields);
+  const std::optional<Delim> delim = pre.delim;
+  const size_t first_data = reader.line_no();
+  const size_t ncols = fields.size();
+  const std::vector<double> first_values = [&] {
+    std::vector<double> v(ncols);
+    for (size_t i = 0; i < ncols; ++i) ParseNumber(fields[i], &v[i]);
+    return v;
+  }();
+  const CsvHeader header = ReadHeader(pre.last, *delim, ncols, first_data, path);
+  const std::vector<std::string>& names = header.names;
+  std::string layout = header.layout;
+  auto find_col = [&](const std::string& spec, bool required, const char* flag) {
+    return FindColumn(spec, required, flag, names, ncols, path, layout);
+  };
+  const int ci = find_col(sel.input_column, true, "--input-column");
+  const int co = find_col(sel.output_column, true, "--output-column");
+  const bool rate_given = sel.sample_rate_hz > 0.0;
+  const int ct = sel.time_column == "none" ? -1 : find_col(sel.time_column, !rate_given, "--time-column");
+  auto col_name = [&](int c) {
+    return names.empty() ? "column " + std::to_string(c + 1) : "column '" + names[c].substr(0, 40) + "'";
+  };
+  layout += "; input " + col_name(ci) + ", output " + col_name(co) + ", time " + (ct >= 0 ? col_name(ct) : "none");
+
+  TimeChecker times(path, sel.max_interval_deviation, !rate_given);
+  ConstantCheck constant;
+  std::vector<double> u, y;
+  u.reserve(kChunk);
+  y.reserve(kChunk);
+  size_t rows = 0;
+  auto flush = [&] {
+    if (u.empty()) return;
+    constant.Add(u.data(), u.size());
+    sink(u.data(), y.data(), u.size());
+    u.clear();
+    y.clear();
+  };
+  bool first = true;
+  do {
+    size_t line_no = first ? first_data : reader.line_no();
+    if (!first) {
+      if (IsBlank(line) || IsComment(line)) continue;
+      Split(line, *delim, &fields);
+      if (fields.size() != ncols) {
+        throw InputError(path + ": line " + std::to_string(line_no) + " has " + std::to_string(fields.size()) +
+                         " fields separated by " + delim->Name() + ", the first data line " +
+                         std::to_string(first_data) + " has " + std::to_string(ncols) +
+                         " (truncated row? mixed delimiters?)");
+      }
+    }
+    auto parse = [&](int col) {
+      double v = 0.0;
+      auto where = [&] { return "line " + std::to_string(line_no) + ", " + col_name(col); };
+      if (first) v = first_values[col];
+      else if (!ParseNumber(fields[col], &v)) {
+        throw InputError(path + ": " + where() + ": " + Shown(fields[col]) + " is not a number");
+      }
+      if (!std::isfinite(v)) CheckFinite(v, path, where());
+      return v;
+    };
+    const double uv = parse(ci), yv = parse(co);
+    if (ct >= 0) times.AddLazy(parse(ct) * time_scale, [&] { return "line " + std::to_string(line_no); });
+    u.push_back(uv * sel.input_scale);
+    y.push_back(yv * sel.output_scale);
+    ++rows;
+    if (u.size() == kChunk) flush();
+    first = false;
+  } while (reader.Next(&line));
+  flush();
+  if (!constant.varies) {
+    throw InputError(path + ": input " + col_name(ci) +
+                     " is constant: the log has no excitation to identify from (wrong --input-column?)");
+  }
+  LogInfo info;
+  info.source = path;
+  info.num_samples = rows;
+  info.layout = layout;
+  ResolveRate(path, sel, times, ct, rows, ct >= 0 ? col_name(ct) : std::string(), &info);
+  return info;
+}
+
+void WriteCsvLog(const std::string& tmp, double rate, const std::vector<double>& u,
+                 const std::vector<double>& y) {
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) throw InputError("cannot create '" + tmp + "'");
+  std::fputs("t,torque,position\n", f);
+  for (size_t k = 0; k < u.size(); ++k) {
+    std::fprintf(f, "%.17g,%.17g,%.17g\n", static_cast<double>(k) / rate, u[k], y[k]);
+  }
+  const bool ok = std::ferror(f) == 0;
+  if (std::fclose(f) != 0 || !ok) throw InputError("failed writing '" + tmp + "' (disk full?)");
+}
+
+}  // namespace zwidth::io::internal
