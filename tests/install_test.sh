@@ -32,6 +32,16 @@ for f in bin/zwidth include/zwidth/model/plant.h include/zwidth/stability/zwidth
   [ -e "$P/$f" ] || fail "$f is not installed"
 done
 [ -n "$(find "$P/lib" -name libzwidth_stability.a)" ] || fail "libzwidth_stability.a is not installed"
+# Internal headers stay out, and every installed header compiles with only the
+# installed ones (no public header reaches an internal or missing one).
+for f in fit/fit_internal.h fit/bin_correlated_covariance.h io/io_internal.h io/log_internal.h io/isolated.h \
+         io/h5_safety.h; do
+  [ ! -e "$P/include/zwidth/$f" ] || fail "the internal header $f is installed"
+done
+(cd "$P/include/zwidth" && find . -name '*.h' | sort | sed 's|^\./\(.*\)|#include "\1"|') >"$T/all_headers.cc"
+[ "$(wc -l <"$T/all_headers.cc")" -ge 20 ] || fail "fewer than 20 public headers are installed"
+${CXX:-c++} -std=c++20 -fsyntax-only -I"$P/include/zwidth" -isystem /usr/include/eigen3 \
+  $(pkg-config --cflags-only-I hdf5 2>/dev/null) "$T/all_headers.cc" || fail "an installed header does not compile alone"
 if [ -f "$BUILD/python/zwidth/__init__.py" ]; then
   ls "$P/$PY"/zwidth/_zwidth*.so >/dev/null 2>&1 || fail "the Python extension is not installed"
   WITH_PYTHON=1
