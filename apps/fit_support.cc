@@ -1,6 +1,7 @@
 #include "apps/fit_support.h"
 
 #include "analysis/compare.h"
+#include "analysis/run.h"
 
 #include <cmath>
 #include <cstdio>
@@ -56,33 +57,7 @@ void FitFlags::Resolve(double fmin_hz, double fmax_hz) {
   if (!o.IsValid(&why)) throw InputError(why);
 }
 
-std::string FitReport(const fit::FitResult& r) {
-  std::ostringstream os;
-  os << "band: " << r.band.Describe() << "\n";
-  if (!r.delay_choice.empty()) os << r.delay_choice << "\n";
-  if (!r.order_table.empty()) {
-    char line[400];
-    os << "order search (stabilisation table; * = pole within 2% of one at the order below):\n";
-    std::snprintf(line, sizeof line, "  %5s %10s %12s  %s\n", "modes", "chi2/dof", "BIC", "poles [Hz]; rejected because");
-    os << line;
-    for (const fit::OrderTrial& t : r.order_table) {
-      std::string poles;
-      for (size_t i = 0; i < t.pole_hz.size(); ++i) {
-        char p[40];
-        std::snprintf(p, sizeof p, "%s%.4g%s", i ? " " : "", t.pole_hz[i], t.persists[i] ? "*" : "");
-        poles += p;
-      }
-      if (!t.spurious.empty()) poles += (poles.empty() ? "" : "; ") + t.spurious.front();
-      if (t.spurious.size() > 1) poles += " (+" + std::to_string(t.spurious.size() - 1) + " more)";
-      std::snprintf(line, sizeof line, "  %5d %10.4g %12.6g  %s\n", t.num_modes, t.chi2_per_dof, t.bic, poles.c_str());
-      os << line;
-    }
-    os << "chosen: " << r.order_choice << "\n";
-  }
-  os << "quality: " << fit::ToString(r.quality) << "\n";
-  for (const fit::QualityReason& q : r.reasons) os << "  - " << q.message << "\n    advice: " << q.advice << "\n";
-  return os.str();
-}
+std::string FitReport(const fit::FitResult& r) { return analysis::FitReport(r); }
 
 void ResolveDelayFlag(const std::string& flag, fit::FitOptions* o) {
   if (flag == "auto") { o->auto_delay = true; return; }

@@ -1,0 +1,192 @@
+#include "analysis/run.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <sstream>
+#include <utility>
+
+#include "model/error.h"
+
+namespace zwidth::analysis {
+namespace {
+
+// Milliseconds between laps.
+class Laps {
+ public:
+  double Lap() {
+    const auto now = std::chrono::steady_clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - start_).count();
+    start_ = now;
+    return ms;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+};
+
+// The model's sampled response g at every bin, phases unwrapped along
+// frequency (the model's continuously; the measured one kept within half a
+// turn of the model's).
+BodeData MakeBode(const ident::FrequencyResponse& frf, const stability::SampledPlant& g, double T) {
+  BodeData b;
+  double pm_prev = 0.0;
+  for (size_t k = 0; k < frf.f_hz.size(); ++k) {
+    const double th = 2 * std::numbers::pi * frf.f_hz[k] * T;
+    const auto gm = g.AtTheta(th);
+    double pm = std::arg(gm) * 180 / std::numbers::pi;
+    if (k > 0) pm += 360.0 * std::round((pm_prev - pm) / 360.0);
+    pm_prev = pm;
+    double ph = std::arg(frf.H[k]) * 180 / std::numbers::pi;
+    ph += 360.0 * std::round((pm - ph) / 360.0);
+    b.H_abs.push_back(std::abs(frf.H[k]));
+    b.H_phase_deg.push_back(ph);
+    b.G_abs.push_back(std::abs(gm));
+    b.G_phase_deg.push_back(pm);
+  }
+  return b;
+}
+
+// K_CR curves on the run's B grid, one per ZWidth.
+std::vector<std::vector<stability::CriticalPoint>> Curves(const std::vector<stability::ZWidth>& zs,
+                                                          const std::vector<double>& b_grid) {
+  std::vector<std::vector<stability::CriticalPoint>> c;
+  for (const stability::ZWidth& z : zs) {
+    c.emplace_back();
+    for (double B : b_grid) c.back().push_back(z.At(B));
+  }
+  return c;
+}
+
+// The loop figure: without and with the report's velocity filter (the run's
+// hand in both), on 300 B values to 1.05 x the larger B_max.
+std::vector<LoopFigureDelay> LoopFigure(const RunAnalysis& a) {
+  const double T = a.period_s;
+  const stability::LoopOptions& loop = a.options.loop;
+  const PlantStability& st = a.stability;
+  stability::LoopOptions lf, lr;
+  lf.hand = lr.hand = loop.hand;
+  stability::SetLowPassFilter(a.options.report_filter_hz, T, &lf);
+  std::vector<LoopFigureDelay> out;
+  for (size_t i = 0; i < st.delays.size(); ++i) {
+    const stability::ZWidth zf(st.sampled, st.delays[i], lf), zr(st.sampled, st.delays[i], lr);
+    const stability::Passivity pf(a.input.model.plant.b, T, zf.total_delay(), lf);
+    const stability::Passivity pr(a.input.model.plant.b, T, zr.total_delay(), lr);
+    // zr is the run's own loop when that has no filter: its summary is known.
+    const double bm = std::max(loop.HasFilter() ? zr.Summarize().B_max : st.summaries[i].B_max, zf.Summarize().B_max);
+    const double top = std::isfinite(bm) && bm > 0 ? 1.05 * bm : st.b_grid.back();
+    LoopFigureDelay f;
+    for (int k = 0; k < 300; ++k) {
+      const double B = top * k / 299.0;
+      f.B.push_back(B);
+      f.raw.push_back(zr.StableIntervals(B));
+      f.filtered.push_back(zf.StableIntervals(B));
+      f.K_passive_raw.push_back(pr.At(B).K_hi);
+      f.K_passive_filtered.push_back(pf.At(B).K_hi);
+    }
+    out.push_back(std::move(f));
+  }
+  return out;
+}
+
+// reference: the reference's Z-width per delay (none without a reference).
+FigureData MakeFigures(const RunAnalysis& a, const std::vector<stability::ZWidth>& reference) {
+  FigureData f;
+  const double T = a.period_s;
+  // The model's own sampled response (the loop's hand is not part of it).
+  const bool plain_hand = a.options.loop.hand.IsNone();
+  f.bode = plain_hand ? MakeBode(a.input.response.frf, a.stability.sampled, T)
+                      : MakeBode(a.input.response.frf, stability::SampledPlant(a.input.model.plant, T), T);
+  if (!reference.empty()) f.kcr_reference = Curves(reference, a.stability.b_grid);
+  Plant rigid = a.input.model.plant;
+  rigid.modes.clear();
+  const stability::SampledPlant rigid_sampled(rigid, T);
+  std::vector<stability::ZWidth> rigid_zs;
+  for (int d : a.options.delays) rigid_zs.emplace_back(rigid_sampled, d);
+  f.kcr_rigid = Curves(rigid_zs, a.stability.b_grid);
+  f.loop = LoopFigure(a);
+  return f;
+}
+
+}  // namespace
+
+bool RunOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  for (int d : delays) {
+    if (d < 0) return fail("RunOptions::delays must be >= 0");
+  }
+  if (figures && !(std::isfinite(report_filter_hz) && report_filter_hz > 0))
+    return fail("RunOptions::report_filter_hz must be > 0 and finite");
+  return grid.IsValid(why);
+}
+
+RunAnalysis Analyse(RunInput input, const RunOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) throw InputError(why);
+  if (input.fit.status != fit::FitStatus::kConverged) throw ComputationError(input.fit.message);
+  Laps laps;
+  input.response.frf.used_by_fit = input.fit.band.used;
+  const double T = 1.0 / input.response.frf.sample_rate_hz;
+  // The model's Z-width per delay, computed once for the summary, the
+  // comparison, the boundary rows and the figures.
+  RunAnalysis a(AnalysePlantStability(input.model, T, o.delays, o.loop, o.grid));
+  a.input = std::move(input);
+  a.options = o;
+  a.period_s = T;
+  a.stages.push_back({"boundary", laps.Lap()});
+  std::vector<stability::ZWidth> ref_zs;  // the reference on the paper's loop, per delay
+  if (a.input.reference) {
+    const io::ModelFile& ref = *a.input.reference;
+    const stability::SampledPlant ref_sampled(ref.plant, T);
+    std::vector<stability::DelaySummary> ref_sums;
+    for (int d : o.delays) {
+      ref_zs.emplace_back(ref_sampled, d);
+      ref_sums.push_back(ref_zs.back().Summarize());
+    }
+    const PlantStability& st = a.stability;
+    const bool plain = !o.loop.HasFilter() && o.loop.hand.IsNone();
+    const DelayStability model_st =
+        plain ? DelayStability{st.summaries, st.stds, st.has_std} : SummarizeDelays(a.input.model, T, o.delays);
+    a.comparison = CompareModels(a.input.model, ref, o.delays, model_st, ref_sums, o.linear);
+    a.stages.push_back({"compare (reference Z-width)", laps.Lap()});
+  }
+  if (o.figures) {
+    a.figures = MakeFigures(a, ref_zs);
+    a.stages.push_back({"figure data (reference, rigid)", laps.Lap()});
+  }
+  return a;
+}
+
+std::string FitReport(const fit::FitResult& r) {
+  std::ostringstream os;
+  os << "band: " << r.band.Describe() << "\n";
+  if (!r.delay_choice.empty()) os << r.delay_choice << "\n";
+  if (!r.order_table.empty()) {
+    char line[400];
+    os << "order search (stabilisation table; * = pole within 2% of one at the order below):\n";
+    std::snprintf(line, sizeof line, "  %5s %10s %12s  %s\n", "modes", "chi2/dof", "BIC", "poles [Hz]; rejected because");
+    os << line;
+    for (const fit::OrderTrial& t : r.order_table) {
+      std::string poles;
+      for (size_t i = 0; i < t.pole_hz.size(); ++i) {
+        char p[40];
+        std::snprintf(p, sizeof p, "%s%.4g%s", i ? " " : "", t.pole_hz[i], t.persists[i] ? "*" : "");
+        poles += p;
+      }
+      if (!t.spurious.empty()) poles += (poles.empty() ? "" : "; ") + t.spurious.front();
+      if (t.spurious.size() > 1) poles += " (+" + std::to_string(t.spurious.size() - 1) + " more)";
+      std::snprintf(line, sizeof line, "  %5d %10.4g %12.6g  %s\n", t.num_modes, t.chi2_per_dof, t.bic, poles.c_str());
+      os << line;
+    }
+    os << "chosen: " << r.order_choice << "\n";
+  }
+  os << "quality: " << fit::ToString(r.quality) << "\n";
+  for (const fit::QualityReason& q : r.reasons) os << "  - " << q.message << "\n    advice: " << q.advice << "\n";
+  return os.str();
+}
+
+}  // namespace zwidth::analysis

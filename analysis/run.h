@@ -1,0 +1,96 @@
+// What `zwidth run` computes after the estimate and the fit, as data: the
+// model's Z-width per delay (PlantStability), the comparison with a reference,
+// and the data of the report's figures (Bode with unwrapped phases, K_CR
+// curves of the reference and of the rigid body, the loop figure's regions and
+// passivity bounds). Prints nothing; report/ turns a RunAnalysis into files.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "analysis/compare.h"
+#include "analysis/plant_stability.h"
+#include "fit/fit.h"
+#include "ident/joint.h"
+#include "io/model_json.h"
+#include "stability/haptic_loop.h"
+#include "stability/zwidth.h"
+
+namespace zwidth::analysis {
+
+struct RunOptions {
+  std::vector<int> delays = {2, 4, 8};  // loop delays [samples], each >= 0, in the order reported
+  stability::LoopOptions loop;          // the run's loop (velocity filter, hand); default: the paper's
+  stability::BGridOptions grid;         // B grid of the boundary rows
+  double report_filter_hz = 50.0;       // the loop figure's first-order velocity low-pass [Hz], > 0
+  bool figures = true;                  // compute the figure data (Bode, curves, regions)
+  bool linear = false;                  // comparison labels in kg and N s/m instead of kg m^2, N m s/rad
+  // False with *why naming the field when a field is out of range.
+  bool IsValid(std::string* why) const;
+};
+
+// The estimate and the fit that a run analyses (made by the caller: reading
+// logs and fitting are their own stages, shared with `estimate` and `fit`).
+struct RunInput {
+  ident::CombinedResponse response;          // the estimate of every log
+  size_t total_samples = 0;                  // samples of all logs
+  std::vector<std::string> logs;             // the log paths, in order
+  std::string source;                        // the logs as one name ("a.h5 + b.h5"), as in model.json
+  bool whole_record = false;                 // one segment per run (no Welch averaging)
+  fit::FitResult fit;                        // the fit of response.frf (status converged)
+  io::ModelFile model;                       // that fit as a model file
+  std::optional<io::ModelFile> reference;    // compared with, on the paper's loop; none: no comparison
+  std::string reference_name;                // what the reference was read from: "table1" or its path
+  bool reference_is_table1 = false;          // the reference is the paper's Table I (Table II drawn)
+};
+
+// The Bode figure: measured and model (exact ZOH, without the loop's hand),
+// phases unwrapped along frequency, the measured within half a turn of the model.
+struct BodeData {
+  std::vector<double> H_abs, H_phase_deg;  // measured, per bin of response.frf
+  std::vector<double> G_abs, G_phase_deg;  // model, per bin
+};
+
+// The loop figure of one delay: the region with the raw backward difference
+// (which 0) and with the report's velocity low-pass (which 1), and the
+// passivity boundary K_P(B) of each, on 300 B values from 0 to 1.05 x the
+// larger B_max.
+struct LoopFigureDelay {
+  std::vector<double> B;                                  // N m s/rad
+  std::vector<std::vector<stability::KInterval>> raw, filtered;  // per B
+  std::vector<double> K_passive_raw, K_passive_filtered;  // per B [N m/rad]
+};
+
+struct FigureData {
+  BodeData bode;
+  std::vector<std::vector<stability::CriticalPoint>> kcr_reference;  // [delay][B]; empty without a reference
+  std::vector<std::vector<stability::CriticalPoint>> kcr_rigid;      // [delay][B]: the rigid body alone
+  std::vector<LoopFigureDelay> loop;                                // one per delay
+};
+
+struct RunStage {
+  std::string name;  // e.g. "boundary"
+  double ms = 0.0;   // wall time [ms]
+};
+
+struct RunAnalysis {
+  explicit RunAnalysis(PlantStability s) : stability(std::move(s)) {}
+  RunInput input;                              // response.frf.used_by_fit set from the fit's band
+  RunOptions options;
+  double period_s = 0.0;                       // the log's sample period [s]
+  PlantStability stability;                    // the model on the run's loop
+  std::optional<ModelComparison> comparison;   // with input.reference
+  std::optional<FigureData> figures;           // when options.figures
+  std::vector<RunStage> stages;                // stage times, in order ("figure data" last)
+};
+
+// Throws InputError for invalid options (the field named), ComputationError
+// when a computation fails.
+RunAnalysis Analyse(RunInput input, const RunOptions& options);
+
+// The verdict, its reasons with advice, the band, the delay and order
+// choices, and the stabilisation table, as `fit` and `run` print it.
+std::string FitReport(const fit::FitResult& r);
+
+}  // namespace zwidth::analysis

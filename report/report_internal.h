@@ -1,0 +1,31 @@
+// Shared by the report's own units; not installed.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "analysis/run.h"
+#include "ident/joint.h"
+
+namespace zwidth::report {
+
+// What the gnuplot script of `run` depends on.
+struct FigureScriptOptions {
+  std::vector<int> delays;                // loop delays [samples], one panel/curve each
+  ident::CombinedMethod method{};         // the estimate's method (Bode title)
+  bool joint = false;                     // closed-loop joint estimate: two coherence columns
+  bool linear = false;                    // N s/m and N/m labels instead of N m s/rad, N m/rad
+  bool have_ref = false;                  // kcr_reference.dat exists
+  bool table1 = false;                    // table2.dat exists
+  double k_clip = 1.0;                    // upper K of the region figure [N m/rad]
+  double k_clip_loop = 1.0;               // upper K of the loop figure [N m/rad]
+  double report_filter_hz = 50.0;         // the loop figure's velocity low-pass [Hz]
+};
+
+// figures.gp: every figure in SVG and PNG, read from the .dat files beside it.
+std::string FigureScript(const FigureScriptOptions& o);
+
+// report.html; have_figures: figures/*.svg exist.
+std::string RunHtml(const analysis::RunAnalysis& a, bool have_figures);
+
+}  // namespace zwidth::report

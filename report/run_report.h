@@ -1,0 +1,36 @@
+// `zwidth run`'s files from a RunAnalysis: model.json, frf.csv, boundary.csv,
+// summary.json, report.html and, with figure data, figures/ (the .dat files,
+// figures.gp, and the SVG/PNG drawn by gnuplot when it is installed). Writes
+// only into the output folder's temporary path; the caller commits it.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "analysis/run.h"
+#include "io/atomic_file.h"
+
+namespace zwidth::report {
+
+struct RunReportOptions {
+  bool draw_figures = true;  // run gnuplot on figures/figures.gp (when the analysis has figure data)
+};
+
+enum class FiguresStatus {
+  kNotRequested,     // the analysis has no figure data: no figures/ folder
+  kDrawn,            // gnuplot drew every figure
+  kGnuplotMissing,   // gnuplot is not installed: the data and the script are written
+  kGnuplotFailed,    // gnuplot exited with an error (see figures/gnuplot.log)
+  kNotDrawn,         // draw_figures false: the data and the script are written
+};
+
+struct RunReport {
+  FiguresStatus figures = FiguresStatus::kNotRequested;
+  std::vector<analysis::RunStage> stages;  // "write outputs", "figure files", "figures (gnuplot)" [ms]
+};
+
+// Throws io's errors when a file cannot be written.
+RunReport WriteRunReport(const analysis::RunAnalysis& analysis, const io::OutputFolder& folder,
+                         const RunReportOptions& options = {});
+
+}  // namespace zwidth::report
