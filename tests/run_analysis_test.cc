@@ -1,0 +1,156 @@
+// analysis::Analyse (the `run` pipeline after the estimate and the fit) on a
+// synthetic model, checked against the exact ZOH response of model/ and
+// against identities; report::WriteRunReport's files on the same analysis.
+#include <cmath>
+#include <complex>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "analysis/run.h"
+#include "io/atomic_file.h"
+#include "model/error.h"
+#include "model/state_space.h"
+#include "report/run_report.h"
+
+namespace zwidth {
+namespace {
+
+constexpr double kT = 1e-3;
+
+Plant TestPlant() {  // a PHANToM-like device: inertia, damping, one mode, three samples of delay
+  Plant p;
+  p.m = 2e-3;
+  p.b = 5e-3;
+  const double w = 2 * std::numbers::pi * 60, v = 2 * std::numbers::pi * 40;
+  p.modes.push_back({w, 0.1 * w, v, 0.1 * v});
+  p.delay_samples = 3;
+  return p;
+}
+
+// The "measured" response: the model's exact ZOH response turned by
+// phase_offset [rad] (so the unwrapped phases differ by exactly that).
+analysis::RunInput TestInput(double phase_offset) {
+  analysis::RunInput in;
+  in.model.plant = TestPlant();
+  in.model.sample_period_s = kT;
+  in.fit.status = fit::FitStatus::kConverged;
+  in.fit.plant = in.model.plant;
+  ident::FrequencyResponse& frf = in.response.frf;
+  frf.sample_rate_hz = 1 / kT;
+  const DiscreteResponse g(DiscretizeZoh(in.model.plant, kT));
+  for (int k = 1; k <= 450; ++k) {
+    frf.f_hz.push_back(k);
+    frf.H.push_back(g.AtTheta(2 * std::numbers::pi * k * kT) * std::polar(1.0, phase_offset));
+    frf.coherence.push_back(1.0);
+    frf.H_std.push_back(0.01 * std::abs(frf.H.back()));
+    frf.S_uu.push_back(1.0);  // unit input PSD: S_yy = |H|^2, S_uy = H
+    frf.S_yy.push_back(std::norm(frf.H.back()));
+    frf.S_uy.push_back(frf.H.back());
+    in.fit.band.used.push_back(k >= 5 && k <= 300);
+  }
+  in.total_samples = 30000;
+  in.source = "synthetic";
+  in.logs = {"synthetic"};
+  return in;
+}
+
+TEST(RunAnalysis, DefaultOptionsAreValidAndFieldsAreNamed) {
+  analysis::RunOptions o;
+  std::string why;
+  EXPECT_TRUE(o.IsValid(&why)) << why;
+  o.delays = {2, -1};
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("RunOptions::delays"), std::string::npos) << why;
+  o = {};
+  o.report_filter_hz = std::nan("");
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("RunOptions::report_filter_hz"), std::string::npos) << why;
+  o.figures = false;  // the filter is the figures' alone
+  EXPECT_TRUE(o.IsValid(&why)) << why;
+  EXPECT_THROW(analysis::Analyse(TestInput(0.0), analysis::RunOptions{.delays = {-2}}), InputError);
+}
+
+TEST(RunAnalysis, BodeIsTheExactZohResponseWithUnwrappedPhases) {
+  const double offset = 0.3;  // rad
+  const analysis::RunAnalysis a = analysis::Analyse(TestInput(offset), {});
+  ASSERT_TRUE(a.figures.has_value());
+  const analysis::BodeData& b = a.figures->bode;
+  const DiscreteResponse g(DiscretizeZoh(TestPlant(), kT));
+  const auto& f = a.input.response.frf.f_hz;
+  ASSERT_EQ(b.G_abs.size(), f.size());
+  for (size_t k = 0; k < f.size(); ++k) {
+    const std::complex<double> gk = g.AtTheta(2 * std::numbers::pi * f[k] * kT);
+    EXPECT_NEAR(b.G_abs[k], std::abs(gk), 1e-9 * std::abs(gk)) << f[k];
+    EXPECT_NEAR(b.H_abs[k], std::abs(gk), 1e-9 * std::abs(gk)) << f[k];
+    // Same angle modulo a turn, unwrapped: consecutive steps under half a turn,
+    // measured exactly `offset` above the model.
+    const double turns = (b.G_phase_deg[k] - std::arg(gk) * 180 / std::numbers::pi) / 360;
+    EXPECT_NEAR(turns, std::round(turns), 1e-9) << f[k];
+    if (k > 0) EXPECT_LT(std::abs(b.G_phase_deg[k] - b.G_phase_deg[k - 1]), 180.0) << f[k];
+    EXPECT_NEAR(b.H_phase_deg[k] - b.G_phase_deg[k], offset * 180 / std::numbers::pi, 1e-7) << f[k];
+  }
+  // The phase falls by more than a turn over the band (delay + ZOH + mode), so
+  // the unwrapping was exercised.
+  EXPECT_LT(b.G_phase_deg.back() - b.G_phase_deg.front(), -360.0);
+  // used_by_fit comes from the fit's band.
+  EXPECT_EQ(a.input.response.frf.used_by_fit, a.input.fit.band.used);
+}
+
+TEST(RunAnalysis, AModelComparedWithItselfHasTheModelsCurvesAndNoRigidModes) {
+  analysis::RunInput in = TestInput(0.0);
+  in.reference = in.model;
+  in.reference_name = "self";
+  analysis::RunOptions o;
+  o.delays = {1, 3};
+  const analysis::RunAnalysis a = analysis::Analyse(std::move(in), o);
+  ASSERT_TRUE(a.comparison.has_value());
+  ASSERT_TRUE(a.figures.has_value());
+  const analysis::PlantStability& st = a.stability;
+  const size_t nB = st.b_grid.size();
+  ASSERT_EQ(a.figures->kcr_reference.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    for (size_t k = 0; k < nB; ++k) {
+      EXPECT_EQ(a.figures->kcr_reference[i][k].K_cr, st.rows[i * nB + k].point.K_cr);
+    }
+    // The rigid body alone (modes removed): its K_CR(B=0) differs from the model's.
+    EXPECT_NE(a.figures->kcr_rigid[i][0].K_cr, st.rows[i * nB].point.K_cr);
+  }
+  // The loop figure: 300 B values from 0 per delay, its filtered region inside [0, top].
+  ASSERT_EQ(a.figures->loop.size(), 2u);
+  EXPECT_EQ(a.figures->loop[0].B.size(), 300u);
+  EXPECT_EQ(a.figures->loop[0].B.front(), 0.0);
+  std::vector<std::string> names;
+  for (const auto& s : a.stages) names.push_back(s.name);
+  EXPECT_EQ(names, (std::vector<std::string>{"boundary", "compare (reference Z-width)", "figure data (reference, rigid)"}));
+}
+
+TEST(RunReport, WritesEveryFileIntoTheFolderAndNothingWithoutFigures) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("zwidth_run_report_" + std::to_string(std::random_device{}()));
+  analysis::RunOptions o;
+  o.figures = false;
+  analysis::RunInput in = TestInput(0.0);
+  in.model.fit = {{"quality_reasons", nlohmann::json::array()}};
+  const analysis::RunAnalysis a = analysis::Analyse(std::move(in), o);
+  {
+    io::OutputFolder folder(dir.string(), false);
+    const report::RunReport r = report::WriteRunReport(a, folder);
+    EXPECT_EQ(r.figures, report::FiguresStatus::kNotRequested);
+    folder.Commit();
+  }
+  for (const char* f : {"model.json", "frf.csv", "boundary.csv", "summary.json", "report.html"}) {
+    EXPECT_TRUE(std::filesystem::is_regular_file(dir / f)) << f;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "figures"));
+  std::ifstream html(dir / "report.html");
+  const std::string text((std::istreambuf_iterator<char>(html)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("No figures"), std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace zwidth
