@@ -13,7 +13,10 @@ std::string FigureScript(const FigureScriptOptions& o) {
      << "set linetype 3 lc rgb '#2ca02c' lw 2\nset linetype 4 lc rgb '#9467bd' lw 2\n"
      << "set linetype 5 lc rgb '#ff7f0e' lw 2\nset linetype 6 lc rgb '#8c564b' lw 2\n";
   std::string dl;
-  for (size_t i = 0; i < o.delays.size(); ++i) dl += (i ? " " : "") + std::to_string(o.delays[i]);
+  for (size_t i = 0; i < o.delays.size(); ++i) {  // appended, not (" " + ...): gcc 12's -Wrestrict false positive
+    if (i) dl += ' ';
+    dl += std::to_string(o.delays[i]);
+  }
   gp << "delays = '" << dl << "'\n";
   for (const char* term : {"svg size 900,640 font 'sans,12'", "pngcairo size 900,640 font 'sans,10'"}) {
     const std::string ext = std::string(term).rfind("svg", 0) == 0 ? "svg" : "png";
