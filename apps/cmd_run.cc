@@ -3,7 +3,10 @@
 // estimate and the fit (which print as they read and fit, shared with
 // `estimate` and `fit`), analysis::Analyse, report::WriteRunReport, printing.
 #include <cstdio>
+#include <filesystem>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "analysis/run.h"
 #include "apps/common.h"
