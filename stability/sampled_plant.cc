@@ -118,20 +118,17 @@ SampledPlant::SampledPlant(const Plant& plant, double period_s, const Hand& hand
   // * T), so that the boundary grid resolves sharp modes; inside the grid's
   // ends pi 1e-7 and pi (1 - 1e-9).
   const double pi = std::numbers::pi;
-  // KNOWN DEFECT, kept in this commit so that every output stays identical:
-  // the ZWidth constructor this was moved from tested each point against the
-  // last point appended ("t < th.back()") instead of the grid's end, so only
-  // the first point of a patch that lies below every earlier one survives.
-  const double first = pi * 1e-7;
-  double back = pi * (1.0 - 1e-9);
+  // Every point of a patch inside the grid's ends is kept (641 points, +-20
+  // c T around the damped frequency).
+  const double first = pi * 1e-7, last = pi * (1.0 - 1e-9);
   auto patch = [&](double w, double c) {
     const double disc = w * w - c * c / 4.0;
     if (disc <= 0.0) return;
     const double center = std::sqrt(disc) * T;
     const double h = std::max(c * T / 16.0, 1e-9);
-    for (int k = -320; k <= 320; ++k) {
+    for (int k = -kModePatchHalfWidth; k <= kModePatchHalfWidth; ++k) {
       const double t = center + k * h;
-      if (t > first && t < back) { d->patch_theta.push_back(t); back = t; }
+      if (t > first && t < last) d->patch_theta.push_back(t);
     }
   };
   for (const Mode& md : plant.modes) {

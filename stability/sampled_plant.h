@@ -26,6 +26,10 @@
 
 namespace zwidth::stability {
 
+// Each patch: the damped frequency sqrt(w^2 - c^2/4) T +- k h, h = max(c T / 16,
+// 1e-9) rad, k = -kModePatchHalfWidth..kModePatchHalfWidth, inside (pi 1e-7, pi (1 - 1e-9)).
+constexpr int kModePatchHalfWidth = 320;
+
 class SampledPlant {
  public:
   // Throws InputError for an invalid plant, period or hand.

@@ -198,6 +198,32 @@ TEST(SampledPlant, SharedByDelaysGivesTheOneLoopConstructorsNumbers) {
   }
 }
 
+// The mode patches hold every point the code intends: 641 points spaced c T / 16
+// around the damped frequency of each resonance and antiresonance (before the
+// fix only one point per patch survived).
+TEST(SampledPlant, ModePatchesAreDenseAroundEveryMode) {
+  Plant p;
+  p.m = 1e-3;
+  p.b = 5e-3;
+  p.modes = {{2 * std::numbers::pi * 200, 2.0, 2 * std::numbers::pi * 150, 1.5},
+             {2 * std::numbers::pi * 400, 0.3, 2 * std::numbers::pi * 330, 0.2}};
+  const double T = 1e-3;
+  const std::vector<double>& th = SampledPlant(p, T).mode_patch_theta();
+  ASSERT_EQ(th.size(), 4u * (2 * kModePatchHalfWidth + 1));
+  for (const Mode& md : p.modes) {
+    for (auto [w, c] : {std::pair{md.omega, md.c}, std::pair{md.v, md.d}}) {
+      const double center = std::sqrt(w * w - c * c / 4) * T, h = c * T / 16;
+      int near = 0;
+      for (double t : th) near += std::abs(t - center) <= (kModePatchHalfWidth + 0.5) * h;
+      EXPECT_EQ(near, 2 * kModePatchHalfWidth + 1) << w;
+      // The point nearest the center is the center itself (k = 0).
+      double best = 1.0;
+      for (double t : th) best = std::min(best, std::abs(t - center));
+      EXPECT_LT(best, 1e-12) << w;
+    }
+  }
+}
+
 TEST(SampledPlant, AHandOtherThanTheSampledOnesIsABrokenContract) {
   const SampledPlant sp(PhantomTable1(), 1e-3);
   LoopOptions l;
