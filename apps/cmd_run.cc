@@ -381,7 +381,7 @@ void AddRunCommand(CLI::App& app) {
       << " Hz.</p>\n<h2>Fitted model (eq. 1)</h2>\n<pre>" << Html(ParameterTable(model, linear)) << "</pre>\n<p>"
       << Html(fr.BriefReport()) << ". Residual: exact ZOH response weighted by the Welch per-bin std. "
       << "Sections in canonical order (pole pairs by omega, zero pairs by v).</p>\n";
-    for (const auto& w : fr.warnings) h << "<p><b>Warning:</b> " << Html(w) << "</p>\n";
+    for (const auto& w : fr.warnings) h << "<p><b>Warning:</b> " << Html(WithFlags(w)) << "</p>\n";
     if (have_ref) {
       h << "<h2>Comparison with the reference (" << Html(table1 ? "Table I, built in" : f->reference) << ")</h2>\n<pre>"
         << Html(cmp_text) << "</pre>\n";

@@ -10,6 +10,7 @@
 #include "io/reference_models.h"
 #include <glog/logging.h>
 
+#include "apps/common.h"
 #include "io/fit_file.h"
 #include "io/stability_files.h"
 #include "model/error.h"
@@ -58,7 +59,7 @@ void FitFlags::Resolve(double fmin_hz, double fmax_hz) {
 
 std::string FitReport(const fit::FitResult& r) {
   std::ostringstream os;
-  os << "band: " << r.band.Describe() << "\n";
+  os << "band: " << WithFlags(r.band.Describe()) << "\n";
   if (!r.delay_choice.empty()) os << r.delay_choice << "\n";
   if (!r.order_table.empty()) {
     char line[400];
@@ -80,7 +81,7 @@ std::string FitReport(const fit::FitResult& r) {
     os << "chosen: " << r.order_choice << "\n";
   }
   os << "quality: " << fit::ToString(r.quality) << "\n";
-  for (const fit::QualityReason& q : r.reasons) os << "  - " << q.message << "\n    advice: " << q.advice << "\n";
+  for (const fit::QualityReason& q : r.reasons) os << "  - " << q.message << "\n    advice: " << WithFlags(q.advice) << "\n";
   return os.str();
 }
 
@@ -104,7 +105,7 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
   FLAGS_minloglevel = google::GLOG_FATAL;
   const fit::FitResult r = fit::FitModel(frf, o);
   if (out) *out = r;
-  for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", WithFlags(w).c_str());
   if (r.status != fit::FitStatus::kConverged) throw ComputationError(r.message);
   return io::FittedModelFile(r, frf, o, source);
 }
