@@ -107,7 +107,12 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
   if (out) *out = r;
   for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", WithFlags(w).c_str());
   if (r.status != fit::FitStatus::kConverged) throw ComputationError(r.message);
-  return io::FittedModelFile(r, frf, o, source);
+  io::ModelFile mf = io::FittedModelFile(r, frf, o, source);
+  // The files the CLI writes (model JSON, run's summary.json) give its flags.
+  for (auto& q : mf.fit["quality_reasons"]) {
+    for (const char* k : {"message", "advice"}) q[k] = WithFlags(q[k].get<std::string>());
+  }
+  return mf;
 }
 
 std::string ParameterTable(const io::ModelFile& mf, bool linear) { return analysis::ParameterTable(mf, linear); }

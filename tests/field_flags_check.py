@@ -11,7 +11,8 @@ the table from going stale:
 3. no string literal of the library names a command-line flag ("--name");
 4. end to end: the CLI prints the flag, not the field, for an option error
    (zwidth excite --rms -1) and for a log-selection error (zwidth estimate
-   --time-unit min), and writes nothing.
+   --time-unit min), and writes nothing; the fit's quality advice in the model
+   JSON that `zwidth fit` writes names flags.
 
 Usage: field_flags_check.py ZWIDTH_BINARY SOURCE_DIR
 """
@@ -124,6 +125,18 @@ with tempfile.TemporaryDirectory() as tmp:
         failures.append(f"estimate --time-unit min: exit {r.returncode}, stderr {r.stderr!r}")
     if os.path.exists(os.path.join(tmp, "f.csv")):
         failures.append("estimate --time-unit min wrote its output")
+
+    # The files the CLI writes give flags too: the fit's quality advice in the model JSON.
+    table1 = os.path.join(src, "datasets", "phantom", "table1.json")
+    sim, model = os.path.join(tmp, "s.csv"), os.path.join(tmp, "m.json")
+    subprocess.run([zwidth, "simulate", "--model", table1, "-o", sim, "--seconds", "4", "--seed", "3"],
+                   capture_output=True, check=True)
+    subprocess.run([zwidth, "fit", sim, "-o", model, "--allow-short", "--window-length", "2048"],
+                   capture_output=True, check=True)
+    with open(model) as f:
+        text = f.read()
+    if "use a shorter --window-length" not in text or "Options::" in text:
+        failures.append("fit's model JSON: the few_averages advice does not name --window-length")
 
 for f in failures:
     print("FAIL:", f)
