@@ -43,6 +43,7 @@ analysis::RunInput EstimateAndFit(const RunFlags& f, analysis::RunInput in, doub
   in.whole_record = f.est.whole_record;
   *t_total_ms = timer.Lap("estimate (read + Welch)");
   in.model = FitToModelFile(in.response.frf, f.fit.o, in.source, &in.fit);
+  for (std::string& w : in.fit.warnings) w = WithFlags(w);  // the report shows the CLI's flags
   *t_total_ms += timer.Lap("fit");
   return in;
 }

@@ -364,10 +364,7 @@ void AddRelayCommand(CLI::App& app) {
     if (loops.size() != 1) throw InputError("relay: give at most one --hand (the experiment runs one loop)");
     rf->o.loop = loops.front();
     std::string why;
-    if (!rf->o.IsValid(&why)) {  // the fields' flags: --period, --delay, --damping, --amplitude, --seconds
-      throw InputError(why + " (relay flags: period_s --period, delay_samples --delay, damping --damping, "
-                       "amplitude --amplitude, seconds --seconds)");
-    }
+    if (!rf->o.IsValid(&why)) throw InputError(why);  // the fields' flags: FieldFlags() in common.cc
     std::fprintf(stderr, "simulating %.3g s of relay feedback (d = %d, B = %g)...\n", rf->o.seconds,
                  rf->o.delay_samples, rf->o.damping);
     const stability::RelayResult res = stability::SimulateRelay(mf.plant, rf->o);

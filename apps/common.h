@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -15,6 +16,17 @@
 #include <limits>
 
 namespace zwidth::app {
+
+// The library's messages name option fields ("WelchOptions::window_length");
+// the CLI's name flags. The one table of field -> flag ("" = no flag: the CLI
+// leaves the field at its default), and the message with each field it names
+// replaced by its flag (a field not in the table is left as it is).
+struct FieldFlag {
+  const char* field;
+  const char* flag;
+};
+const std::vector<FieldFlag>& FieldFlags();
+std::string WithFlags(const std::string& message);
 
 struct EstimateFlags {
   io::LogSelect select;

@@ -1,4 +1,5 @@
 #include "apps/fit_support.h"
+#include "apps/common.h"
 
 #include "analysis/compare.h"
 #include "analysis/run.h"
@@ -57,7 +58,8 @@ void FitFlags::Resolve(double fmin_hz, double fmax_hz) {
   if (!o.IsValid(&why)) throw InputError(why);
 }
 
-std::string FitReport(const fit::FitResult& r) { return analysis::FitReport(r); }
+// The library names option fields; the CLI shows its flags (WithFlags).
+std::string FitReport(const fit::FitResult& r) { return WithFlags(analysis::FitReport(r)); }
 
 void ResolveDelayFlag(const std::string& flag, fit::FitOptions* o) {
   if (flag == "auto") { o->auto_delay = true; return; }
@@ -79,9 +81,14 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
   FLAGS_minloglevel = google::GLOG_FATAL;
   const fit::FitResult r = fit::FitModel(frf, o);
   if (out) *out = r;
-  for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", WithFlags(w).c_str());
   if (r.status != fit::FitStatus::kConverged) throw ComputationError(r.message);
-  return io::FittedModelFile(r, frf, o, source);
+  io::ModelFile mf = io::FittedModelFile(r, frf, o, source);
+  // The files the CLI writes (model JSON, run's summary.json) give its flags.
+  for (auto& q : mf.fit["quality_reasons"]) {
+    for (const char* k : {"message", "advice"}) q[k] = WithFlags(q[k].get<std::string>());
+  }
+  return mf;
 }
 
 std::string ParameterTable(const io::ModelFile& mf, bool linear) { return analysis::ParameterTable(mf, linear); }

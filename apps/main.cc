@@ -30,10 +30,10 @@ int main(int argc, char** argv) {
     const int code = app.exit(e);
     return code == 0 ? 0 : 2;
   } catch (const zwidth::InputError& e) {
-    std::fprintf(stderr, "zwidth: error: %s\n", e.what());
+    std::fprintf(stderr, "zwidth: error: %s\n", zwidth::app::WithFlags(e.what()).c_str());
     return 2;
   } catch (const zwidth::ComputationError& e) {
-    std::fprintf(stderr, "zwidth: computation failed: %s\n", e.what());
+    std::fprintf(stderr, "zwidth: computation failed: %s\n", zwidth::app::WithFlags(e.what()).c_str());
     return 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "zwidth: internal error: %s\n", e.what());

@@ -269,7 +269,7 @@ Fixed FitFixed(const ident::FrequencyResponse& sub, const FitOptions& o, int n, 
   const size_t usable = MakeBins(sub, 0, o.relative_std_floor).z.size();
   if (static_cast<int>(2 * usable) <= p) {
     throw InputError("the response has " + std::to_string(usable) + " usable bins, too few for " +
-                     std::to_string(p) + " parameters; widen --fmin/--fmax or use fewer --modes");
+                     std::to_string(p) + " parameters; widen BandOptions::fmin_hz/BandOptions::fmax_hz or use fewer FitOptions::num_modes");
   }
   Screening sc;
   if (!o.auto_delay) {
@@ -311,24 +311,24 @@ using namespace internal;
 
 bool FitOptions::IsValid(std::string* why) const {
   auto bad = [&](const std::string& m) { if (why) *why = m; return false; };
-  if (num_modes < 0 || num_modes > 20) return bad("--modes must be in [0, 20]");
-  if (delay_samples < 0) return bad("--delay-samples must be >= 0");
-  if (max_auto_delay < 0 || max_auto_delay > 1000) return bad("max_auto_delay (--max-delay) must be in [0, 1000]");
-  if (!(min_damping_ratio > 0 && min_damping_ratio < max_pole_damping_ratio)) return bad("min_damping_ratio must be in (0, max_pole_damping_ratio)");
-  if (!(max_pole_damping_ratio < 1.0)) return bad("max_pole_damping_ratio must be < 1");
-  if (!(max_zero_damping_ratio > min_damping_ratio)) return bad("max_zero_damping_ratio must be > min_damping_ratio");
-  if (!(max_frequency_fraction > 0 && max_frequency_fraction < 1)) return bad("max_frequency_fraction must be in (0, 1)");
-  if (!(relative_std_floor >= 0)) return bad("relative_std_floor must be >= 0");
-  if (max_iterations < 1) return bad("max_iterations must be >= 1");
-  if (!(function_tolerance > 0)) return bad("function_tolerance must be > 0");
-  if (max_starts < 1) return bad("max_starts must be >= 1");
-  if (max_modes < 0 || max_modes > 8) return bad("max_modes (--max-modes) must be in [0, 8]");
-  if (min_averages < 1) return bad("min_averages must be >= 1");
-  if (max_converged_starts < 1) return bad("max_converged_starts must be >= 1");
-  if (!(runner_up_cost_ratio >= 1.0)) return bad("runner_up_cost_ratio must be >= 1");
+  if (num_modes < 0 || num_modes > 20) return bad("FitOptions::num_modes must be in [0, 20]");
+  if (delay_samples < 0) return bad("FitOptions::delay_samples must be >= 0");
+  if (max_auto_delay < 0 || max_auto_delay > 1000) return bad("FitOptions::max_auto_delay must be in [0, 1000]");
+  if (!(min_damping_ratio > 0 && min_damping_ratio < max_pole_damping_ratio)) return bad("FitOptions::min_damping_ratio must be in (0, FitOptions::max_pole_damping_ratio)");
+  if (!(max_pole_damping_ratio < 1.0)) return bad("FitOptions::max_pole_damping_ratio must be < 1");
+  if (!(max_zero_damping_ratio > min_damping_ratio)) return bad("FitOptions::max_zero_damping_ratio must be > FitOptions::min_damping_ratio");
+  if (!(max_frequency_fraction > 0 && max_frequency_fraction < 1)) return bad("FitOptions::max_frequency_fraction must be in (0, 1)");
+  if (!(relative_std_floor >= 0)) return bad("FitOptions::relative_std_floor must be >= 0");
+  if (max_iterations < 1) return bad("FitOptions::max_iterations must be >= 1");
+  if (!(function_tolerance > 0)) return bad("FitOptions::function_tolerance must be > 0");
+  if (max_starts < 1) return bad("FitOptions::max_starts must be >= 1");
+  if (max_modes < 0 || max_modes > 8) return bad("FitOptions::max_modes must be in [0, 8]");
+  if (min_averages < 1) return bad("FitOptions::min_averages must be >= 1");
+  if (max_converged_starts < 1) return bad("FitOptions::max_converged_starts must be >= 1");
+  if (!(runner_up_cost_ratio >= 1.0)) return bad("FitOptions::runner_up_cost_ratio must be >= 1");
   if (std::string w; !band.IsValid(&w)) return bad(w);
   if (!auto_modes && init && static_cast<int>(init->modes.size()) != num_modes) {
-    return bad("--init has " + std::to_string(init->modes.size()) + " modes but --modes is " + std::to_string(num_modes));
+    return bad("FitOptions::init has " + std::to_string(init->modes.size()) + " modes but FitOptions::num_modes is " + std::to_string(num_modes));
   }
   return true;
 }
@@ -378,8 +378,8 @@ void CheckInput(const ident::FrequencyResponse& frf, const FitOptions& o) {
                      std::to_string(frf.window_length) + " samples; with fewer than " + std::to_string(o.min_averages) +
                      " its per-bin std, hence the fit's weights, chi2 and standard errors, mean nothing. Options: "
                      "record a longer log (at least " + std::to_string(2 * frf.window_length) +
-                     " samples at this window), use a shorter window (e.g. --window-length " + std::to_string(w) +
-                     ", at the cost of frequency resolution), or --allow-short to fit anyway (judged poor)");
+                     " samples at this window), use a shorter window (e.g. WelchOptions::window_length " + std::to_string(w) +
+                     ", at the cost of frequency resolution), or FitOptions::allow_few_averages to fit anyway (judged poor)");
   }
 }
 
@@ -436,12 +436,12 @@ void Verdict(const Fixed& chosen, const ident::FrequencyResponse& sub, const Fit
   if (o.auto_modes && res->plant.modes.size() == static_cast<size_t>(o.max_modes) && o.max_modes > 0) {
     res->reasons.push_back({"order_search_at_limit",
                             "the order search chose its maximum, " + std::to_string(o.max_modes) + " modes",
-                            "raise --max-modes, or narrow the band to the modes that matter"});
+                            "raise FitOptions::max_modes, or narrow the band to the modes that matter"});
   }
   if (o.auto_delay && res->plant.delay_samples >= o.max_auto_delay) {
     res->reasons.push_back({"delay_search_at_limit",
                             "the delay search chose its maximum, " + std::to_string(o.max_auto_delay) + " samples",
-                            "check the log's timing (a constant input-output offset), or give --delay-samples"});
+                            "check the log's timing (a constant input-output offset), or give FitOptions::delay_samples"});
   }
   res->quality = res->reasons.empty() ? FitQuality::kGood : FitQuality::kPoor;
 }

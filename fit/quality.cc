@@ -37,7 +37,7 @@ void JudgeQuality(const Fixed& fx, const ident::FrequencyResponse& sub, const Fi
   if (res->chi2_per_dof > chi_limit) {
     add("chi2_per_dof", Fmt("chi2/dof %.3g is above %.3g: the model does not explain the response within its std",
                             res->chi2_per_dof, chi_limit),
-        "try more modes (--modes auto), --delay-samples auto, or a band where the device is linear (--fmin/--fmax)");
+        "try more modes (FitOptions::auto_modes), FitOptions::auto_delay, or a band where the device is linear (BandOptions::fmin_hz/BandOptions::fmax_hz)");
   }
   // Runs test on every 3rd bin (Hann bins 3 apart are uncorrelated).
   const int stride = kappa > 1.2 ? 3 : 1;
@@ -60,7 +60,7 @@ void JudgeQuality(const Fixed& fx, const ident::FrequencyResponse& sub, const Fi
   res->runs_z = z_min;
   if (z_min < -4.0) {
     add("residual_runs", Fmt("the residual has long runs of one sign (runs test z = %.3g < -4): systematic misfit", z_min),
-        "the model misses a feature of the response: more modes (--modes auto), a delay (--delay-samples auto)");
+        "the model misses a feature of the response: more modes (FitOptions::auto_modes), a delay (FitOptions::auto_delay)");
   }
   // Misfit concentrated in one octave.
   if (!fx.r.empty()) {
@@ -88,19 +88,19 @@ void JudgeQuality(const Fixed& fx, const ident::FrequencyResponse& sub, const Fi
       res->misfit_band_hz = {a, b};
       add("misfit_band", Fmt("the misfit is concentrated in %.4g-%.4g Hz (chi2/dof %.3g there, %.3g elsewhere)", a, b,
                              worst_chi, rest_chi),
-          "a mode there is missing or wrong: more modes, or leave that band out (--fmin/--fmax)");
+          "a mode there is missing or wrong: more modes, or leave that band out (BandOptions::fmin_hz/BandOptions::fmax_hz)");
     }
   }
   if (sub.num_averages < o.min_averages) {
     add("few_averages", "the response averages " + std::to_string(sub.num_averages) +
                             " Welch segment(s): its per-bin std, hence the weights and the standard errors, mean little",
-        "record a longer log or use a shorter --window-length");
+        "record a longer log or use a shorter WelchOptions::window_length");
   }
   for (const std::string& s : SpuriousSections(*res, o)) {
     const bool bound = s.find("bound") != std::string::npos;
     add(bound ? "parameter_at_bound" : "spurious_section", s,
-        bound ? "the data may not support this many modes: fewer modes (--modes auto)"
-              : "fewer modes (--modes auto) or a wider band");
+        bound ? "the data may not support this many modes: fewer modes (FitOptions::auto_modes)"
+              : "fewer modes (FitOptions::auto_modes) or a wider band");
   }
 }
 

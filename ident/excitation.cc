@@ -64,16 +64,16 @@ bool FromString(const std::string& s, ExcitationKind* k) {
 
 bool ExcitationOptions::IsValid(std::string* why) const {
   auto bad = [&](const std::string& m) { if (why) *why = m; return false; };
-  if (!(sample_rate_hz > 0.0 && std::isfinite(sample_rate_hz))) return bad("sample_rate_hz (--rate) must be finite and > 0");
-  if (!(seconds > 0.0 && std::isfinite(seconds))) return bad("seconds must be finite and > 0");
-  if (seconds * sample_rate_hz > 1e8) return bad("seconds x rate is over 1e8 samples");
-  if (seconds * sample_rate_hz < 16) return bad("seconds x rate gives fewer than 16 samples");
-  if (!(rms > 0.0 && std::isfinite(rms))) return bad("rms must be finite and > 0");
-  if (!(fmin_hz >= 0.0 && std::isfinite(fmin_hz))) return bad("fmin must be finite and >= 0");
-  if (kind == ExcitationKind::kChirp && !(fmin_hz > 0.0)) return bad("fmin must be > 0 for a logarithmic chirp");
-  if (!(fmax_hz > fmin_hz)) return bad("fmax must be > fmin");
+  if (!(sample_rate_hz > 0.0 && std::isfinite(sample_rate_hz))) return bad("ExcitationOptions::sample_rate_hz must be finite and > 0");
+  if (!(seconds > 0.0 && std::isfinite(seconds))) return bad("ExcitationOptions::seconds must be finite and > 0");
+  if (seconds * sample_rate_hz > 1e8) return bad("ExcitationOptions::seconds x ExcitationOptions::sample_rate_hz is over 1e8 samples");
+  if (seconds * sample_rate_hz < 16) return bad("ExcitationOptions::seconds x ExcitationOptions::sample_rate_hz gives fewer than 16 samples");
+  if (!(rms > 0.0 && std::isfinite(rms))) return bad("ExcitationOptions::rms must be finite and > 0");
+  if (!(fmin_hz >= 0.0 && std::isfinite(fmin_hz))) return bad("ExcitationOptions::fmin_hz must be finite and >= 0");
+  if (kind == ExcitationKind::kChirp && !(fmin_hz > 0.0)) return bad("ExcitationOptions::fmin_hz must be > 0 for a logarithmic chirp");
+  if (!(fmax_hz > fmin_hz)) return bad("ExcitationOptions::fmax_hz must be > ExcitationOptions::fmin_hz");
   if (!(fmax_hz < 0.5 * sample_rate_hz)) {
-    return bad("fmax = " + std::to_string(fmax_hz) + " Hz must be below the Nyquist frequency " +
+    return bad("ExcitationOptions::fmax_hz = " + std::to_string(fmax_hz) + " Hz must be below the Nyquist frequency " +
                std::to_string(0.5 * sample_rate_hz) + " Hz");
   }
   return true;

@@ -113,7 +113,7 @@ int WelchOptions::overlap_samples() const {
 }
 
 bool WelchOptions::IsValid(std::string* why) const {
-  auto bad = [&](const std::string& m) { if (why) *why = m; return false; };
+  auto bad = [&](const std::string& m) { if (why) *why = "WelchOptions::" + m; return false; };
   if (window_length < 16) {
     return bad("window_length = " + std::to_string(window_length) + ": must be >= 16 samples");
   }
@@ -122,8 +122,8 @@ bool WelchOptions::IsValid(std::string* why) const {
     return bad("overlap = " + std::to_string(overlap) + ": must be in [0, 1)");
   }
   if (window_length - overlap_samples() < 1) return bad("overlap leaves no step between segments");
-  if (!(std::isfinite(fmin_hz) && fmin_hz >= 0.0)) return bad("fmin must be finite and >= 0");
-  if (!(fmax_hz > fmin_hz)) return bad("fmax must be > fmin");
+  if (!(std::isfinite(fmin_hz) && fmin_hz >= 0.0)) return bad("fmin_hz must be finite and >= 0");
+  if (!(fmax_hz > fmin_hz)) return bad("fmax_hz must be > WelchOptions::fmin_hz");
   return true;
 }
 
@@ -243,7 +243,7 @@ FrequencyResponse WelchEstimator::Finish(double fs) const {
     while (suggest * 2 <= static_cast<int>(seen_)) suggest *= 2;
     throw InputError("the log has " + std::to_string(seen_) +
                      " samples, fewer than one window of " + std::to_string(n) +
-                     (seen_ >= 16 ? "; use --window-length " + std::to_string(suggest) + " or less"
+                     (seen_ >= 16 ? "; use WelchOptions::window_length " + std::to_string(suggest) + " or less"
                                   : "; record a longer log"));
   }
   if (!(fs > 0.0) || !std::isfinite(fs)) throw InputError("sample rate must be finite and > 0");
@@ -301,12 +301,12 @@ FrequencyResponse WelchEstimator::Finish(double fs) const {
 
 bool BandOptions::IsValid(std::string* why) const {
   auto bad = [&](const std::string& m) { if (why) *why = m; return false; };
-  if (!(std::isfinite(fmin_hz) && fmin_hz >= 0.0)) return bad("fmin_hz (--fmin) must be finite and >= 0");
-  if (!(fmax_hz > fmin_hz)) return bad("fmax_hz (--fmax) must be > fmin_hz (--fmin)");
+  if (!(std::isfinite(fmin_hz) && fmin_hz >= 0.0)) return bad("BandOptions::fmin_hz must be finite and >= 0");
+  if (!(fmax_hz > fmin_hz)) return bad("BandOptions::fmax_hz must be > BandOptions::fmin_hz");
   if (!(min_input_power_ratio >= 0.0 && min_input_power_ratio < 1.0)) {
-    return bad("min_input_power_ratio (--min-input-power) must be in [0, 1)");
+    return bad("BandOptions::min_input_power_ratio must be in [0, 1)");
   }
-  if (!(min_coherence >= 0.0 && min_coherence < 1.0)) return bad("min_coherence (--min-coherence) must be in [0, 1)");
+  if (!(min_coherence >= 0.0 && min_coherence < 1.0)) return bad("BandOptions::min_coherence must be in [0, 1)");
   return true;
 }
 
@@ -346,7 +346,7 @@ std::string ExcitedBand::Describe() const {
   char s[400];
   std::snprintf(s, sizeof s, "used %d of %zu bins, %.4g-%.4g Hz", num_used, used.size(), f_lo_hz, f_hi_hz);
   std::string out = s;
-  if (num_outside) out += "; " + std::to_string(num_outside) + " outside --fmin/--fmax";
+  if (num_outside) out += "; " + std::to_string(num_outside) + " outside BandOptions::fmin_hz/BandOptions::fmax_hz";
   if (num_low_input) out += "; " + std::to_string(num_low_input) + " where the input carries too little power";
   if (num_low_coherence) out += "; " + std::to_string(num_low_coherence) + " with too low coherence";
   if (!input_power_known) out += "; the response has no input PSD (S_uu): input power not checked";

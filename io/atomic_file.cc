@@ -373,7 +373,7 @@ OutputFolder::OutputFolder(const std::string& path_given, bool force) : path_(pa
     if (ec) throw InputError("output folder '" + path + "': " + ec.message());
     if (!empty && !force) {
       throw InputError("output folder '" + path +
-                       "' is not empty: choose a new folder, empty this one, or pass --force to replace "
+                       "' is not empty: choose a new folder, empty this one, or pass OutputFolder::force to replace "
                        "zwidth's files in it (other files are kept)");
     }
   } else {

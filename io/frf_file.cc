@@ -185,11 +185,11 @@ void Finish(ident::FrequencyResponse& r, const std::string& path, double rate) {
   }
   if (rate > 0.0) r.sample_rate_hz = rate;
   if (!(r.sample_rate_hz > 0.0) || !std::isfinite(r.sample_rate_hz)) {
-    throw InputError(path + ": no sample_rate_hz column or attribute; pass --rate (the log's sample rate)");
+    throw InputError(path + ": no sample_rate_hz column or attribute; pass ReadFrequencyResponse::sample_rate_hz (the log's sample rate)");
   }
   if (r.f_hz.back() >= 0.5 * r.sample_rate_hz) {
     char msg[160];
-    std::snprintf(msg, sizeof msg, ": frequencies reach %g Hz, the Nyquist frequency of %g Hz; wrong --rate?",
+    std::snprintf(msg, sizeof msg, ": frequencies reach %g Hz, the Nyquist frequency of %g Hz; wrong ReadFrequencyResponse::sample_rate_hz?",
                   r.f_hz.back(), 0.5 * r.sample_rate_hz);
     throw InputError(path + msg);
   }

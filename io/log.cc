@@ -118,9 +118,9 @@ LogFormat DetectLogFormat(const std::string& path) {
 
 LogInfo StreamLog(const std::string& path, const LogSelect& select, const LogSink& sink) {
   if (select.sample_rate_hz < 0.0 || !std::isfinite(select.sample_rate_hz)) {
-    throw InputError("--rate must be finite and > 0");
+    throw InputError("LogSelect::sample_rate_hz must be finite and > 0");
   }
-  for (const auto& [v, flag] : {std::pair{select.input_scale, "--input-scale"}, std::pair{select.output_scale, "--output-scale"}}) {
+  for (const auto& [v, flag] : {std::pair{select.input_scale, "LogSelect::input_scale"}, std::pair{select.output_scale, "LogSelect::output_scale"}}) {
     if (!std::isfinite(v) || v == 0.0) {
       throw InputError(std::string(flag) + " = " + std::to_string(v) + ": must be finite and non-zero");
     }
@@ -139,9 +139,9 @@ LogInfo StreamLog(const std::string& path, const LogSelect& select, const LogSin
   const LogFormat format = DetectLogFormat(path);
   if (format == LogFormat::kCsv) return StreamCsv(path, select, capped);
   if (!select.time_unit.empty() && select.time_unit != "s") {
-    throw InputError(path + ": --time-unit applies to text logs; this " +
+    throw InputError(path + ": LogSelect::time_unit applies to text logs; this " +
                      std::string(format == LogFormat::kMat ? "MATLAB" : "HDF5") +
-                     " log's time is read in s (give --rate instead)");
+                     " log's time is read in s (give LogSelect::sample_rate_hz instead)");
   }
   // Scales applied here for the binary formats (the text reader applies them).
   std::vector<double> su, sy;

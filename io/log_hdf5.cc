@@ -227,8 +227,8 @@ LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& sel, const
     throw InputError(path + ": cannot open as HDF5 (missing, truncated or corrupt file)");
   }
   try {
-    H5::DataSet du = OpenDataset(*file, path, sel.input_dataset, "--input-dataset");
-    H5::DataSet dy = OpenDataset(*file, path, sel.output_dataset, "--output-dataset");
+    H5::DataSet du = OpenDataset(*file, path, sel.input_dataset, "LogSelect::input_dataset");
+    H5::DataSet dy = OpenDataset(*file, path, sel.output_dataset, "LogSelect::output_dataset");
     const size_t n = Length1D(du, H5Where(path, sel.input_dataset));
     if (Length1D(dy, H5Where(path, sel.output_dataset)) != n) {
       throw InputError(path + ": '" + sel.input_dataset + "' and '" + sel.output_dataset +
@@ -248,14 +248,14 @@ LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& sel, const
     const bool have_time = H5LinkExists(file->getId(), path, sel.time_dataset);
     H5::DataSet dt;
     if (have_time) {
-      dt = OpenDataset(*file, path, sel.time_dataset, "--time-dataset");
+      dt = OpenDataset(*file, path, sel.time_dataset, "LogSelect::time_dataset");
       if (Length1D(dt, H5Where(path, sel.time_dataset)) != n) {
         throw InputError(path + ": '" + sel.time_dataset + "' has a different length from the signals");
       }
       CheckWritten(dt, H5Where(path, sel.time_dataset));
     } else if (attr_rate <= 0.0 && sel.sample_rate_hz <= 0.0) {
       throw InputError(path + ": neither a '" + sel.time_dataset +
-                       "' dataset nor a sample_rate_hz attribute; pass --rate");
+                       "' dataset nor a sample_rate_hz attribute; pass LogSelect::sample_rate_hz");
     }
     TimeChecker times(path, sel.max_interval_deviation, sel.sample_rate_hz <= 0.0);  // --rate: only increasing
     ConstantCheck constant;
@@ -295,7 +295,7 @@ LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& sel, const
     } else {
       info.sample_rate_hz = time_rate;
     }
-    if (!(info.sample_rate_hz > 0.0)) throw InputError(path + ": cannot tell the sample rate; pass --rate");
+    if (!(info.sample_rate_hz > 0.0)) throw InputError(path + ": cannot tell the sample rate; pass LogSelect::sample_rate_hz");
     return info;
   } catch (const H5::Exception& e) {
     throw InputError(path + ": HDF5 error (" + e.getDetailMsg() + "): truncated or corrupt file?");

@@ -122,15 +122,15 @@ LogInfo StreamMatInProcess(const std::string& path, const LogSelect& sel, const 
                        " file (variables: " + MatVariables(mat.get()) + "); choose one with " + flag);
     }
   };
-  need(sel.input_column, "--input-column", &u);
-  need(sel.output_column, "--output-column", &y);
+  need(sel.input_column, "LogSelect::input_column", &u);
+  need(sel.output_column, "LogSelect::output_column", &y);
   const bool rate_given = sel.sample_rate_hz > 0.0;
   bool have_time = false;
   if (sel.time_column != "none") {
-    have_time = ReadMatVector(mat.get(), path, sel.time_column, "--time-column", &t);
+    have_time = ReadMatVector(mat.get(), path, sel.time_column, "LogSelect::time_column", &t);
     if (!have_time && !rate_given) {
       throw InputError(path + ": no time variable '" + sel.time_column.substr(0, 40) + "' (variables: " +
-                       MatVariables(mat.get()) + "); choose one with --time-column, or pass --rate");
+                       MatVariables(mat.get()) + "); choose one with LogSelect::time_column, or pass LogSelect::sample_rate_hz");
     }
   }
   if (u.size() != y.size() || (have_time && t.size() != u.size())) {
@@ -159,7 +159,7 @@ LogInfo StreamMatInProcess(const std::string& path, const LogSelect& sel, const 
   info.num_samples = u.size();
   info.sample_rate_hz = rate_given ? sel.sample_rate_hz : times.Rate();
   if (!(info.sample_rate_hz > 0.0) || !std::isfinite(info.sample_rate_hz)) {
-    throw InputError(path + ": cannot tell the sample rate (fewer than 2 samples?); pass --rate");
+    throw InputError(path + ": cannot tell the sample rate (fewer than 2 samples?); pass LogSelect::sample_rate_hz");
   }
   return info;
 }

@@ -169,7 +169,7 @@ std::optional<Delim> GivenDelim(const std::string& s) {
       s[0] != '-' && s[0] != '+') {
     return Delim{s[0], false};
   }
-  throw InputError("--delimiter '" + s.substr(0, 20) +
+  throw InputError("LogSelect::delimiter '" + s.substr(0, 20) +
                    "' is not one of , ; tab space (or another single character that is not a digit, sign, '.' or '#')");
 }
 
@@ -186,7 +186,7 @@ double TimeScale(const std::string& unit) {
   if (unit.empty() || unit == "s") return 1.0;
   if (unit == "ms") return 1e-3;
   if (unit == "us") return 1e-6;
-  throw InputError("--time-unit '" + unit.substr(0, 20) + "' is not one of s, ms, us");
+  throw InputError("LogSelect::time_unit '" + unit.substr(0, 20) + "' is not one of s, ms, us");
 }
 
 namespace {
@@ -241,7 +241,7 @@ CsvPreamble ReadPreamble(LineReader& reader, const std::string& path, const LogS
                          " looks like data, but " +
                          (delim ? "the delimiter " + delim->Name() + " does not split it into numbers"
                                 : std::string("no delimiter (; tab , whitespace) splits it into numbers")) +
-                         " (decimal commas? a stray field?); pass --delimiter or repair the file");
+                         " (decimal commas? a stray field?); pass LogSelect::delimiter or repair the file");
       }
     }
     if (last) ++skipped;
@@ -255,7 +255,7 @@ CsvPreamble ReadPreamble(LineReader& reader, const std::string& path, const LogS
     if (!last) throw InputError(path + ": empty file (expected a header line such as t,torque,position and numeric rows)");
     throw InputError(path + ": no numeric data row (last line " + std::to_string(last->no) + ": " +
                      Shown(last->text) + ")" +
-                     (sel.delimiter.empty() ? "" : "; is --delimiter " + sel.delimiter + " right?"));
+                     (sel.delimiter.empty() ? "" : "; is LogSelect::delimiter " + sel.delimiter + " right?"));
   }
   return result;
 }
@@ -290,7 +290,7 @@ CsvHeader ReadHeader(const std::optional<CsvPreLine>& last, const Delim& delim_v
       throw InputError(path + ": the line before the data (line " + std::to_string(last->no) + ", " +
                        Shown(last->text) + ") has " + std::to_string(hf.size()) + " fields separated by " +
                        delim->Name() + ", the first data line " + std::to_string(first_data) + " has " +
-                       std::to_string(ncols) + "; mark it with '#' if it is not a header, or pass --delimiter");
+                       std::to_string(ncols) + "; mark it with '#' if it is not a header, or pass LogSelect::delimiter");
     }
   }
   std::string layout = "text, " + delim->Name() + "-separated, " + std::to_string(ncols) + " columns, ";
@@ -326,7 +326,7 @@ int FindColumn(const std::string& spec, bool required, const char* flag, const s
   std::string msg = path + ": no column '" + spec.substr(0, 40) + "' (" + layout + "); ";
   if (pos > 0) msg += "position " + std::to_string(pos) + " is past the last column; ";
   msg += std::string("choose with ") + flag + " NAME or a position 1.." + std::to_string(ncols);
-  if (std::string(flag) == "--time-column") msg += ", or --time-column none with --rate";
+  if (std::string(flag) == "LogSelect::time_column") msg += ", or LogSelect::time_column none with LogSelect::sample_rate_hz";
   throw InputError(msg);
 }
 
@@ -343,18 +343,18 @@ void ResolveRate(const std::string& path, const LogSelect& sel, const TimeChecke
       const double jitter = std::max(std::abs(times.MaxInterval() - T), std::abs(times.MinInterval() - T));
       std::ostringstream os;
       os.precision(3);
-      os << "--rate " << std::to_string(sel.sample_rate_hz).substr(0, 12) << " Hz used; the time column's intervals deviate from 1/rate by up to "
+      os << "LogSelect::sample_rate_hz " << std::to_string(sel.sample_rate_hz).substr(0, 12) << " Hz used; the time column's intervals deviate from 1/rate by up to "
          << jitter << " s (" << 100.0 * jitter / T << " % of an interval)";
       const double tr = times.Rate();
       if (std::abs(tr - sel.sample_rate_hz) > 0.01 * sel.sample_rate_hz) {
-        os << " and imply " << tr << " Hz on average: check --rate";
+        os << " and imply " << tr << " Hz on average: check LogSelect::sample_rate_hz";
       }
       if (jitter > 1e-6 * T) info.warnings.push_back(os.str());
     }
   } else {
     info.sample_rate_hz = times.Rate();
     if (!(info.sample_rate_hz > 0.0) || !std::isfinite(info.sample_rate_hz)) {
-      throw InputError(path + ": cannot tell the sample rate (fewer than 2 rows?); pass --rate");
+      throw InputError(path + ": cannot tell the sample rate (fewer than 2 rows?); pass LogSelect::sample_rate_hz");
     }
     if (sel.time_unit.empty() && (info.sample_rate_hz < 10.0 || info.sample_rate_hz > 1e6)) {
       std::ostringstream os;
@@ -362,13 +362,13 @@ void ResolveRate(const std::string& path, const LogSelect& sel, const TimeChecke
       os << path << ": the time " << time_col_name << " implies a sample rate of " << info.sample_rate_hz
          << " Hz (mean interval " << 1.0 / info.sample_rate_hz << " s), implausible for a device log: ";
       if (info.sample_rate_hz * 1e3 >= 10.0 && info.sample_rate_hz * 1e3 <= 1e6) {
-        os << "is it in milliseconds? pass --time-unit ms (" << info.sample_rate_hz * 1e3 << " Hz)";
+        os << "is it in milliseconds? pass LogSelect::time_unit ms (" << info.sample_rate_hz * 1e3 << " Hz)";
       } else if (info.sample_rate_hz * 1e6 >= 10.0 && info.sample_rate_hz * 1e6 <= 1e6) {
-        os << "is it in microseconds? pass --time-unit us (" << info.sample_rate_hz * 1e6 << " Hz)";
+        os << "is it in microseconds? pass LogSelect::time_unit us (" << info.sample_rate_hz * 1e6 << " Hz)";
       } else {
-        os << "is it a sample index or another quantity? choose the time column with --time-column, or give --rate";
+        os << "is it a sample index or another quantity? choose the time column with LogSelect::time_column, or give LogSelect::sample_rate_hz";
       }
-      os << "; --time-unit s accepts it as is";
+      os << "; LogSelect::time_unit s accepts it as is";
       throw InputError(os.str());
     }
   }
@@ -398,10 +398,10 @@ LogInfo StreamCsv(const std::string& path, const LogSelect& sel, const LogSink& 
   auto find_col = [&](const std::string& spec, bool required, const char* flag) {
     return FindColumn(spec, required, flag, names, ncols, path, layout);
   };
-  const int ci = find_col(sel.input_column, true, "--input-column");
-  const int co = find_col(sel.output_column, true, "--output-column");
+  const int ci = find_col(sel.input_column, true, "LogSelect::input_column");
+  const int co = find_col(sel.output_column, true, "LogSelect::output_column");
   const bool rate_given = sel.sample_rate_hz > 0.0;
-  const int ct = sel.time_column == "none" ? -1 : find_col(sel.time_column, !rate_given, "--time-column");
+  const int ct = sel.time_column == "none" ? -1 : find_col(sel.time_column, !rate_given, "LogSelect::time_column");
   auto col_name = [&](int c) {
     return names.empty() ? "column " + std::to_string(c + 1) : "column '" + names[c].substr(0, 40) + "'";
   };
@@ -454,7 +454,7 @@ LogInfo StreamCsv(const std::string& path, const LogSelect& sel, const LogSink& 
   flush();
   if (!constant.varies) {
     throw InputError(path + ": input " + col_name(ci) +
-                     " is constant: the log has no excitation to identify from (wrong --input-column?)");
+                     " is constant: the log has no excitation to identify from (wrong LogSelect::input_column?)");
   }
   LogInfo info;
   info.source = path;

@@ -11,15 +11,15 @@ namespace zwidth {
 
 bool SimulateOptions::IsValid(std::string* why) const {
   auto bad = [&](const std::string& m) { if (why) *why = m; return false; };
-  if (!(std::isfinite(seconds) && seconds > 0)) return bad("--seconds must be > 0");
-  if (!(std::isfinite(sample_rate_hz) && sample_rate_hz > 0)) return bad("--rate must be > 0");
-  if (!(std::isfinite(torque_rms) && torque_rms > 0)) return bad("--torque-rms must be > 0");
-  if (!(std::isfinite(bandwidth_hz) && bandwidth_hz > 0)) return bad("--bandwidth-hz must be > 0");
-  if (!(std::isfinite(encoder_step_rad) && encoder_step_rad >= 0)) return bad("--encoder-step must be >= 0");
-  if (!(std::isfinite(noise_std_rad) && noise_std_rad >= 0)) return bad("--noise-std must be >= 0");
-  if (delay_samples < 0) return bad("--delay-samples must be >= 0");
-  if (seconds * sample_rate_hz < 2) return bad("--seconds * --rate must give at least 2 samples");
-  if (seconds * sample_rate_hz > 1e9) return bad("--seconds * --rate is over 1e9 samples");
+  if (!(std::isfinite(seconds) && seconds > 0)) return bad("SimulateOptions::seconds must be > 0");
+  if (!(std::isfinite(sample_rate_hz) && sample_rate_hz > 0)) return bad("SimulateOptions::sample_rate_hz must be > 0");
+  if (!(std::isfinite(torque_rms) && torque_rms > 0)) return bad("SimulateOptions::torque_rms must be > 0");
+  if (!(std::isfinite(bandwidth_hz) && bandwidth_hz > 0)) return bad("SimulateOptions::bandwidth_hz must be > 0");
+  if (!(std::isfinite(encoder_step_rad) && encoder_step_rad >= 0)) return bad("SimulateOptions::encoder_step_rad must be >= 0");
+  if (!(std::isfinite(noise_std_rad) && noise_std_rad >= 0)) return bad("SimulateOptions::noise_std_rad must be >= 0");
+  if (delay_samples < 0) return bad("SimulateOptions::delay_samples must be >= 0");
+  if (seconds * sample_rate_hz < 2) return bad("SimulateOptions::seconds * SimulateOptions::sample_rate_hz must give at least 2 samples");
+  if (seconds * sample_rate_hz > 1e9) return bad("SimulateOptions::seconds * SimulateOptions::sample_rate_hz is over 1e9 samples");
   return true;
 }
 

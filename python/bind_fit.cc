@@ -14,9 +14,15 @@ struct PyFitResult {
   io::ModelFile model;  // the fitted plant with its std and sample period
 };
 
-// The library's messages name the CLI flags; here they name the keywords.
+// The library's messages name option fields (FitOptions::allow_few_averages);
+// here they name the keywords. Other fields are left as they are (the CLI's
+// table of fields and flags is apps/common.cc).
 std::string Keywords(std::string s) {
-  for (auto [from, to] : {std::pair{"--allow-short", "allow_short=True"}, std::pair{"--window-length ", "window_length="}}) {
+  for (auto [from, to] : {std::pair{"FitOptions::allow_few_averages", "allow_short=True"},
+                          std::pair{"WelchOptions::window_length ", "window_length="},
+                          std::pair{"FitOptions::auto_modes", "modes='auto'"},
+                          std::pair{"FitOptions::auto_delay", "delay_samples='auto'"},
+                          std::pair{"FitOptions::num_modes", "modes"}}) {
     for (size_t p = s.find(from); p != std::string::npos; p = s.find(from, p)) s.replace(p, std::string(from).size(), to);
   }
   return s;

@@ -75,7 +75,7 @@ bool LoopOptions::IsValid(std::string* why) const {
 void SetLowPassFilter(double cutoff_hz, double period_s, LoopOptions* loop) {
   if (!(std::isfinite(cutoff_hz) && cutoff_hz > 0.0 && cutoff_hz < 0.5 / period_s)) {
     char buf[200];
-    std::snprintf(buf, sizeof buf, "--velocity-filter-hz = %g: must be > 0 and below the Nyquist frequency %g Hz",
+    std::snprintf(buf, sizeof buf, "SetLowPassFilter::cutoff_hz = %g: must be > 0 and below the Nyquist frequency %g Hz",
                   cutoff_hz, 0.5 / period_s);
     throw InputError(buf);
   }
@@ -104,10 +104,10 @@ void ParseFilterCoefficients(const std::string& text, const std::string& what, L
 }
 
 Hand ParseHand(const std::string& text) {
-  const std::vector<double> v = ParseNumbers(text, "--hand");
-  if (v.size() != 3) throw InputError("--hand '" + text + "': expected three numbers M,B,K (SI, at the measured coordinate)");
+  const std::vector<double> v = ParseNumbers(text, "LoopOptions::hand");
+  if (v.size() != 3) throw InputError("LoopOptions::hand '" + text + "': expected three numbers M,B,K (SI, at the measured coordinate)");
   Hand h{v[0], v[1], v[2]};
-  if (h.M < 0 || h.B < 0 || h.K < 0) throw InputError("--hand '" + text + "': M, B and K must be >= 0");
+  if (h.M < 0 || h.B < 0 || h.K < 0) throw InputError("LoopOptions::hand '" + text + "': M, B and K must be >= 0");
   return h;
 }
 
@@ -162,7 +162,7 @@ std::vector<KInterval> IntersectIntervals(const std::vector<KInterval>& a, const
 // ---- Passivity
 
 bool PassivityOptions::IsValid(std::string* why) const {
-  auto bad = [&](const char* m) { if (why) *why = m; return false; };
+  auto bad = [&](const char* m) { if (why) *why = std::string("PassivityOptions::") + m; return false; };
   if (min_grid_points < 64) return bad("min_grid_points must be >= 64");
   if (grid_points_per_delay < 8) return bad("grid_points_per_delay must be >= 8");
   if (!(theta_tolerance > 0.0 && theta_tolerance < 1e-3)) return bad("theta_tolerance must be in (0, 1e-3)");

@@ -56,7 +56,7 @@ Plant PerturbLog(const Plant& plant, const std::vector<double>& dx) {
 
 bool UncertaintyOptions::IsValid(std::string* why) const {
   if (!(log_step > 0.0 && log_step < 0.1)) {
-    if (why) *why = "log_step must be in (0, 0.1)";
+    if (why) *why = "UncertaintyOptions::log_step must be in (0, 0.1)";
     return false;
   }
   return true;
@@ -201,7 +201,7 @@ SummaryStd SummaryStdDelta(const PerturbedPlants& pl, const std::vector<double>&
 
 MonteCarloResult SummaryMonteCarlo(const Plant& plant, const std::vector<double>& cov, double T, int delay,
                                    int samples, std::uint64_t seed, const LoopOptions& loop) {
-  if (samples < 2) throw InputError("--monte-carlo needs at least 2 samples");
+  if (samples < 2) throw InputError("SummaryMonteCarlo::samples must be >= 2");
   const Eigen::MatrixXd S = CovMatrix(plant, cov);
   const int p = NumLogParameters(plant);
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(S);

@@ -76,7 +76,7 @@ using internal::BrentRoot;
 using internal::PolyMul;
 
 bool BoundaryOptions::IsValid(std::string* why) const {
-  auto bad = [&](const char* m) { if (why) *why = m; return false; };
+  auto bad = [&](const char* m) { if (why) *why = std::string("BoundaryOptions::") + m; return false; };
   if (min_grid_points < 64) return bad("min_grid_points must be >= 64");
   if (grid_points_per_delay < 8) return bad("grid_points_per_delay must be >= 8");
   if (!(theta_tolerance > 0.0 && theta_tolerance < 1e-3)) return bad("theta_tolerance must be in (0, 1e-3)");
@@ -296,10 +296,10 @@ bool ZWidth::IsStable(double K, double B) const {
 
 bool BGridOptions::IsValid(std::string* why) const {
   auto bad = [&](const std::string& m) { if (why) *why = m; return false; };
-  if (!(std::isfinite(b_min) && b_min >= 0.0)) return bad("--b-min must be finite and >= 0");
-  if (!std::isnan(b_max) && !(std::isfinite(b_max) && b_max >= b_min)) return bad("--b-max must be finite and >= --b-min");
-  if (!std::isnan(b_step) && !(std::isfinite(b_step) && b_step > 0.0)) return bad("--b-step must be finite and > 0");
-  if (!(b_points >= 2 && b_points <= kMaxBGridValues)) return bad("--b-points must be in [2, 1000000]");
+  if (!(std::isfinite(b_min) && b_min >= 0.0)) return bad("BGridOptions::b_min must be finite and >= 0");
+  if (!std::isnan(b_max) && !(std::isfinite(b_max) && b_max >= b_min)) return bad("BGridOptions::b_max must be finite and >= BGridOptions::b_min");
+  if (!std::isnan(b_step) && !(std::isfinite(b_step) && b_step > 0.0)) return bad("BGridOptions::b_step must be finite and > 0");
+  if (!(b_points >= 2 && b_points <= kMaxBGridValues)) return bad("BGridOptions::b_points must be in [2, 1000000]");
   return true;
 }
 
@@ -318,8 +318,8 @@ std::vector<double> MakeBGrid(const BGridOptions& o, double largest, double fall
   if (!(count * nd <= kMaxBGridValues)) {
     char buf[300];
     std::snprintf(buf, sizeof buf,
-                  "the B grid would have %.3g values x %d delays, over the cap of %.0f: raise --b-step, "
-                  "lower --b-points or narrow --b-min/--b-max",
+                  "the B grid would have %.3g values x %d delays, over the cap of %.0f: raise BGridOptions::b_step, "
+                  "lower BGridOptions::b_points or narrow BGridOptions::b_min/BGridOptions::b_max",
                   count, num_delays, kMaxBGridValues);
     throw InputError(buf);
   }

@@ -124,7 +124,7 @@ struct BGridOptions {
   double b_max = std::numeric_limits<double>::quiet_NaN();   // last B [N m s/rad]; nan = automatic
   double b_step = std::numeric_limits<double>::quiet_NaN();  // B step [N m s/rad], > 0; nan = from b_points
   int b_points = 1000;  // number of B values when b_step is not given, in [2, kMaxBGridValues]
-  bool IsValid(std::string* why) const;  // names the command-line flag
+  bool IsValid(std::string* why) const;  // names the field: "BGridOptions::b_step must be ..."
 };
 // Cap on B values x delays of one table (about 100 MB of CSV).
 constexpr double kMaxBGridValues = 1e6;

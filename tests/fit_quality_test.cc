@@ -95,8 +95,8 @@ TEST(FitQuality, OneSegmentLogIsRefusedUnlessAllowed) {
     ADD_FAILURE() << "a one-segment log was fitted";
   } catch (const InputError& e) {
     const std::string m = e.what();
-    EXPECT_NE(m.find("--window-length"), std::string::npos) << m;
-    EXPECT_NE(m.find("--allow-short"), std::string::npos) << m;
+    EXPECT_NE(m.find("WelchOptions::window_length"), std::string::npos) << m;
+    EXPECT_NE(m.find("FitOptions::allow_few_averages"), std::string::npos) << m;
   }
   o.allow_few_averages = true;
   const FitResult r = FitModel(frf, o);

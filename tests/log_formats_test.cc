@@ -132,7 +132,7 @@ TEST_F(LogFormats, WhitespaceNoHeaderByPositionMilliseconds) {
   sel.input_column = "2";
   sel.output_column = "3";
   // Time in ms read as s implies 1 Hz: refused with the suggestion.
-  EXPECT_NE(Refusal(p, sel).find("--time-unit ms"), std::string::npos);
+  EXPECT_NE(Refusal(p, sel).find("LogSelect::time_unit ms"), std::string::npos);
   sel.time_unit = "ms";
   const Log log = ReadLog(p, sel);
   ExpectSame(log, s);
@@ -161,7 +161,7 @@ TEST_F(LogFormats, MissingColumnSaysDelimiterAndHeader) {
   EXPECT_NE(m.find("no column 'torque'"), std::string::npos) << m;
   EXPECT_NE(m.find("';'-separated"), std::string::npos) << m;
   EXPECT_NE(m.find("header at line 1: t, force, position"), std::string::npos) << m;
-  EXPECT_NE(m.find("--input-column"), std::string::npos) << m;
+  EXPECT_NE(m.find("LogSelect::input_column"), std::string::npos) << m;
 }
 
 // The 610 kB CR-only file: no message may echo more than one line.
@@ -201,10 +201,10 @@ TEST_F(LogFormats, RefusalsSayWhatWasFound) {
   // Bad flags.
   LogSelect sel;
   sel.time_unit = "min";
-  EXPECT_NE(Refusal(Write("n.csv", "t,torque,position\n0,1,2\n"), sel).find("--time-unit 'min'"), std::string::npos);
+  EXPECT_NE(Refusal(Write("n.csv", "t,torque,position\n0,1,2\n"), sel).find("LogSelect::time_unit 'min'"), std::string::npos);
   sel = {};
   sel.input_scale = 0.0;
-  EXPECT_NE(Refusal(Write("o.csv", "t,torque,position\n0,1,2\n"), sel).find("--input-scale"), std::string::npos);
+  EXPECT_NE(Refusal(Write("o.csv", "t,torque,position\n0,1,2\n"), sel).find("LogSelect::input_scale"), std::string::npos);
 }
 
 // .mat through libmatio's writer, v5 and v7.3 (HDF5), named with misleading

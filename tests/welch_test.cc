@@ -207,7 +207,7 @@ TEST(Welch, RefusesBadRequests) {
     FAIL();
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("1000 samples"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("--window-length 512"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("WelchOptions::window_length 512"), std::string::npos) << e.what();
   }
   Window w;
   EXPECT_FALSE(FromString("blackman", &w));
