@@ -71,6 +71,8 @@ const std::vector<FieldFlag>& FieldFlags() {
       {"SummaryMonteCarlo::samples", "--monte-carlo"},
       {"SetLowPassFilter::cutoff_hz", "--velocity-filter-hz"},
       {"LoopOptions::hand", "--hand"},
+      {"RunOptions::delays", "--delays"},
+      {"RunOptions::report_filter_hz", "--report-filter-hz"},
       {"RelayOptions::period_s", "--period"},
       {"RelayOptions::delay_samples", "--delay"},
       {"RelayOptions::damping", "--damping"},
