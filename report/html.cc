@@ -18,11 +18,11 @@ std::string Html(const std::string& s) {
 }
 
 // The verdict, the estimate and the fitted model.
-void FitSection(const analysis::RunAnalysis& a, std::ostringstream& h) {
+void FitSection(const analysis::RunAnalysis& a, const std::string& fit_report, std::ostringstream& h) {
   const fit::FitResult& fr = a.input.fit;
   const ident::FrequencyResponse& frf = a.input.response.frf;
   h << "<p><b>Fit quality: " << fit::ToString(fr.quality) << "</b>"
-    << (fr.quality == fit::FitQuality::kGood ? "" : ": the Z-width below comes from a model that does not explain the log; do not rely on it") << "</p>\n<pre>" << Html(analysis::FitReport(fr)) << "</pre>\n"
+    << (fr.quality == fit::FitQuality::kGood ? "" : ": the Z-width below comes from a model that does not explain the log; do not rely on it") << "</p>\n<pre>" << Html(fit_report.empty() ? analysis::FitReport(fr) : fit_report) << "</pre>\n"
     << "<p>Log <code>" << Html(a.input.source) << "</code>: " << a.input.total_samples << " samples at "
     << frf.sample_rate_hz << " Hz; Welch " << frf.num_averages << " averages of " << frf.window_length
     << " samples; " << Html(ident::ToString(a.input.response.method)) << "; " << frf.f_hz.size() << " bins from " << frf.f_hz.front() << " to " << frf.f_hz.back()
@@ -105,12 +105,12 @@ void FiguresSection(const analysis::RunAnalysis& a, bool have_figures, std::ostr
 
 }  // namespace
 
-std::string RunHtml(const analysis::RunAnalysis& a, bool have_figures) {
+std::string RunHtml(const analysis::RunAnalysis& a, bool have_figures, const std::string& fit_report) {
   std::ostringstream h;
   h << "<!DOCTYPE html><html><head><meta charset='utf-8'><title>zwidth report</title>"
     << "<style>body{font-family:sans-serif;max-width:1000px;margin:auto}pre{background:#f4f4f4;padding:8px}"
     << "img{max-width:100%}</style></head><body>\n<h1>zwidth report</h1>\n";
-  FitSection(a, h);
+  FitSection(a, fit_report, h);
   StabilitySection(a, h);
   FiguresSection(a, have_figures, h);
   h << "</body></html>\n";

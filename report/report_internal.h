@@ -26,6 +26,6 @@ struct FigureScriptOptions {
 std::string FigureScript(const FigureScriptOptions& o);
 
 // report.html; have_figures: figures/*.svg exist.
-std::string RunHtml(const analysis::RunAnalysis& a, bool have_figures);
+std::string RunHtml(const analysis::RunAnalysis& a, bool have_figures, const std::string& fit_report);
 
 }  // namespace zwidth::report

@@ -214,7 +214,7 @@ RunReport WriteRunReport(const analysis::RunAnalysis& a, const io::OutputFolder&
       if (r.figures != FiguresStatus::kGnuplotMissing) r.stages.push_back({"figures (gnuplot)", laps.Lap()});
     }
   }
-  io::WriteTextAtomically((out / "report.html").string(), RunHtml(a, r.figures == FiguresStatus::kDrawn));
+  io::WriteTextAtomically((out / "report.html").string(), RunHtml(a, r.figures == FiguresStatus::kDrawn, options.fit_report));
   return r;
 }
 

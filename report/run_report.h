@@ -14,6 +14,9 @@ namespace zwidth::report {
 
 struct RunReportOptions {
   bool draw_figures = true;  // run gnuplot on figures/figures.gp (when the analysis has figure data)
+  // The fit's report as the user reads it in report.html (the CLI gives its
+  // flags where the library names option fields); analysis::FitReport when empty.
+  std::string fit_report;
 };
 
 enum class FiguresStatus {

@@ -138,6 +138,18 @@ with tempfile.TemporaryDirectory() as tmp:
     if "use a shorter --window-length" not in text or "Options::" in text:
         failures.append("fit's model JSON: the few_averages advice does not name --window-length")
 
+    # And `run`: its terminal report, summary.json and report.html (the same poor fit).
+    outdir = os.path.join(tmp, "run")
+    r = subprocess.run([zwidth, "run", sim, "-o", outdir, "--no-figures", "--allow-short", "--window-length", "2048",
+                        "--modes", "1", "--delays", "2"], capture_output=True, text=True)
+    shown = {"run's terminal output": r.stdout + r.stderr}
+    for name in ("summary.json", "report.html"):
+        path = os.path.join(outdir, name)
+        shown[name] = open(path).read() if os.path.exists(path) else ""
+    for name, text in shown.items():
+        if "--window-length" not in text or "Options::" in text:
+            failures.append(f"{name}: the fit's advice does not name --window-length (or names a field)")
+
 for f in failures:
     print("FAIL:", f)
 sys.exit(1 if failures else 0)
