@@ -131,6 +131,12 @@ RunAnalysis Analyse(RunInput input, const RunOptions& o) {
   Laps laps;
   input.response.frf.used_by_fit = input.fit.band.used;
   const double T = 1.0 / input.response.frf.sample_rate_hz;
+  if (o.figures && !(o.report_filter_hz < 0.5 / T)) {  // before the Z-width, not at the figures
+    std::ostringstream msg;
+    msg << "RunOptions::report_filter_hz " << o.report_filter_hz << " Hz must be below the log's Nyquist frequency "
+        << 0.5 / T << " Hz";
+    throw InputError(msg.str());
+  }
   // The model's Z-width per delay, computed once for the summary, the
   // comparison, the boundary rows and the figures.
   RunAnalysis a(AnalysePlantStability(input.model, T, o.delays, o.loop, o.grid));

@@ -70,12 +70,15 @@ inline Eigen::MatrixXd BinCorrelatedCovariance(const Eigen::MatrixXd& J, const E
       const long j = partner[l][k];
       if (j < 0) continue;
       const long a = std::max(0L, k - kHalfWindow), b = std::min(nb, k + kHalfWindow + 1);
-      const double rho = std::clamp((c[l][b] - c[l][a]) / (e2[b] - e2[a]), -1.0, 1.0);
+      const double den = e2[b] - e2[a];
+      if (!(den > 0.0)) continue;  // residuals exactly zero around k: no correlation measured
+      const double rho = std::clamp((c[l][b] - c[l][a]) / den, -1.0, 1.0);
       const Eigen::MatrixXd x = rho * J.middleRows(2 * k, 2).transpose() * J.middleRows(2 * j, 2);
       M += x + x.transpose();
     }
   }
-  if (Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(M, Eigen::EigenvaluesOnly).eigenvalues().minCoeff() < 0.0) {
+  if (!M.allFinite() ||
+      !(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(M, Eigen::EigenvaluesOnly).eigenvalues().minCoeff() >= 0.0)) {
     M = J.transpose() * J;  // the measured correlations do not make a covariance: none assumed
   }
   return s2 * A_inv * M * A_inv;

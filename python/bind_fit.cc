@@ -118,7 +118,8 @@ void BindFit(py::module_& m) {
                              "few_averages, parameter_at_bound, spurious_section, order_search_at_limit, "
                              "delay_search_at_limit), message (what was seen) and advice (what to try)")
       .def_property_readonly("covariance", [](const PyFitResult& r) { return SquareArray(r.result.log_covariance); },
-                             "parameter covariance in log space (scaled by std_scale), an (n, n) array ordered "
+                             "parameter covariance in log space (the least-squares sandwich with the bins' correlation measured "
+                             "from the residuals: fit/bin_correlated_covariance.h), an (n, n) array ordered "
                              "as covariance_names; None when it could not be computed")
       .def_property_readonly("covariance_names",
                              [](const PyFitResult& r) { return stability::LogParameterNames(r.result.plant); },

@@ -56,7 +56,7 @@ std::string SummaryJson(const analysis::RunAnalysis& a) {
   summary["fit"] = in.model.fit;
   summary["reference"] = in.reference ? (in.reference_is_table1 ? "table1 (built in)" : in.reference_name) : "none";
   nlohmann::ordered_json top = {{"fit_quality", fit::ToString(in.fit.quality)},
-                                {"fit_quality_reasons", nlohmann::ordered_json::parse(in.model.fit["quality_reasons"].dump())}};
+                                {"fit_quality_reasons", nlohmann::ordered_json::parse(in.model.fit.value("quality_reasons", nlohmann::json::array()).dump())}};
   for (const auto& [k, v] : summary.items()) top[k] = nlohmann::ordered_json::parse(v.dump());
   return top.dump(2) + "\n";
 }
