@@ -208,7 +208,8 @@ TEST(SampledPlant, ModePatchesAreDenseAroundEveryMode) {
   p.modes = {{2 * std::numbers::pi * 200, 2.0, 2 * std::numbers::pi * 150, 1.5},
              {2 * std::numbers::pi * 400, 0.3, 2 * std::numbers::pi * 330, 0.2}};
   const double T = 1e-3;
-  const std::vector<double>& th = SampledPlant(p, T).mode_patch_theta();
+  const SampledPlant sp(p, T);  // the grid is the plant's: a reference into a temporary would dangle
+  const std::vector<double>& th = sp.mode_patch_theta();
   ASSERT_EQ(th.size(), 4u * (2 * kModePatchHalfWidth + 1));
   for (const Mode& md : p.modes) {
     for (auto [w, c] : {std::pair{md.omega, md.c}, std::pair{md.v, md.d}}) {
