@@ -1,30 +1,16 @@
 #include "analysis/run.h"
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
 #include <sstream>
 #include <utility>
 
+#include "analysis/laps.h"
 #include "model/error.h"
 
 namespace zwidth::analysis {
 namespace {
-
-// Milliseconds between laps.
-class Laps {
- public:
-  double Lap() {
-    const auto now = std::chrono::steady_clock::now();
-    const double ms = std::chrono::duration<double, std::milli>(now - start_).count();
-    start_ = now;
-    return ms;
-  }
-
- private:
-  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
-};
 
 // The model's sampled response g at every bin, phases unwrapped along
 // frequency (the model's continuously; the measured one kept within half a

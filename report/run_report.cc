@@ -1,7 +1,6 @@
 #include "report/run_report.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -9,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "analysis/laps.h"
 #include "io/frf_file.h"
 #include "io/isolated.h"
 #include "io/reference_models.h"
@@ -19,18 +19,7 @@ namespace zwidth::report {
 namespace fs = std::filesystem;
 namespace {
 
-class Laps {
- public:
-  double Lap() {
-    const auto now = std::chrono::steady_clock::now();
-    const double ms = std::chrono::duration<double, std::milli>(now - start_).count();
-    start_ = now;
-    return ms;
-  }
-
- private:
-  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
-};
+using analysis::Laps;
 
 // summary.json: the verdict first, above any Z-width computed from the model.
 std::string SummaryJson(const analysis::RunAnalysis& a) {
