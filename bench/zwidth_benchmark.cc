@@ -285,6 +285,39 @@ void BM_CutoffSweep(benchmark::State& state) {
 }
 BENCHMARK(BM_CutoffSweep)->Unit(benchmark::kMillisecond);
 
+// The passive K (Colgate-Schenkel) of the boundary rows: 1000 B values at
+// d = 4 with a 50 Hz first-order velocity filter, Table I's b. Error: largest
+// difference of K_hi from a brute-force minimum of (b + B R)/P over 2e5 + 1
+// uniform theta, relative to K_hi(0) (the brute force's own grid error is of
+// order 1e-9).
+void BM_PassivityRows(benchmark::State& state) {
+  const double T = 1e-3, b = PhantomTable1().b;
+  stability::LoopOptions loop;
+  stability::SetLowPassFilter(50.0, T, &loop);
+  const int D = 4;
+  const stability::Passivity pa(b, T, D, loop);
+  std::vector<double> Bs;
+  for (int i = 0; i < 1000; ++i) Bs.push_back(0.06 * i / 999.0);
+  std::vector<double> K(Bs.size());
+  for (auto _ : state) {
+    for (size_t i = 0; i < Bs.size(); ++i) K[i] = pa.At(Bs[i]).K_hi;
+    benchmark::DoNotOptimize(K.data());
+  }
+  std::vector<double> best(Bs.size(), INFINITY);
+  const int m = 200000;
+  for (int k = 0; k <= m; ++k) {
+    const double th = std::numbers::pi * k / m;
+    const double P = pa.Rhs(1.0, 0.0, th), R = -pa.Rhs(0.0, 1.0, th);
+    if (P > 0)
+      for (size_t i = 0; i < Bs.size(); ++i) best[i] = std::min(best[i], (b + Bs[i] * R) / P);
+  }
+  double err = 0;  // relative to K_hi at B = 0
+  for (size_t i = 0; i < Bs.size(); ++i)
+    if (K[i] > 0) err = std::max(err, std::abs(K[i] - best[i]) / K[0]);
+  state.counters["max_err_vs_dense_grid"] = err;
+}
+BENCHMARK(BM_PassivityRows)->Unit(benchmark::kMillisecond);
+
 // Delta-method std at d = 2 on Table I with a seeded covariance (1% relative
 // std): K_CR(B) on a 1000-point grid (implicit differentiation) plus the four
 // summary quantities (local finite differences). Error: largest relative

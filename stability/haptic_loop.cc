@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <cstdint>
 #include <cstdio>
 #include <functional>
 #include <numbers>
@@ -183,9 +184,46 @@ Passivity::Passivity(double b_phys, double period_s, int total_delay, const Loop
   th_.resize(n + 1);
   P_.resize(n + 1);
   R_.resize(n + 1);
+  inv_P_.resize(n + 1);
+  upper_penalty_.resize(n + 1);
+  lower_penalty_.resize(n + 1);
+  const double inf = std::numeric_limits<double>::infinity();
   for (int i = 0; i <= n; ++i) {
     th_[i] = std::numbers::pi * i / n;
     PR(th_[i], &P_[i], &R_[i]);
+    inv_P_[i] = P_[i] != 0.0 ? 1.0 / P_[i] : 0.0;
+    upper_penalty_[i] = P_[i] > 0.0 ? 0.0 : inf;
+    lower_penalty_[i] = P_[i] < 0.0 ? 0.0 : -inf;
+    if (P_[i] == 0.0) zero_P_.push_back(i);
+  }
+  // Blocks of the grid with the bounds of their lines u_i(B) = a_i + s_i B,
+  // a_i = b/P_i, s_i = R_i/P_i (P_i > 0; l alike where P_i < 0), and of the
+  // steps between neighbours of one sign (a candidate's reach is at most the
+  // larger of its two steps), the neighbours just outside the block included.
+  const size_t m = th_.size(), size = 64;
+  for (size_t first = 0; first < m; first += size) {
+    Block bk;
+    bk.first = first;
+    bk.last = std::min(m, first + size);
+    for (size_t i = bk.first; i < bk.last; ++i) {
+      if (P_[i] == 0.0) continue;
+      LineBounds& lb = P_[i] > 0.0 ? bk.up : bk.down;
+      const double a = b_ * inv_P_[i], sl = R_[i] * inv_P_[i];
+      lb.any = true;
+      lb.a_min = std::min(lb.a_min, a);
+      lb.a_max = std::max(lb.a_max, a);
+      lb.s_min = std::min(lb.s_min, sl);
+      lb.s_max = std::max(lb.s_max, sl);
+      lb.a_abs = std::max(lb.a_abs, std::abs(a));
+      lb.s_abs = std::max(lb.s_abs, std::abs(sl));
+    }
+    for (size_t i = bk.first > 0 ? bk.first - 1 : 0; i + 1 < m && i < bk.last; ++i) {
+      if (P_[i] == 0.0 || (P_[i] > 0.0) != (P_[i + 1] > 0.0) || P_[i + 1] == 0.0) continue;
+      LineBounds& lb = P_[i] > 0.0 ? bk.up : bk.down;
+      lb.da_max = std::max(lb.da_max, std::abs(b_ * inv_P_[i + 1] - b_ * inv_P_[i]));
+      lb.ds_max = std::max(lb.ds_max, std::abs(R_[i + 1] * inv_P_[i + 1] - R_[i] * inv_P_[i]));
+    }
+    blocks_.push_back(bk);
   }
 }
 
@@ -211,6 +249,27 @@ double Passivity::Rhs(double K, double B, double theta) const {
   return K * P - B * R;
 }
 
+namespace {
+
+// A grid local extremum whose refinement (on its two neighbouring cells) could
+// move the bound. value: the grid value (signed so that smaller is better);
+// reach: how far below it a refinement could plausibly go. Through the three
+// grid points the parabola's vertex lies (q - p)^2 / (8 (p + q)) <= (p + q)/8
+// below the middle value (p, q >= 0 its rises to the neighbours); reach is four
+// times that, (p + q)/2, so a candidate is refined unless even a much sharper
+// dip than the grid shows could not beat the best refined value.
+struct Candidate {
+  size_t i;
+  double value, reach;
+};
+
+double SignedReach(double left, double mid, double right) {
+  const double p = std::isfinite(left) ? left - mid : 0.0, q = std::isfinite(right) ? right - mid : 0.0;
+  return 0.5 * (std::max(p, 0.0) + std::max(q, 0.0));
+}
+
+}  // namespace
+
 PassiveInterval Passivity::At(double B) const {
   PassiveInterval out;
   const double inf = std::numeric_limits<double>::infinity();
@@ -220,48 +279,96 @@ PassiveInterval Passivity::At(double B) const {
     PR(t, &P, &R);
     return P > 0.0 ? (b_ + B * R) / P : inf;
   };
-  const size_t n = th_.size();
-  double hi = inf, lo = -inf, th_hi = std::numeric_limits<double>::quiet_NaN();
-  bool zero_fail = false;
-  std::vector<double> u(n);
-  for (size_t i = 0; i < n; ++i) {
-    const double num = b_ + B * R_[i];
-    u[i] = P_[i] > 0.0 ? num / P_[i] : inf;
-    if (P_[i] < 0.0) lo = std::max(lo, num / P_[i]);
-    if (P_[i] == 0.0 && !(num > 0.0)) zero_fail = true;
-  }
-  // Refine every grid local minimum of the upper bound (golden section on the
-  // two neighbouring cells); endpoints 0 and pi are exact grid points.
-  for (size_t i = 0; i < n; ++i) {
-    if (!std::isfinite(u[i])) continue;
-    const bool left = i == 0 || u[i] <= u[i - 1];
-    const bool right = i + 1 == n || u[i] <= u[i + 1];
-    if (!(left && right)) continue;
-    double t = th_[i], v = u[i];
-    if (i > 0 && i + 1 < n) {
-      const double tt = internal::GoldenExtremum(upper, th_[i - 1], th_[i + 1], -1.0, options_.theta_tolerance);
-      const double vv = upper(tt);
-      if (vv < v) { v = vv; t = tt; }
-    }
-    if (v < hi) { hi = v; th_hi = t; }
-  }
-  // Lower bounds refined the same way (maxima of (b + B R)/P where P < 0).
   auto lower = [&](double t) {
     double P, R;
     PR(t, &P, &R);
     return P < 0.0 ? (b_ + B * R) / P : -inf;
   };
-  for (size_t i = 1; i + 1 < n; ++i) {
-    if (!(P_[i] < 0.0)) continue;
-    const double li = (b_ + B * R_[i]) / P_[i];
-    const double lm = P_[i - 1] < 0.0 ? (b_ + B * R_[i - 1]) / P_[i - 1] : -inf;
-    const double lp = P_[i + 1] < 0.0 ? (b_ + B * R_[i + 1]) / P_[i + 1] : -inf;
-    if (li >= lm && li >= lp) {
-      const double tt = internal::GoldenExtremum(lower, th_[i - 1], th_[i + 1], 1.0, options_.theta_tolerance);
+  const size_t n = th_.size();
+  // On the grid: u, the upper bounds (inf where P <= 0), and l, the lower ones
+  // (-inf where P >= 0), as (b + B R) times 1/P (a division per point cost
+  // more than the rest); the values that reach the result are recomputed as
+  // (b + B R)/P, the products only choose the candidates: every grid local
+  // minimum of u (endpoints 0 and pi included: they are exact grid points) and
+  // every interior local maximum of l. A candidate is refined (golden section
+  // on its two neighbouring cells) unless its grid value less its reach cannot
+  // beat the best value so far: it could not change the result. Blocks of the
+  // grid are visited best bound first, and a block whose bound (its smallest
+  // u less the largest reach it allows; see Block) cannot beat the best value
+  // is not scanned at all.
+  auto g = [&](size_t i) { return (b_ + B * R_[i]) * inv_P_[i]; };
+  auto u = [&](size_t i) { return g(i) + upper_penalty_[i]; };
+  auto l = [&](size_t i) { return g(i) + lower_penalty_[i]; };
+  auto exact = [&](size_t i) { return (b_ + B * R_[i]) / P_[i]; };
+  bool zero_fail = false;
+  for (size_t i : zero_P_) zero_fail = zero_fail || !(b_ + B * R_[i] > 0.0);
+  const double absB = std::abs(B);
+  std::vector<std::pair<double, size_t>> order;  // (bound, block)
+  order.reserve(blocks_.size());
+
+  // K_hi: the smallest upper bound.
+  for (size_t k = 0; k < blocks_.size(); ++k) {
+    const Block& bk = blocks_[k];
+    if (!bk.up.any) continue;
+    const double lb = bk.up.a_min + (B >= 0.0 ? B * bk.up.s_min : B * bk.up.s_max);
+    order.push_back({lb - bk.up.da_max - absB * bk.up.ds_max - 1e-12 * (bk.up.a_abs + absB * bk.up.s_abs), k});
+  }
+  std::sort(order.begin(), order.end());
+  double hi = inf, th_hi = std::numeric_limits<double>::quiet_NaN();
+  std::vector<Candidate> cands;
+  for (const auto& [bound, k] : order) {
+    if (bound >= hi) break;
+    cands.clear();
+    for (size_t i = blocks_[k].first; i < blocks_[k].last; ++i) {
+      const double uc = u(i);
+      if (!(uc < inf)) continue;
+      const double ul = i > 0 ? u(i - 1) : inf, ur = i + 1 < n ? u(i + 1) : inf;
+      if ((i == 0 || uc <= ul) && (i + 1 == n || uc <= ur))
+        cands.push_back({i, uc, i > 0 && i + 1 < n ? SignedReach(ul, uc, ur) : 0.0});
+    }
+    std::sort(cands.begin(), cands.end(), [](const Candidate& x, const Candidate& y) { return x.value < y.value; });
+    for (const Candidate& c : cands) {
+      if (c.value - c.reach >= hi) continue;
+      double t = th_[c.i], v = exact(c.i);
+      if (c.i > 0 && c.i + 1 < n) {
+        const double tt = internal::GoldenExtremum(upper, th_[c.i - 1], th_[c.i + 1], -1.0, options_.theta_tolerance);
+        const double vv = upper(tt);
+        if (vv < v) { v = vv; t = tt; }
+      }
+      if (v < hi) { hi = v; th_hi = t; }
+    }
+  }
+
+  // K_lo = max(0, the largest lower bound): only a lower bound above 0 counts.
+  order.clear();
+  for (size_t k = 0; k < blocks_.size(); ++k) {
+    const Block& bk = blocks_[k];
+    if (!bk.down.any) continue;
+    const double ub = bk.down.a_max + (B >= 0.0 ? B * bk.down.s_max : B * bk.down.s_min);
+    order.push_back({-(ub + bk.down.da_max + absB * bk.down.ds_max + 1e-12 * (bk.down.a_abs + absB * bk.down.s_abs)), k});
+  }
+  std::sort(order.begin(), order.end());
+  double lo = 0.0;
+  for (const auto& [neg_bound, k] : order) {
+    if (-neg_bound <= lo) break;
+    cands.clear();
+    for (size_t i = blocks_[k].first; i < blocks_[k].last; ++i) {
+      const double lc = l(i);
+      if (!(lc > -inf)) continue;
+      lo = std::max(lo, exact(i));
+      if (i == 0 || i + 1 == n) continue;
+      const double ll = l(i - 1), lr = l(i + 1);
+      if (lc >= ll && lc >= lr) cands.push_back({i, -lc, SignedReach(-ll, -lc, -lr)});
+    }
+    std::sort(cands.begin(), cands.end(), [](const Candidate& x, const Candidate& y) { return x.value < y.value; });
+    for (const Candidate& c : cands) {
+      if (-(c.value - c.reach) <= lo) continue;
+      lo = std::max(lo, exact(c.i));
+      const double tt = internal::GoldenExtremum(lower, th_[c.i - 1], th_[c.i + 1], 1.0, options_.theta_tolerance);
       lo = std::max(lo, lower(tt));
     }
   }
-  out.K_lo = std::max(0.0, lo);
+  out.K_lo = lo;
   out.theta_hi = th_hi;
   if (zero_fail || !(hi > out.K_lo)) {
     out.passive_set_empty = true;

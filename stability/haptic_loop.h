@@ -101,7 +101,23 @@ class Passivity {
   int D_;
   LoopOptions loop_;
   PassivityOptions options_;
-  std::vector<double> th_, P_, R_;
+  // The theta grid, P, R and 1/P (0 where P = 0) on it; 0 or +inf (-inf) where
+  // P > 0 (P < 0) does not hold; the grid points where P = 0.
+  std::vector<double> th_, P_, R_, inv_P_, upper_penalty_, lower_penalty_;
+  std::vector<size_t> zero_P_;
+  // Bounds of the lines a_i + s_i B over a block's points of one sign of P,
+  // and of the steps between neighbours (see the constructor).
+  struct LineBounds {
+    bool any = false;
+    double a_min = std::numeric_limits<double>::infinity(), a_max = -std::numeric_limits<double>::infinity();
+    double s_min = std::numeric_limits<double>::infinity(), s_max = -std::numeric_limits<double>::infinity();
+    double a_abs = 0.0, s_abs = 0.0, da_max = 0.0, ds_max = 0.0;
+  };
+  struct Block {
+    size_t first = 0, last = 0;  // grid points [first, last)
+    LineBounds up, down;         // where P > 0, where P < 0
+  };
+  std::vector<Block> blocks_;
 };
 
 // ---- Cut-off sweep (Chawda, Celik and O'Malley's question, answered exactly):
