@@ -1,5 +1,7 @@
 #include "analysis/plant_stability.h"
 
+#include "analysis/parallel_internal.h"
+
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -20,30 +22,39 @@ PlantStability AnalysePlantStability(const io::ModelFile& model, double T, const
     stability::CheckLogCovariance(model.plant, model.log_covariance);
     perturbed = std::make_unique<stability::PerturbedPlants>(stability::SamplePerturbedPlants(model.plant, T, loop.hand));
   }
+  // The delays are independent: each one's summary, std and rows are
+  // computed on its own thread and written to its own slots.
+  for (int d : delays) r.zwidths.emplace_back(sampled, d, loop);
+  r.summaries.resize(delays.size());
+  ParallelFor(delays.size(), [&](size_t i) {
+    r.summaries[i] = r.zwidths[i].Summarize();
+    if (r.has_std) r.stds[i] = stability::SummaryStdDelta(*perturbed, model.log_covariance, delays[i], r.summaries[i], loop);
+  });
   double b_max = 0.0;
-  for (size_t i = 0; i < delays.size(); ++i) {
-    r.zwidths.emplace_back(sampled, delays[i], loop);
-    r.summaries.push_back(r.zwidths.back().Summarize());
-    if (std::isfinite(r.summaries.back().B_max)) b_max = std::max(b_max, r.summaries.back().B_max);
-    if (r.has_std) r.stds[i] = stability::SummaryStdDelta(*perturbed, model.log_covariance, delays[i], r.summaries.back(), loop);
+  for (const stability::DelaySummary& s : r.summaries) {
+    if (std::isfinite(s.B_max)) b_max = std::max(b_max, s.B_max);
   }
   r.b_grid = stability::MakeBGrid(grid, b_max, model.plant.m / T, static_cast<int>(delays.size()));
   const size_t nB = r.b_grid.size();
-  r.rows.reserve(delays.size() * nB);
-  for (size_t i = 0; i < delays.size(); ++i) {
+  r.rows.resize(delays.size() * nB);
+  std::vector<int> disagreements(delays.size(), 0);
+  ParallelFor(delays.size(), [&](size_t i) {
     const stability::Passivity passivity(model.plant.b, T, r.zwidths[i].total_delay(), loop);  // Colgate-Schenkel
     std::vector<stability::CriticalPoint> pts;
-    for (double B : r.b_grid) {
-      r.rows.push_back({delays[i], r.zwidths[i].At(B), r.zwidths[i].StableIntervals(B)});
-      r.rows.back().K_passive = passivity.At(B).K_hi;
-      pts.push_back(r.rows.back().point);
-      if (!r.rows.back().point.AgreesWithMargin()) ++r.margin_disagreements;
+    for (size_t k = 0; k < nB; ++k) {
+      const double B = r.b_grid[k];
+      io::BoundaryRow& row = r.rows[i * nB + k];
+      row = {delays[i], r.zwidths[i].At(B), r.zwidths[i].StableIntervals(B)};
+      row.K_passive = passivity.At(B).K_hi;
+      pts.push_back(row.point);
+      if (!row.point.AgreesWithMargin()) ++disagreements[i];
     }
     if (r.has_std) {
       const std::vector<double> sd = stability::KcrStd(*perturbed, model.log_covariance, delays[i], pts, loop);
       for (size_t k = 0; k < nB; ++k) r.rows[i * nB + k].K_cr_std = sd[k];
     }
-  }
+  });
+  for (int n : disagreements) r.margin_disagreements += n;
   return r;
 }
 
