@@ -28,40 +28,25 @@
 #include "io/log.h"
 #include "io/model_json.h"
 #include "model/error.h"
+#include "tests/test_util.h"
 
 namespace zwidth::io {
 namespace {
 namespace fs = std::filesystem;
 
-class TempDir {
- public:
-  TempDir() {
-    std::string t = (fs::temp_directory_path() / "zwidth_safety_XXXXXX").string();
-    path_ = ::mkdtemp(t.data());
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  std::string operator/(const std::string& name) const { return (path_ / name).string(); }
-  const fs::path& path() const { return path_; }
-  // Names in the folder holding ".tmp-" (leftover temporaries).
-  int Leftovers() const {
-    int n = 0;
-    for (const auto& e : fs::recursive_directory_iterator(path_)) n += e.path().filename().string().find(".tmp-") != std::string::npos;
-    return n;
-  }
+using test::ReadFile;
+using test::TempDir;
+using test::WriteFile;
 
- private:
-  fs::path path_;
-};
-
-std::string Slurp(const std::string& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
+// Names in the folder holding ".tmp-" (leftover temporaries).
+int Leftovers(const TempDir& dir) {
+  int n = 0;
+  for (const auto& e : fs::recursive_directory_iterator(dir.path())) n += e.path().filename().string().find(".tmp-") != std::string::npos;
+  return n;
 }
 
-void Put(const std::string& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
-
 TEST(AtomicFile, RefusesDevicesFifosAndFoldersAndLeavesThemAlone) {
-  TempDir dir;
+  TempDir dir("zwidth_safety_");
   std::vector<std::string> hostile = {"/dev/null", "/dev/full", dir / "fifo", dir / "folder", dir / "link_to_fifo"};
   ASSERT_EQ(::mkfifo((dir / "fifo").c_str(), 0600), 0);
   fs::create_directory(dir / "folder");
@@ -79,12 +64,12 @@ TEST(AtomicFile, RefusesDevicesFifosAndFoldersAndLeavesThemAlone) {
   EXPECT_TRUE(S_ISFIFO(st.st_mode));
   ASSERT_EQ(::lstat((dir / "link_to_fifo").c_str(), &st), 0);
   EXPECT_TRUE(S_ISLNK(st.st_mode));
-  EXPECT_EQ(dir.Leftovers(), 0);
+  EXPECT_EQ(Leftovers(dir), 0);
 }
 
 TEST(AtomicFile, RefusesAnInputByInodeThroughHardAndSymbolicLinks) {
-  TempDir dir;
-  Put(dir / "log.csv", "precious");
+  TempDir dir("zwidth_safety_");
+  WriteFile(dir / "log.csv", "precious");
   fs::create_hard_link(dir / "log.csv", dir / "hard.csv");
   fs::create_symlink(dir / "log.csv", dir / "soft.csv");
   EXPECT_THROW(CheckOutputPath(dir / "hard.csv", {dir / "log.csv"}), InputError);
@@ -93,42 +78,42 @@ TEST(AtomicFile, RefusesAnInputByInodeThroughHardAndSymbolicLinks) {
     SCOPED_TRACE(name);
     EXPECT_THROW(WriteTextAtomically(dir / name, "replaced"), InputError);
   }
-  EXPECT_EQ(Slurp(dir / "log.csv"), "precious");
-  EXPECT_EQ(dir.Leftovers(), 0);
+  EXPECT_EQ(ReadFile(dir / "log.csv"), "precious");
+  EXPECT_EQ(Leftovers(dir), 0);
 }
 
 TEST(AtomicFile, FollowsASymlinkToARegularFileAndKeepsTheLink) {
-  TempDir dir;
-  Put(dir / "target.txt", "old");
+  TempDir dir("zwidth_safety_");
+  WriteFile(dir / "target.txt", "old");
   fs::create_symlink(dir / "target.txt", dir / "link.txt");
   WriteTextAtomically(dir / "link.txt", "new");
   EXPECT_TRUE(fs::is_symlink(dir / "link.txt"));
-  EXPECT_EQ(Slurp(dir / "target.txt"), "new");
+  EXPECT_EQ(ReadFile(dir / "target.txt"), "new");
 }
 
 TEST(AtomicFile, AFailingWriterLeavesTheOldFileAndNoTemporary) {
-  TempDir dir;
-  Put(dir / "out.csv", "old");
+  TempDir dir("zwidth_safety_");
+  WriteFile(dir / "out.csv", "old");
   EXPECT_THROW(WriteAtomically(dir / "out.csv", [](const std::string& tmp) {
-                 Put(tmp, "half");
+                 WriteFile(tmp, "half");
                  throw InputError("disk full");
                }),
                InputError);
-  EXPECT_EQ(Slurp(dir / "out.csv"), "old");
-  EXPECT_EQ(dir.Leftovers(), 0);
+  EXPECT_EQ(ReadFile(dir / "out.csv"), "old");
+  EXPECT_EQ(Leftovers(dir), 0);
 }
 
 TEST(AtomicFile, SigtermRemovesRegisteredFilesAndFoldersThenKills) {
-  TempDir dir;
+  TempDir dir("zwidth_safety_");
   const pid_t pid = ::fork();
   ASSERT_GE(pid, 0);
   if (pid == 0) {
     OutputFolder* folder = new OutputFolder(dir / "run", false);  // never destroyed: the signal ends us
     fs::create_directories(fs::path(folder->temp_path()) / "figures");
-    Put(folder->temp_path() + "/model.json", "{}");
-    Put(folder->temp_path() + "/figures/bode.svg", "<svg/>");
+    WriteFile(folder->temp_path() + "/model.json", "{}");
+    WriteFile(folder->temp_path() + "/figures/bode.svg", "<svg/>");
     WriteAtomically(dir / "big.csv", [](const std::string& tmp) {
-      Put(tmp, std::string(1 << 20, 'x'));
+      WriteFile(tmp, std::string(1 << 20, 'x'));
       ::raise(SIGTERM);
     });
     ::_exit(0);  // not reached
@@ -141,61 +126,61 @@ TEST(AtomicFile, SigtermRemovesRegisteredFilesAndFoldersThenKills) {
 }
 
 TEST(OutputFolder, AppearsWholeOnCommitAndNotAtAllOnFailure) {
-  TempDir dir;
+  TempDir dir("zwidth_safety_");
   {
     OutputFolder f(dir / "out", false);
-    Put(f.temp_path() + "/a.txt", "a");
+    WriteFile(f.temp_path() + "/a.txt", "a");
     EXPECT_FALSE(fs::exists(dir / "out"));
   }  // not committed: a failure
   EXPECT_TRUE(fs::is_empty(dir.path()));
   {
     OutputFolder f(dir / "out", false);
-    Put(f.temp_path() + "/a.txt", "a");
+    WriteFile(f.temp_path() + "/a.txt", "a");
     f.Commit();
   }
-  EXPECT_EQ(Slurp(dir / "out/a.txt"), "a");
+  EXPECT_EQ(ReadFile(dir / "out/a.txt"), "a");
   {
     OutputFolder f(dir / "slash/", false);  // a trailing slash names the same folder
-    Put(f.temp_path() + "/b.txt", "b");
+    WriteFile(f.temp_path() + "/b.txt", "b");
     f.Commit();
   }
-  EXPECT_EQ(Slurp(dir / "slash/b.txt"), "b");
+  EXPECT_EQ(ReadFile(dir / "slash/b.txt"), "b");
   EXPECT_THROW(OutputFolder(dir / "out", false), InputError);  // not empty
-  Put(dir / "plain", "x");
+  WriteFile(dir / "plain", "x");
   EXPECT_THROW(OutputFolder(dir / "plain", false), InputError);  // not a folder
   EXPECT_THROW(OutputFolder(dir / "no/such/parent", false), InputError);
 }
 
 TEST(OutputFolder, TwoRunsIntoOneFolderCannotMix) {
-  TempDir dir;
+  TempDir dir("zwidth_safety_");
   OutputFolder first(dir / "out", false), second(dir / "out", false);
-  Put(first.temp_path() + "/model.json", "first");
-  Put(first.temp_path() + "/report.html", "first");
-  Put(second.temp_path() + "/model.json", "second");
-  Put(second.temp_path() + "/report.html", "second");
+  WriteFile(first.temp_path() + "/model.json", "first");
+  WriteFile(first.temp_path() + "/report.html", "first");
+  WriteFile(second.temp_path() + "/model.json", "second");
+  WriteFile(second.temp_path() + "/report.html", "second");
   first.Commit();
   EXPECT_THROW(second.Commit(), InputError);
-  EXPECT_EQ(Slurp(dir / "out/model.json"), "first");
-  EXPECT_EQ(Slurp(dir / "out/report.html"), "first");
+  EXPECT_EQ(ReadFile(dir / "out/model.json"), "first");
+  EXPECT_EQ(ReadFile(dir / "out/report.html"), "first");
 }
 
 TEST(OutputFolder, ForceReplacesItsFilesAndKeepsTheOthers) {
-  TempDir dir;
+  TempDir dir("zwidth_safety_");
   fs::create_directory(dir / "out");
-  Put(dir / "out/notes.txt", "mine");
-  Put(dir / "out/model.json", "old");
+  WriteFile(dir / "out/notes.txt", "mine");
+  WriteFile(dir / "out/model.json", "old");
   {
     OutputFolder f(dir / "out", true);
-    Put(f.temp_path() + "/model.json", "new");
+    WriteFile(f.temp_path() + "/model.json", "new");
     f.Commit();
   }
-  EXPECT_EQ(Slurp(dir / "out/notes.txt"), "mine");
-  EXPECT_EQ(Slurp(dir / "out/model.json"), "new");
-  EXPECT_EQ(dir.Leftovers(), 0);
+  EXPECT_EQ(ReadFile(dir / "out/notes.txt"), "mine");
+  EXPECT_EQ(ReadFile(dir / "out/model.json"), "new");
+  EXPECT_EQ(Leftovers(dir), 0);
 }
 
 TEST(RunProgram, NoShellInterpretsTheFolderNameOrTheArguments) {
-  TempDir dir;
+  TempDir dir("zwidth_safety_");
   const std::string evil = dir / "it's $(touch pwned) `touch pwned2`; touch pwned3 '";
   fs::create_directory(evil);
   EXPECT_EQ(RunProgram({"touch", "made", "$(touch pwned4)"}, evil, evil + "/err.log"), 0);
@@ -311,7 +296,7 @@ void WriteLogWithArrayRate(const std::string& path, hsize_t n) {
 }
 
 TEST(Hdf5Log, AnArrayAttributeIsRefusedInTheChildAndInProcess) {
-  TempDir dir;
+  TempDir dir("zwidth_safety_");
   for (hsize_t n : {2, 1000}) {
     SCOPED_TRACE(n);
     WriteLogWithArrayRate(dir / "log.h5", n);
@@ -330,12 +315,12 @@ TEST(Hdf5Log, AnArrayAttributeIsRefusedInTheChildAndInProcess) {
 }
 
 TEST(FrfCsv, ADuplicatedColumnIsRefusedNotReadPastItsRow) {
-  TempDir dir;
+  TempDir dir("zwidth_safety_");
   std::string text = "f_hz,H_re,H_im,coherence,coherence,coherence,coherence\n";
   // Four distinct names, so the old reader let rows of four fields through and
   // read "coherence" at position 6: past the row's buffer.
   for (int k = 1; k <= 20; ++k) text += std::to_string(k) + ",1,0,1\n";
-  Put(dir / "frf.csv", text);
+  WriteFile(dir / "frf.csv", text);
   try {
     ReadFrequencyResponse(dir / "frf.csv", 1000.0);
     FAIL() << "accepted";
@@ -373,7 +358,7 @@ TEST(ModelJson, DelaysAndParametersOutsideTheirRangesAreRefused) {
 
 TEST(ModelJson, AModelFileMustBeARegularFile) {
   EXPECT_THROW(ReadModelJson("/dev/zero"), InputError);
-  TempDir dir;
+  TempDir dir("zwidth_safety_");
   ASSERT_EQ(::mkfifo((dir / "model.json").c_str(), 0600), 0);
   EXPECT_THROW(ReadModelJson(dir / "model.json"), InputError);  // refused at once, never opened
 }

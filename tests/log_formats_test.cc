@@ -13,6 +13,7 @@
 
 #include "io/log.h"
 #include "model/error.h"
+#include "tests/test_util.h"
 
 namespace zwidth::io {
 namespace {
@@ -45,16 +46,7 @@ std::string Num(double v) {
 
 class LogFormats : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("zwidth_logfmt_" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string Write(const std::string& name, const std::string& bytes) {
-    const std::string p = (dir_ / name).string();
-    std::ofstream(p, std::ios::binary) << bytes;
-    return p;
-  }
+  std::string Write(const std::string& name, const std::string& bytes) { return dir_.Write(name, bytes); }
   // Rows "t<d>u<d>y" with the given line end; time scaled by time_factor.
   static std::string Rows(const Signals& s, const std::string& d, const std::string& eol, double time_factor = 1.0) {
     std::string out;
@@ -83,7 +75,7 @@ class LogFormats : public ::testing::Test {
     ADD_FAILURE() << path << " was accepted";
     return "";
   }
-  fs::path dir_;
+  test::TempDir dir_{"zwidth_logfmt_"};
 };
 
 TEST_F(LogFormats, CommaHeaderLf) {
@@ -232,7 +224,7 @@ TEST_F(LogFormats, MatV5AndV73ByContent) {
   sel.input_column = "u";
   sel.output_column = "Theta";
   for (auto [version, name] : {std::pair{MAT_FT_MAT5, "v5.csv"}, std::pair{MAT_FT_MAT73, "v73.txt"}}) {
-    const std::string p = (dir_ / name).string();
+    const std::string p = dir_ / name;
     WriteMat(p, version, s);
     EXPECT_EQ(DetectLogFormat(p), LogFormat::kMat) << name;
     ExpectSame(ReadLog(p, sel), s);

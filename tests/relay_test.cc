@@ -17,6 +17,7 @@
 #include "stability/haptic_loop.h"
 #include "stability/relay.h"
 #include "stability/zwidth.h"
+#include "tests/test_util.h"
 
 namespace zwidth::stability {
 namespace {
@@ -24,18 +25,16 @@ namespace {
 // Random plausible devices (seeded): m 1e-4..1e-2, b / m 0.5..5 rad/s (so that
 // the rigid body settles within a few tens of seconds), 0-3 modes between 20
 // and 400 Hz with damping ratios 1e-3..0.3.
+// Antiresonances 0.5..1.5 of their resonance, capped below Nyquist.
 Plant RandomDevice(std::mt19937_64& rng, int nm, double T) {
-  std::uniform_real_distribution<double> U(0, 1);
-  Plant p;
-  p.m = std::pow(10.0, -4 + 2 * U(rng));
-  p.b = p.m * std::pow(10.0, std::log10(0.5) + U(rng));
-  for (int i = 0; i < nm; ++i) {
-    const double w = 2 * std::numbers::pi * (20 + 380 * U(rng));
-    const double v = w * (0.5 + U(rng));
-    const double zc = std::pow(10.0, -3 + 2.5 * U(rng)), zd = std::pow(10.0, -3 + 2.5 * U(rng));
-    p.modes.push_back({w, 2 * zc * w, std::min(v, 0.95 * std::numbers::pi / T), 2 * zd * v});
-  }
-  return p;
+  test::RandomPlantRanges r;
+  r.log10_m_kg_m2 = {-4, 2};
+  r.log10_b_over_m_rad_s = {std::log10(0.5), 1};
+  r.pole_hz = {20, 380};
+  r.zero_over_pole = {0.5, 1};
+  r.log10_zeta = {-3, 2.5};
+  r.cap_zero_below_nyquist = true;
+  return test::RandomPlant(rng, r, nm, T);
 }
 
 // A hand from none to firm, scaled to the device: inertia 0..2 m, damping

@@ -15,6 +15,7 @@
 #include "model/error.h"
 #include "model/state_space.h"
 #include "report/run_report.h"
+#include "tests/test_util.h"
 
 namespace zwidth {
 namespace {
@@ -129,8 +130,8 @@ TEST(RunAnalysis, AModelComparedWithItselfHasTheModelsCurvesAndNoRigidModes) {
 }
 
 TEST(RunReport, WritesEveryFileIntoTheFolderAndNothingWithoutFigures) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
-                                    ("zwidth_run_report_" + std::to_string(std::random_device{}()));
+  const test::TempDir tmp("zwidth_run_report_");
+  const std::filesystem::path dir = tmp.path() / "run";
   analysis::RunOptions o;
   o.figures = false;
   analysis::RunInput in = TestInput(0.0);
@@ -146,10 +147,8 @@ TEST(RunReport, WritesEveryFileIntoTheFolderAndNothingWithoutFigures) {
     EXPECT_TRUE(std::filesystem::is_regular_file(dir / f)) << f;
   }
   EXPECT_FALSE(std::filesystem::exists(dir / "figures"));
-  std::ifstream html(dir / "report.html");
-  const std::string text((std::istreambuf_iterator<char>(html)), std::istreambuf_iterator<char>());
+  const std::string text = test::ReadFile(dir / "report.html");
   EXPECT_NE(text.find("No figures"), std::string::npos);
-  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

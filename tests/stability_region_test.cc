@@ -13,6 +13,7 @@
 #include "stability/uncertainty.h"
 #include "stability/zwidth.h"
 #include "tests/brute_force.h"
+#include "tests/test_util.h"
 
 namespace zwidth::stability {
 namespace {
@@ -35,79 +36,15 @@ Plant IssueDeviceTwo() {
   return p;
 }
 
-// A random plausible device: seeded, 0-3 modes between 30 and 400 Hz (T = 1 ms),
-// damping ratios 0.002-0.3, antiresonances within +-30% of their resonance.
-Plant RandomDevice(std::mt19937_64& rng, int modes) {
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  Plant p;
-  p.m = std::pow(10.0, -3.5 + 2.5 * u(rng));
-  p.b = p.m * std::pow(10.0, 0.3 + 1.2 * u(rng));
-  for (int i = 0; i < modes; ++i) {
-    Mode md;
-    md.omega = 2 * M_PI * (30.0 + 370.0 * u(rng));
-    md.c = 2 * md.omega * std::pow(10.0, -2.7 + 2.2 * u(rng));
-    md.v = md.omega * (0.7 + 0.6 * u(rng));
-    md.d = 2 * md.v * std::pow(10.0, -2.7 + 2.2 * u(rng));
-    p.modes.push_back(md);
-  }
-  return p;
-}
-
-struct Tally {
-  long points = 0, stable = 0, reopened = 0, near_boundary = 0, disagree = 0;
-};
-
-// Classifies a grid of (K, B) points by the intervals and by the brute force.
-// A disagreement counts only when the brute force's verdict is the same at
-// K (1 +- 1e-6) and B (1 +- 1e-6), i.e. outside a relative 1e-6 neighbourhood
-// of a boundary.
+// 120 values of B up to 1.3 B_max, 20 points inside each interval
+// (tests/brute_force.h's Classify).
 Tally Classify(const Plant& p, int delay, int min_points) {
   const double T = 1e-3;
   const ZWidth z(p, T, delay);
   const BruteForce bf(p, T, delay);
   const DelaySummary s = z.Summarize();
-  Tally t;
-  const double b_top = 1.3 * std::max(s.B_max, 1e-6 * p.m / T);
-  const int nb = 120;
-  auto stable_bf = [&](double K, double B) { return bf.MaxRoot(K, B) < 1.0; };
-  for (int i = 0; i < nb; ++i) {
-    const double B = b_top * i / (nb - 1);
-    const std::vector<KInterval> iv = z.StableIntervals(B);
-    double k_top = 0.0;
-    for (const KInterval& v : iv) k_top = std::max(k_top, std::isfinite(v.K_hi) ? v.K_hi : v.K_lo);
-    for (const Crossing& x : z.Crossings(B)) if (x.K > 0 && std::isfinite(x.K)) k_top = std::max(k_top, x.K);
-    if (!(k_top > 0.0)) k_top = 100.0 * p.m / (T * T);
-    std::vector<double> ks;
-    const int nk = min_points / nb + 1;
-    for (int j = 0; j < nk; ++j) ks.push_back(k_top * 2.0 * std::pow(1e-4, 1.0 - double(j) / (nk - 1)));
-    for (const KInterval& v : iv) {  // 20 points inside each interval
-      const double lo = v.K_lo > 0 ? v.K_lo : 1e-3 * v.K_hi, hi = std::isfinite(v.K_hi) ? v.K_hi : 10 * lo;
-      for (int j = 1; j <= 20; ++j) ks.push_back(lo * std::pow(hi / lo, j / 21.0));
-    }
-    for (const KInterval& v : iv) {  // just inside and just outside each end (1e-4 relative)
-      if (v.K_lo > 0) { ks.push_back(v.K_lo * (1 + 1e-4)); ks.push_back(v.K_lo * (1 - 1e-4)); }
-      if (std::isfinite(v.K_hi)) { ks.push_back(v.K_hi * (1 - 1e-4)); ks.push_back(v.K_hi * (1 + 1e-4)); }
-    }
-    for (double K : ks) {
-      bool mine = false, reopened = false;
-      for (const KInterval& v : iv) {
-        if (K > v.K_lo && K < v.K_hi) { mine = true; reopened = v.K_lo > 0.0; }
-      }
-      const bool ref = stable_bf(K, B);
-      ++t.points;
-      t.stable += mine;
-      t.reopened += mine && reopened;
-      if (mine == ref) continue;
-      const bool flips = stable_bf(K * (1 + 1e-6), B) != ref || stable_bf(K * (1 - 1e-6), B) != ref ||
-                         stable_bf(K, B * (1 + 1e-6)) != ref || stable_bf(K, B * (1 - 1e-6)) != ref;
-      if (flips) { ++t.near_boundary; continue; }
-      ++t.disagree;
-      ADD_FAILURE() << "d=" << delay << " B=" << B << " K=" << K << " intervals say " << mine
-                    << ", eigenvalues (max |z| " << bf.MaxRoot(K, B) << ") say " << ref;
-      if (t.disagree > 5) return t;
-    }
-  }
-  return t;
+  const ClassifyGrid g{1.3 * std::max(s.B_max, 1e-6 * p.m / T), 120, min_points, 20};
+  return stability::Classify(z, [&](double K, double B) { return bf.MaxRoot(K, B); }, p, T, delay, g);
 }
 
 TEST(StableIntervals, AgreeWithEigenvaluesOnRandomDevicesAndTheIssuesExamples) {
@@ -115,7 +52,7 @@ TEST(StableIntervals, AgreeWithEigenvaluesOnRandomDevicesAndTheIssuesExamples) {
   struct Case { Plant p; int d; };
   std::vector<Case> cases = {{IssueDeviceOne(), 4}, {IssueDeviceTwo(), 5}, {PhantomTable1(), 2}};
   std::uniform_int_distribution<int> delay(0, 20);
-  for (int k = 0; k < 8; ++k) cases.push_back({RandomDevice(rng, k % 4), k == 0 ? 0 : k == 1 ? 20 : delay(rng)});
+  for (int k = 0; k < 8; ++k) cases.push_back({test::RandomPlausibleDevice(rng, k % 4), k == 0 ? 0 : k == 1 ? 20 : delay(rng)});
   long total = 0, reopened = 0, near = 0;
   for (const Case& c : cases) {
     const Tally t = Classify(c.p, c.d, 20000);
@@ -166,7 +103,7 @@ TEST(StableIntervals, NothingIsStableJustPastBMax) {
   // just before it the intervals' midpoint is stable by eigenvalues.
   std::mt19937_64 rng(7);
   std::vector<std::pair<Plant, int>> cases = {{IssueDeviceOne(), 4}, {IssueDeviceTwo(), 5}, {PhantomTable1(), 2}};
-  for (int k = 0; k < 4; ++k) cases.push_back({RandomDevice(rng, 1 + k % 3), 1 + 3 * k});
+  for (int k = 0; k < 4; ++k) cases.push_back({test::RandomPlausibleDevice(rng, 1 + k % 3), 1 + 3 * k});
   for (const auto& [p, d] : cases) {
     const ZWidth z(p, 1e-3, d);
     const BruteForce bf(p, 1e-3, d);

@@ -12,25 +12,24 @@
 #include "stability/relay.h"
 #include "stability/zwidth.h"
 #include "tests/brute_force.h"
+#include "tests/test_util.h"
 
 namespace zwidth::stability {
 namespace {
 
 // Random models: m over 5 decades, b / m 0.1..10 rad/s, nm modes up to
 // 0.45 fs with damping ratios 1e-3..0.5 (at least 0.1 rad/s).
+// (antiresonances 0.5..1.5 of their resonance, capped below Nyquist).
 Plant RandomModel(std::mt19937_64& rng, int nm, double T) {
-  std::uniform_real_distribution<double> U(0, 1);
-  Plant p;
-  p.m = std::pow(10.0, -5 + 5 * U(rng));
-  p.b = p.m * std::pow(10.0, -1 + 2 * U(rng));
-  for (int i = 0; i < nm; ++i) {
-    const double w = 2 * std::numbers::pi * (5 + 445 * U(rng));
-    const double v = w * (0.5 + U(rng));
-    const double zc = std::pow(10.0, -3 + 2.7 * U(rng)), zd = std::pow(10.0, -3 + 2.7 * U(rng));
-    p.modes.push_back(
-        {w, std::max(0.1, 2 * zc * w), std::min(v, 0.95 * std::numbers::pi / T), std::max(0.1, 2 * zd * v)});
-  }
-  return p;
+  test::RandomPlantRanges r;
+  r.log10_m_kg_m2 = {-5, 5};
+  r.log10_b_over_m_rad_s = {-1, 2};
+  r.pole_hz = {5, 445};
+  r.zero_over_pole = {0.5, 1};
+  r.log10_zeta = {-3, 2.7};
+  r.min_damping_rad_s = 0.1;
+  r.cap_zero_below_nyquist = true;
+  return test::RandomPlant(rng, r, nm, T);
 }
 
 // Right (refined, K_cr and f_cr within 1e-3 of the exact values) or flagged
