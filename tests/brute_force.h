@@ -1,5 +1,5 @@
-// Independent brute force for the Z-width tests (stability_test,
-// stability_stress_test): closed-loop roots from companion matrices.
+// Independent brute force for the Z-width tests (zwidth_test, haptic_loop_test,
+// zwidth_stress_test): closed-loop roots from companion matrices.
 #pragma once
 
 #include <cmath>

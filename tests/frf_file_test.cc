@@ -82,5 +82,20 @@ TEST(FrfFile, ATruncatedCsvRowIsRefusedByItsLine) {
   }
 }
 
+TEST(FrfCsv, ADuplicatedColumnIsRefusedNotReadPastItsRow) {
+  const test::TempDir dir("zwidth_frf_file_test_");
+  std::string text = "f_hz,H_re,H_im,coherence,coherence,coherence,coherence\n";
+  // Four distinct names, so the old reader let rows of four fields through and
+  // read "coherence" at position 6: past the row's buffer.
+  for (int k = 1; k <= 20; ++k) text += std::to_string(k) + ",1,0,1\n";
+  test::WriteFile(dir / "frf.csv", text);
+  try {
+    ReadFrequencyResponse(dir / "frf.csv", 1000.0);
+    FAIL() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("column 'coherence' appears twice"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace zwidth::io

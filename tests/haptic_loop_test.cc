@@ -7,7 +7,7 @@
 // - the passivity boundary against Colgate's closed form (rigid body, no delay
 //   or filter) and against a direct evaluation of Colgate and Schenkel's
 //   condition on a fine frequency grid.
-// Random devices: seeded (tests/stability_region_test.cc's recipe).
+// Random devices: seeded (test::RandomPlausibleDevice).
 #include <cmath>
 #include <complex>
 #include <cstdio>
@@ -438,24 +438,27 @@ TEST(Passivity, BothEndsAndEmptySetsMatchTheTheoremEvaluatedDirectly) {
   EXPECT_GE(empty_checked, 5);
 }
 
-TEST(Passivity, RigidBodyPassiveWallIsStable) {
+class PassivityDelays : public ::testing::TestWithParam<int> {};
+
+TEST_P(PassivityDelays, RigidBodyPassiveWallIsStable) {
   // Passivity of the sampled rigid body with its wall implies a stable loop:
   // K_P(B) <= K_CR(B) at every B where both exist.
   Plant p;
   p.m = 1e-3;
   p.b = 4e-3;
-  for (int d : {0, 2, 8}) {
-    LoopOptions l;
-    SetLowPassFilter(50.0, 1e-3, &l);
-    const ZWidth z(p, 1e-3, d, l);
-    const Passivity pa(p.b, 1e-3, d, l);
-    for (double B : {0.0, 0.001, 0.002, 0.003}) {
-      const PassiveInterval r = pa.At(B);
-      if (r.passive_set_empty) continue;
-      EXPECT_LE(r.K_hi, z.At(B).K_cr * (1 + 1e-9)) << "d=" << d << " B=" << B;
-    }
+  const int d = GetParam();
+  LoopOptions l;
+  SetLowPassFilter(50.0, 1e-3, &l);
+  const ZWidth z(p, 1e-3, d, l);
+  const Passivity pa(p.b, 1e-3, d, l);
+  for (double B : {0.0, 0.001, 0.002, 0.003}) {
+    const PassiveInterval r = pa.At(B);
+    if (r.passive_set_empty) continue;
+    EXPECT_LE(r.K_hi, z.At(B).K_cr * (1 + 1e-9)) << "d=" << d << " B=" << B;
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(RigidBody, PassivityDelays, ::testing::Values(0, 2, 8), test::DelayName());
 
 TEST(CutoffSweep, BestCutoffHasTheLargestMeasure) {
   std::mt19937_64 rng(4);

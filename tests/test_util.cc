@@ -47,6 +47,18 @@ RandomPlantRanges PlausibleDevice() {
   return r;
 }
 
+RandomPlantRanges WideRandomModels() {
+  RandomPlantRanges r;
+  r.log10_m_kg_m2 = {-5, 5};
+  r.log10_b_over_m_rad_s = {-1, 2};
+  r.pole_hz = {5, 445};
+  r.zero_over_pole = {0.5, 1};
+  r.log10_zeta = {-3, 2.7};
+  r.min_damping_rad_s = 0.1;
+  r.cap_zero_below_nyquist = true;
+  return r;
+}
+
 Plant RandomPlausibleDevice(std::mt19937_64& rng, int modes) { return RandomPlant(rng, PlausibleDevice(), modes); }
 
 TempDir::TempDir(const std::string& prefix) {

@@ -45,12 +45,27 @@ struct RandomPlantRanges {
 // used only by cap_zero_below_nyquist.
 Plant RandomPlant(std::mt19937_64& rng, const RandomPlantRanges& r, int modes, double T = 1e-3);
 
-// A plausible device (haptic_loop_test, stability_region_test): m 10^-3.5..10^-1,
+// A plausible device (haptic_loop_test, zwidth_test): m 10^-3.5..10^-1,
 // b / m 10^0.3..10^1.5 rad/s, modes 30-400 Hz with damping ratios 0.002-0.3,
 // antiresonances 0.7-1.3 of their resonance.
 RandomPlantRanges PlausibleDevice();
 // RandomPlant(rng, PlausibleDevice(), modes).
 Plant RandomPlausibleDevice(std::mt19937_64& rng, int modes);
+
+// Wide random models (the stress tests of the Z-width and the relay): m over 5
+// decades from 1e-5, b / m 0.1..10 rad/s, modes 5-450 Hz with damping ratios
+// 1e-3..0.5 (c, d at least 0.1 rad/s), antiresonances 0.5..1.5 of their
+// resonance, capped below Nyquist.
+RandomPlantRanges WideRandomModels();
+
+// The names of TEST_P cases over delays: "d<delay>" (the INSTANTIATE_TEST_SUITE_P
+// name generator).
+struct DelayName {
+  template <class ParamInfo>
+  std::string operator()(const ParamInfo& info) const {
+    return "d" + std::to_string(info.param);
+  }
+};
 
 // A temporary folder, made at construction (mkdtemp under the system's
 // temporary directory, name "<prefix>XXXXXX") and removed with everything in it
