@@ -120,22 +120,16 @@ BoundaryTable ComputeBoundaryTable(const io::ModelFile& mf, double T, const std:
 // The summary table, per-hand lines, passivity and the margin() count on stdout.
 void PrintBoundarySummary(const BoundaryTable& t, const io::ModelFile& mf, const std::vector<int>& delays,
                           const std::vector<stability::LoopOptions>& loops) {
-  const auto& sums = t.sums;
-  const auto& hsums = t.hsums;
-  const auto& stds = t.stds;
-  const auto& pas = t.pas;
-  const bool has_cov = t.has_cov;
-  const int disagree = t.disagree;
   std::printf("%-6s %12s %10s %10s %12s %10s %10s %12s %12s\n", "delay", "K_cr(B=0)", "f(B=0)", "B_t",
               "K_cr^max", "f_before", "f_after", "B_max_0", "B_max");
-  for (size_t i = 0; i < sums.size(); ++i) {
-    const auto& s = sums[i];
+  for (size_t i = 0; i < t.sums.size(); ++i) {
+    const auto& s = t.sums[i];
     std::printf("%-6d %12.6g %10.5g %10.6g %12.6g %10.5g %10.5g %12.6g %12.6g\n", delays[i],
                 s.K_cr_at_zero_B, s.f_at_zero_B_hz, s.B_t, s.K_cr_max, s.f_before_hz, s.f_after_hz,
                 s.B_max_from_zero, s.B_max);
-    if (has_cov) {
-      std::printf("  std   %12.3g %10s %10.3g %12.3g %10s %10s %12s %12.3g\n", stds[i].K_cr_at_zero_B, "",
-                  stds[i].B_t, stds[i].K_cr_max, "", "", "", stds[i].B_max);
+    if (t.has_cov) {
+      std::printf("  std   %12.3g %10s %10.3g %12.3g %10s %10s %12s %12.3g\n", t.stds[i].K_cr_at_zero_B, "",
+                  t.stds[i].B_t, t.stds[i].K_cr_max, "", "", "", t.stds[i].B_max);
     }
     for (const auto& band : s.reopened_bands) {
       std::printf("  reopened band: B in (%.6g, %.6g), largest stable K %.6g\n", band.B_lo, band.B_hi, band.K_max);
@@ -143,23 +137,23 @@ void PrintBoundarySummary(const BoundaryTable& t, const io::ModelFile& mf, const
   }
   std::printf("B_max_0: where the interval from K = 0+ closes; B_max: the largest B with some stable K > 0\n");
   if (loops.size() > 1) {
-    for (size_t i = 0; i < sums.size(); ++i) {
+    for (size_t i = 0; i < t.sums.size(); ++i) {
       for (size_t h = 0; h < loops.size(); ++h) {
-        const auto& s = hsums[i][h];
+        const auto& s = t.hsums[i][h];
         std::printf("  d = %d, hand M %g B %g K %g: K_cr(0) %.6g, K_cr^max %.6g, B_max %.6g\n", delays[i],
                     loops[h].hand.M, loops[h].hand.B, loops[h].hand.K, s.K_cr_at_zero_B, s.K_cr_max, s.B_max);
       }
     }
     std::printf("the boundary CSV holds the region stable for every hand (intersection of the intervals)\n");
   }
-  for (size_t i = 0; i < sums.size(); ++i) {
-    const stability::PassiveInterval p0 = pas[i].At(0.0);
+  for (size_t i = 0; i < t.sums.size(); ++i) {
+    const stability::PassiveInterval p0 = t.pas[i].At(0.0);
     std::printf("d = %d passivity (Colgate-Schenkel, b = %g): K_P(0) = %.6g; passive up to B = %.6g\n",
-                delays[i], mf.plant.b, p0.K_hi, io::PassiveBMax(pas[i], mf.plant.b));
+                delays[i], mf.plant.b, p0.K_hi, io::PassiveBMax(t.pas[i], mf.plant.b));
   }
   std::printf("%d of %zu B values: the margin() reading of eq. (4) differs from the exact K_CR "
               "(mostly B past B_max_0, where margin() stays positive but K -> 0+ is unstable)\n",
-              disagree, t.rows.size());
+              t.disagree, t.rows.size());
 }
 
 // The summary JSON; with monte_carlo > 0 also the Monte Carlo std per delay
@@ -168,27 +162,21 @@ nlohmann::json BoundarySummaryJson(const BoundaryTable& t, const io::ModelFile& 
                                    const std::vector<int>& delays,
                                    const std::vector<stability::LoopOptions>& loops, int monte_carlo,
                                    std::uint64_t seed) {
-  const auto& sums = t.sums;
-  const auto& hsums = t.hsums;
-  const auto& stds = t.stds;
-  const auto& pas = t.pas;
-  const bool has_cov = t.has_cov;
-  const int disagree = t.disagree;
   nlohmann::json js;
   js["period_s"] = T;
   js["model"] = mf.plant.name;
   js["B_max_meaning"] = "B_max: the largest B at which some K > 0 is stable (reopened bands included); "
                         "B_max_from_zero: the B where the interval from K = 0+ closes (the paper's B_max)";
   js["delays"] = nlohmann::json::array();
-  for (size_t i = 0; i < sums.size(); ++i) {
-    nlohmann::json e = io::SummaryToJson(sums[i], has_cov ? &stds[i] : nullptr);
+  for (size_t i = 0; i < t.sums.size(); ++i) {
+    nlohmann::json e = io::SummaryToJson(t.sums[i], t.has_cov ? &t.stds[i] : nullptr);
     e["delay_samples"] = delays[i];
-    e["total_delay_samples"] = sums[i].delay_samples;
-    e["passivity"] = io::PassivitySummaryJson(pas[i], mf.plant.b);
+    e["total_delay_samples"] = t.sums[i].delay_samples;
+    e["passivity"] = io::PassivitySummaryJson(t.pas[i], mf.plant.b);
     if (loops.size() > 1) {
       e["per_hand"] = nlohmann::json::array();
       for (size_t h = 0; h < loops.size(); ++h) {
-        nlohmann::json eh = io::SummaryToJson(hsums[i][h]);
+        nlohmann::json eh = io::SummaryToJson(t.hsums[i][h]);
         eh["hand"] = {{"M", loops[h].hand.M}, {"B", loops[h].hand.B}, {"K", loops[h].hand.K}};
         e["per_hand"].push_back(eh);
       }
@@ -202,12 +190,12 @@ nlohmann::json BoundarySummaryJson(const BoundaryTable& t, const io::ModelFile& 
                           {"mean", io::SummaryToJson(stability::DelaySummary{}, &mc.mean)["std"]}};
       std::printf("d = %d  std by delta method / Monte Carlo (%d samples): K_cr(0) %.4g / %.4g, B_t %.4g / %.4g, "
                   "K_cr^max %.4g / %.4g, B_max %.4g / %.4g\n",
-                  delays[i], mc.samples, stds[i].K_cr_at_zero_B, mc.std.K_cr_at_zero_B, stds[i].B_t,
-                  mc.std.B_t, stds[i].K_cr_max, mc.std.K_cr_max, stds[i].B_max, mc.std.B_max);
+                  delays[i], mc.samples, t.stds[i].K_cr_at_zero_B, mc.std.K_cr_at_zero_B, t.stds[i].B_t,
+                  mc.std.B_t, t.stds[i].K_cr_max, mc.std.K_cr_max, t.stds[i].B_max, mc.std.B_max);
     }
     js["delays"].push_back(e);
   }
-  js["margin_disagreements"] = disagree;
+  js["margin_disagreements"] = t.disagree;
   js["loop"] = LoopJson(loops);
   return js;
 }
@@ -336,6 +324,73 @@ void AddFilterSweepCommand(CLI::App& app) {
 }
 
 // zwidth relay: the relay experiment of section IV, beside the exact K_CR.
+// The relay's trace CSV (t, relay force, damping force, command, position), atomically.
+void WriteRelayTrace(const std::string& path, const stability::RelayResult& res, double period_s) {
+  io::WriteAtomically(path, [&](const std::string& tmp) {
+    std::FILE* f = std::fopen(tmp.c_str(), "wb");
+    if (!f) throw InputError("cannot create '" + tmp + "'");
+    std::fputs("t,relay_force,damping_force,command,position\n", f);
+    for (size_t k = 0; k < res.position.size(); ++k) {
+      std::fprintf(f, "%.9g,%.9g,%.9g,%.9g,%.12g\n", k * period_s, res.relay_force[k],
+                   res.damping_force[k], res.command[k], res.position[k]);
+    }
+    if (std::fclose(f) != 0) throw InputError("failed writing '" + path + "'");
+  });
+}
+
+// relay --json: the relay's result beside the exact critical point cp.
+nlohmann::json RelayJson(const stability::RelayResult& res, const stability::CriticalPoint& cp,
+                         const stability::RelayOptions& o) {
+  return {{"K_cr", io::NumberOrNull(res.K_cr)}, {"f_cr_hz", io::NumberOrNull(res.f_cr_hz)},
+          {"status", stability::ToString(res.status)},
+          {"refined", res.refined()}, {"diverged", res.status == stability::RelayStatus::kDiverged},
+          {"K_cr_peak", io::NumberOrNull(res.K_cr_peak)},
+          {"f_cr_peak_hz", io::NumberOrNull(res.f_cr_peak_hz)}, {"relay_runs", res.relay_runs},
+          {"unsettled", res.unsettled},
+          {"uncertainty", io::NumberOrNull(res.uncertainty)}, {"below_band", res.status == stability::RelayStatus::kBelowBand},
+          {"band_low_hz", io::NumberOrNull(res.band_low_hz)},
+          {"K_cr_exact", io::NumberOrNull(cp.K_cr)},
+          {"f_cr_exact_hz", io::NumberOrNull(cp.f_cr_hz)},
+          {"delay_samples", o.delay_samples}, {"B", o.damping},
+          {"period_s", o.period_s}};
+}
+
+// Warnings on stderr: an unsettled estimate, a crossing below the record's band.
+void WarnRelay(const stability::RelayResult& res) {
+  if (res.refined() && !(res.uncertainty <= 1e-3)) {
+    std::fprintf(stderr,
+                 "warning: the estimate is uncertain to about %.2g%% (L from the two halves of the steady part "
+                 "differs by %.2g%%, the oscillation was still settling); simulate longer with --seconds\n",
+                 100.0 * res.uncertainty, 100.0 * res.unsettled);
+  }
+  if (res.status == stability::RelayStatus::kBelowBand) {
+    std::fprintf(stderr,
+                 "warning: the relay run at %.3g Hz, the lowest this record resolves (20 cycles in the steady part), "
+                 "is already past -180 deg: the critical crossing lies below it; simulate longer with --seconds\n",
+                 res.band_low_hz);
+  }
+}
+
+// The relay's readings and the exact K_cr on stdout, or the JSON alone.
+void PrintRelay(const stability::RelayResult& res, const stability::CriticalPoint& cp, const nlohmann::json& j,
+                bool json) {
+  if (json) {
+    std::cout << j.dump() << std::endl;
+  } else if (res.status == stability::RelayStatus::kDiverged) {
+    std::printf("relay: the loop diverges with the relay alone, so K -> 0+ is unstable here (B past B_max_from_zero): "
+                "K_cr = 0\n");
+  } else {
+    std::printf("relay, paper's reading (spectral peak, first harmonics): K_cr = %.6g N m/rad at %.5g Hz\n",
+                res.K_cr_peak, res.f_cr_peak_hz);
+    std::printf("relay, -180 deg crossings measured by steered runs:    K_cr = %.6g N m/rad at %.5g Hz%s\n",
+                res.K_cr, res.f_cr_hz, res.refined() ? "" : " (no crossing found: the paper's reading)");
+  }
+  if (!json) {
+    std::printf("exact (eq. 2, with this loop's filter and hand):        K_cr = %.6g N m/rad at %.5g Hz\n",
+                cp.K_cr, cp.f_cr_hz);
+  }
+}
+
 void AddRelayCommand(CLI::App& app) {
   struct RelayFlags {
     std::string model, trace;
@@ -373,57 +428,10 @@ void AddRelayCommand(CLI::App& app) {
     }
     const stability::ZWidth z(mf.plant, rf->o.period_s, rf->o.delay_samples, rf->o.loop);
     const stability::CriticalPoint cp = z.At(rf->o.damping);
-    if (!rf->trace.empty()) {
-      io::WriteAtomically(rf->trace, [&](const std::string& tmp) {
-        std::FILE* f = std::fopen(tmp.c_str(), "wb");
-        if (!f) throw InputError("cannot create '" + tmp + "'");
-        std::fputs("t,relay_force,damping_force,command,position\n", f);
-        for (size_t k = 0; k < res.position.size(); ++k) {
-          std::fprintf(f, "%.9g,%.9g,%.9g,%.9g,%.12g\n", k * rf->o.period_s, res.relay_force[k],
-                       res.damping_force[k], res.command[k], res.position[k]);
-        }
-        if (std::fclose(f) != 0) throw InputError("failed writing '" + rf->trace + "'");
-      });
-    }
-    nlohmann::json j = {{"K_cr", io::NumberOrNull(res.K_cr)}, {"f_cr_hz", io::NumberOrNull(res.f_cr_hz)},
-                        {"status", stability::ToString(res.status)},
-                        {"refined", res.refined()}, {"diverged", res.status == stability::RelayStatus::kDiverged},
-                        {"K_cr_peak", io::NumberOrNull(res.K_cr_peak)},
-                        {"f_cr_peak_hz", io::NumberOrNull(res.f_cr_peak_hz)}, {"relay_runs", res.relay_runs},
-                        {"unsettled", res.unsettled},
-                        {"uncertainty", io::NumberOrNull(res.uncertainty)}, {"below_band", res.status == stability::RelayStatus::kBelowBand},
-                        {"band_low_hz", io::NumberOrNull(res.band_low_hz)},
-                        {"K_cr_exact", io::NumberOrNull(cp.K_cr)},
-                        {"f_cr_exact_hz", io::NumberOrNull(cp.f_cr_hz)},
-                        {"delay_samples", rf->o.delay_samples}, {"B", rf->o.damping},
-                        {"period_s", rf->o.period_s}};
-    if (res.refined() && !(res.uncertainty <= 1e-3)) {
-      std::fprintf(stderr,
-                   "warning: the estimate is uncertain to about %.2g%% (L from the two halves of the steady part "
-                   "differs by %.2g%%, the oscillation was still settling); simulate longer with --seconds\n",
-                   100.0 * res.uncertainty, 100.0 * res.unsettled);
-    }
-    if (res.status == stability::RelayStatus::kBelowBand) {
-      std::fprintf(stderr,
-                   "warning: the relay run at %.3g Hz, the lowest this record resolves (20 cycles in the steady part), "
-                   "is already past -180 deg: the critical crossing lies below it; simulate longer with --seconds\n",
-                   res.band_low_hz);
-    }
-    if (rf->json) {
-      std::cout << j.dump() << std::endl;
-    } else if (res.status == stability::RelayStatus::kDiverged) {
-      std::printf("relay: the loop diverges with the relay alone, so K -> 0+ is unstable here (B past B_max_from_zero): "
-                  "K_cr = 0\n");
-    } else {
-      std::printf("relay, paper's reading (spectral peak, first harmonics): K_cr = %.6g N m/rad at %.5g Hz\n",
-                  res.K_cr_peak, res.f_cr_peak_hz);
-      std::printf("relay, -180 deg crossings measured by steered runs:    K_cr = %.6g N m/rad at %.5g Hz%s\n",
-                  res.K_cr, res.f_cr_hz, res.refined() ? "" : " (no crossing found: the paper's reading)");
-    }
-    if (!rf->json) {
-      std::printf("exact (eq. 2, with this loop's filter and hand):        K_cr = %.6g N m/rad at %.5g Hz\n",
-                  cp.K_cr, cp.f_cr_hz);
-    }
+    if (!rf->trace.empty()) WriteRelayTrace(rf->trace, res, rf->o.period_s);
+    const nlohmann::json j = RelayJson(res, cp, rf->o);
+    WarnRelay(res);
+    PrintRelay(res, cp, j, rf->json);
   });
 }
 

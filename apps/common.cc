@@ -198,9 +198,10 @@ void WarnDropped(const std::string& path, size_t n_samples, const ident::WelchOp
 
 }  // namespace
 
-LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const EstimateFlags& flags, bool for_fit) {
-  ident::WelchOptions options = flags.Resolve();
-  const bool closed = !flags.reference_column.empty() || !flags.reference_dataset.empty();
+namespace {
+
+// --whole-record, --period-samples and --window-length that do not go together.
+void CheckRecordFlags(const EstimateFlags& flags) {
   if (flags.whole_record && flags.welch.window_length != ident::WelchOptions{}.window_length) {
     throw InputError("--whole-record takes each log (or --period-samples) as one segment: drop --window-length");
   }
@@ -208,95 +209,104 @@ LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const Estim
     throw InputError("--period-samples " + std::to_string(flags.period_samples) +
                      ": needs --whole-record and a period of at least 16 samples");
   }
-  LogsEstimate out;
+}
+
+// Closed loop: the selector that reads the logged excitation r as the "input".
+io::LogSelect ExcitationSelect(const std::string& path, const EstimateFlags& flags) {
+  io::LogSelect rsel = flags.select;
+  const bool h5 = io::DetectLogFormat(path) == io::LogFormat::kHdf5;
+  if (h5 && flags.reference_dataset.empty()) {
+    throw InputError(path + ": an HDF5 log: name the excitation with --reference-dataset (not --reference-column)");
+  }
+  if (!h5 && flags.reference_column.empty()) {
+    throw InputError(path + ": not an HDF5 log: name the excitation with --reference-column (not --reference-dataset)");
+  }
+  if (h5) rsel.input_dataset = flags.reference_dataset;
+  else rsel.input_column = flags.reference_column;
+  return rsel;
+}
+
+// Open loop in Welch segments: one streaming pass, memory for a few windows.
+ident::RunSpectra StreamedRun(const std::string& path, const EstimateFlags& flags, const ident::WelchOptions& options,
+                              io::LogInfo* info) {
+  ident::WelchEstimator est(options);
+  *info = io::StreamLog(path, flags.select, [&](const double* u, const double* y, size_t n) { est.Push(u, y, n); });
+  PrintRead(*info);
+  WarnDropped(path, info->num_samples, options);
+  ident::RunSpectra spectra;
+  spectra.uy = est.Finish(info->sample_rate_hz);
+  return spectra;
+}
+
+// Each whole period of P samples one run of its own: the std is the scatter between periods.
+std::vector<ident::RunSpectra> PeriodRuns(const std::string& path, const io::Log& log, const std::vector<double>& r,
+                                          size_t P, ident::WelchOptions o) {
+  const size_t periods = log.input.size() / P;
+  if (periods == 0) {
+    throw InputError("the log has " + std::to_string(log.input.size()) + " samples, fewer than one period of " +
+                     std::to_string(P) + " (--period-samples)");
+  }
+  o.window_length = static_cast<int>(P);
+  o.overlap = 0.0;
+  o.window = ident::Window::kRect;
+  WarnDropped(path, log.info.num_samples, o);
   std::vector<ident::RunSpectra> runs;
-  for (const std::string& path : paths) {
-    io::LogSelect rsel = flags.select;  // the excitation read as the "input"
-    if (closed) {
-      const bool h5 = io::DetectLogFormat(path) == io::LogFormat::kHdf5;
-      if (h5 && flags.reference_dataset.empty()) {
-        throw InputError(path + ": an HDF5 log: name the excitation with --reference-dataset (not --reference-column)");
-      }
-      if (!h5 && flags.reference_column.empty()) {
-        throw InputError(path + ": not an HDF5 log: name the excitation with --reference-column (not --reference-dataset)");
-      }
-      if (h5) rsel.input_dataset = flags.reference_dataset;
-      else rsel.input_column = flags.reference_column;
+  for (size_t q = 0; q < periods; ++q) {
+    auto cut = [&](const std::vector<double>& v) {
+      return v.empty() ? v : std::vector<double>(v.begin() + q * P, v.begin() + (q + 1) * P);
+    };
+    runs.push_back(ident::EstimateRun(cut(log.input), cut(log.output), cut(r), log.info.sample_rate_hz, o));
+  }
+  return runs;
+}
+
+// The log in memory (closed loop, or --whole-record): its run, or one run per
+// period with --period-samples.
+std::vector<ident::RunSpectra> InMemoryRuns(const std::string& path, const EstimateFlags& flags, bool closed,
+                                            const io::LogSelect& rsel, ident::WelchOptions o, io::LogInfo* info) {
+  io::Log log = io::ReadLog(path, flags.select);
+  *info = log.info;
+  PrintRead(*info);
+  std::vector<double> r;
+  if (closed) {
+    io::Log ex = io::ReadLog(path, rsel);
+    if (ex.input.size() != log.input.size()) {
+      throw InputError("the excitation has " + std::to_string(ex.input.size()) + " samples, the input " +
+                       std::to_string(log.input.size()));
     }
-    io::LogInfo info;
-    ident::RunSpectra spectra;
-    try {
-      if (!closed && !flags.whole_record) {  // one streaming pass
-        ident::WelchEstimator est(options);
-        info = io::StreamLog(path, flags.select, [&](const double* u, const double* y, size_t n) { est.Push(u, y, n); });
-        PrintRead(info);
-        WarnDropped(path, info.num_samples, options);
-        spectra.uy = est.Finish(info.sample_rate_hz);
-      } else {
-        io::Log log = io::ReadLog(path, flags.select);
-        info = log.info;
-        PrintRead(info);
-        std::vector<double> r;
-        if (closed) {
-          io::Log ex = io::ReadLog(path, rsel);
-          if (ex.input.size() != log.input.size()) {
-            throw InputError("the excitation has " + std::to_string(ex.input.size()) + " samples, the input " +
-                             std::to_string(log.input.size()));
-          }
-          r = std::move(ex.input);
-        }
-        ident::WelchOptions o = options;
-        if (flags.whole_record && flags.period_samples > 0) {
-          // Each whole period one run of its own: the std is the scatter between periods.
-          const size_t P = static_cast<size_t>(flags.period_samples);
-          const size_t periods = log.input.size() / P;
-          if (periods == 0) {
-            throw InputError("the log has " + std::to_string(log.input.size()) + " samples, fewer than one period of " +
-                             std::to_string(P) + " (--period-samples)");
-          }
-          o.window_length = static_cast<int>(P);
-          o.overlap = 0.0;
-          o.window = ident::Window::kRect;
-          WarnDropped(path, info.num_samples, o);
-          for (size_t q = 0; q < periods; ++q) {
-            auto cut = [&](const std::vector<double>& v) {
-              return v.empty() ? v : std::vector<double>(v.begin() + q * P, v.begin() + (q + 1) * P);
-            };
-            runs.push_back(ident::EstimateRun(cut(log.input), cut(log.output), cut(r), info.sample_rate_hz, o));
-          }
-          out.total_samples += info.num_samples;
-          out.infos.push_back(info);
-          continue;
-        }
-        if (flags.whole_record) {
-          if (log.input.size() > (1u << 24)) throw InputError("a whole record is limited to 2^24 samples");
-          o.window_length = static_cast<int>(log.input.size());
-          o.overlap = 0.0;
-          o.window = ident::Window::kRect;
-        } else {
-          WarnDropped(path, info.num_samples, o);
-        }
-        spectra = ident::EstimateRun(log.input, log.output, r, info.sample_rate_hz, o);
-      }
-    } catch (const InputError& e) {
-      const std::string what = e.what();
-      throw InputError(what.rfind(path, 0) == 0 ? what : path + ": " + what);
-    }
-    out.total_samples += info.num_samples;
-    out.infos.push_back(info);
-    runs.push_back(std::move(spectra));
+    r = std::move(ex.input);
   }
-  out.response = ident::CombineRuns(runs, options.estimator,
-                                    flags.whole_record ? ident::StdSource::kRunScatter : ident::StdSource::kCoherence);
-  if (for_fit && flags.whole_record && runs.size() < 2) {
-    throw InputError("--whole-record with one log and no --period-samples gives one segment: no per-bin std to "
-                     "weight the fit; pass several runs of the same excitation, or --period-samples");
+  if (flags.whole_record && flags.period_samples > 0) {
+    return PeriodRuns(path, log, r, static_cast<size_t>(flags.period_samples), o);
   }
-  if (flags.whole_record && runs.size() < 2) {
-    std::fprintf(stderr, "warning: --whole-record with one segment: no scatter between runs, the per-bin std is "
-                         "infinite (pass several runs of the same excitation, or --period-samples)\n");
+  if (flags.whole_record) {
+    if (log.input.size() > (1u << 24)) throw InputError("a whole record is limited to 2^24 samples");
+    o.window_length = static_cast<int>(log.input.size());
+    o.overlap = 0.0;
+    o.window = ident::Window::kRect;
+  } else {
+    WarnDropped(path, info->num_samples, o);
   }
-  const auto& r = out.response;
+  std::vector<ident::RunSpectra> runs;
+  runs.push_back(ident::EstimateRun(log.input, log.output, r, info->sample_rate_hz, o));
+  return runs;
+}
+
+// One log's runs; an InputError names the file first.
+std::vector<ident::RunSpectra> LogRuns(const std::string& path, const EstimateFlags& flags, bool closed,
+                                       const ident::WelchOptions& options, io::LogInfo* info) {
+  const io::LogSelect rsel = closed ? ExcitationSelect(path, flags) : flags.select;
+  try {
+    if (!closed && !flags.whole_record) return {StreamedRun(path, flags, options, info)};
+    return InMemoryRuns(path, flags, closed, rsel, options, info);
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    throw InputError(what.rfind(path, 0) == 0 ? what : path + ": " + what);
+  }
+}
+
+// "<method> from N runs, M segments[; median coherences]" on stderr.
+void PrintCombined(const ident::CombinedResponse& r) {
   std::fprintf(stderr, "%s from %d run%s, %d segments", ident::ToString(r.method).c_str(), r.num_runs,
                r.num_runs > 1 ? "s" : "", r.frf.num_averages);
   if (r.method == ident::CombinedMethod::kJoint) {
@@ -308,6 +318,33 @@ LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const Estim
                  median(r.coherence_ru), median(r.coherence_ry));
   }
   std::fprintf(stderr, "\n");
+}
+
+}  // namespace
+
+LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const EstimateFlags& flags, bool for_fit) {
+  ident::WelchOptions options = flags.Resolve();
+  const bool closed = !flags.reference_column.empty() || !flags.reference_dataset.empty();
+  CheckRecordFlags(flags);
+  LogsEstimate out;
+  std::vector<ident::RunSpectra> runs;
+  for (const std::string& path : paths) {
+    io::LogInfo info;
+    for (ident::RunSpectra& run : LogRuns(path, flags, closed, options, &info)) runs.push_back(std::move(run));
+    out.total_samples += info.num_samples;
+    out.infos.push_back(info);
+  }
+  out.response = ident::CombineRuns(runs, options.estimator,
+                                    flags.whole_record ? ident::StdSource::kRunScatter : ident::StdSource::kCoherence);
+  if (for_fit && flags.whole_record && runs.size() < 2) {
+    throw InputError("--whole-record with one log and no --period-samples gives one segment: no per-bin std to "
+                     "weight the fit; pass several runs of the same excitation, or --period-samples");
+  }
+  if (flags.whole_record && runs.size() < 2) {
+    std::fprintf(stderr, "warning: --whole-record with one segment: no scatter between runs, the per-bin std is "
+                         "infinite (pass several runs of the same excitation, or --period-samples)\n");
+  }
+  PrintCombined(out.response);
   io::CheckFiniteResponse(out.response.frf, JoinPaths(paths));  // the stage named: estimate, before fit or write
   return out;
 }

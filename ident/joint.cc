@@ -56,12 +56,10 @@ Bin Evaluate(double suu, double syy, std::complex<double> suy, double srr, std::
   return b;
 }
 
-}  // namespace
-
-CombinedResponse CombineRuns(const std::vector<RunSpectra>& runs, Estimator estimator, StdSource std_source) {
-  if (runs.empty()) throw InputError("no run to estimate from");
+// Runs of one estimate: the same rate (0.1 %), segment length and bins, and
+// all with an excitation or none.
+void CheckRunsAlike(const std::vector<RunSpectra>& runs, bool joint) {
   const FrequencyResponse& first = runs.front().uy;
-  const bool joint = runs.front().ru.has_value();
   for (size_t i = 0; i < runs.size(); ++i) {
     const FrequencyResponse& f = runs[i].uy;
     // Rates measured from time columns differ in the last digits; 0.1 % is a
@@ -78,79 +76,114 @@ CombinedResponse CombineRuns(const std::vector<RunSpectra>& runs, Estimator esti
                        " an excitation where run 1 " + (joint ? "has one" : "does not"));
     }
   }
-  CombinedResponse out;
-  out.method = joint ? CombinedMethod::kJoint
-                     : (estimator == Estimator::kH1 ? CombinedMethod::kH1 : CombinedMethod::kH2);
-  out.num_runs = static_cast<int>(runs.size());
-  FrequencyResponse& r = out.frf;
-  r.sample_rate_hz = first.sample_rate_hz;
-  r.window_length = first.window_length;
-  r.bin_correlation = first.bin_correlation;
-  r.f_hz = first.f_hz;
+}
+
+// The excitation's spectra summed over runs (joint estimate only).
+struct ExcitationSpectra {
+  std::vector<double> srr;
+  std::vector<std::complex<double>> sru, sry;
+};
+
+// r's header (rate, segments, bins, averages) and its spectra S_uu, S_yy, S_uy
+// (and the excitation's) as the means over all segments of all runs: each
+// run's spectra weighted by its share of the segments.
+ExcitationSpectra AverageSpectra(const std::vector<RunSpectra>& runs, bool joint, FrequencyResponse* r) {
+  const FrequencyResponse& first = runs.front().uy;
+  r->sample_rate_hz = first.sample_rate_hz;
+  r->window_length = first.window_length;
+  r->bin_correlation = first.bin_correlation;
+  r->f_hz = first.f_hz;
   double segments = 0.0;
   for (const RunSpectra& s : runs) {
-    r.num_averages += s.uy.num_averages;
-    r.effective_averages += s.uy.effective_averages;
+    r->num_averages += s.uy.num_averages;
+    r->effective_averages += s.uy.effective_averages;
     segments += s.uy.num_averages;
   }
-  const size_t nb = r.f_hz.size();
-  r.S_uu.assign(nb, 0.0);
-  r.S_yy.assign(nb, 0.0);
-  r.S_uy.assign(nb, 0.0);
-  std::vector<double> srr(nb, 0.0);
-  std::vector<std::complex<double>> sru(nb, 0.0), sry(nb, 0.0);
+  const size_t nb = r->f_hz.size();
+  r->S_uu.assign(nb, 0.0);
+  r->S_yy.assign(nb, 0.0);
+  r->S_uy.assign(nb, 0.0);
+  ExcitationSpectra x{std::vector<double>(nb, 0.0), std::vector<std::complex<double>>(nb, 0.0),
+                      std::vector<std::complex<double>>(nb, 0.0)};
   for (const RunSpectra& s : runs) {
     const double w = s.uy.num_averages / segments;  // spectra are means over segments
     for (size_t k = 0; k < nb; ++k) {
-      r.S_uu[k] += w * s.uy.S_uu[k];
-      r.S_yy[k] += w * s.uy.S_yy[k];
-      r.S_uy[k] += w * s.uy.S_uy[k];
+      r->S_uu[k] += w * s.uy.S_uu[k];
+      r->S_yy[k] += w * s.uy.S_yy[k];
+      r->S_uy[k] += w * s.uy.S_uy[k];
       if (joint) {
-        srr[k] += w * s.ru->S_uu[k];
-        sru[k] += w * s.ru->S_uy[k];
-        sry[k] += w * s.ry->S_uy[k];
+        x.srr[k] += w * s.ru->S_uu[k];
+        x.sru[k] += w * s.ru->S_uy[k];
+        x.sry[k] += w * s.ry->S_uy[k];
       }
     }
   }
+  return x;
+}
+
+// H, its std (from the coherence) and the coherences of every bin from the
+// averaged spectra.
+void EvaluateBins(const ExcitationSpectra& x, bool joint, CombinedResponse* out) {
+  FrequencyResponse& r = out->frf;
+  const size_t nb = r.f_hz.size();
   const double nd = r.effective_averages;
   r.H.resize(nb);
   r.H_std.resize(nb);
   r.coherence.resize(nb);
   if (joint) {
-    out.coherence_ru.resize(nb);
-    out.coherence_ry.resize(nb);
+    out->coherence_ru.resize(nb);
+    out->coherence_ry.resize(nb);
   }
   bool any_power = false;
   for (size_t k = 0; k < nb; ++k) {
     if (r.S_uu[k] > 0) any_power = true;
-    const Bin b = Evaluate(r.S_uu[k], r.S_yy[k], r.S_uy[k], srr[k], sru[k], sry[k], nd, out.method);
+    const Bin b = Evaluate(r.S_uu[k], r.S_yy[k], r.S_uy[k], x.srr[k], x.sru[k], x.sry[k], nd, out->method);
     r.H[k] = b.h;
     r.H_std[k] = b.sd;
     r.coherence[k] = joint ? b.coh_ry : b.coh;
     if (joint) {
-      out.coherence_ru[k] = b.coh_ru;
-      out.coherence_ry[k] = b.coh_ry;
+      out->coherence_ru[k] = b.coh_ru;
+      out->coherence_ry[k] = b.coh_ry;
     }
   }
   if (!any_power) throw InputError("the input has no power in the band: constant input?");
-  if (std_source == StdSource::kRunScatter) {
-    const double m = static_cast<double>(runs.size());
-    for (size_t k = 0; k < nb; ++k) {
-      if (runs.size() < 2) {
-        r.H_std[k] = std::numeric_limits<double>::infinity();
-        continue;
-      }
-      double ss = 0.0;
-      for (const RunSpectra& s : runs) {
-        const Bin b = Evaluate(s.uy.S_uu[k], s.uy.S_yy[k], s.uy.S_uy[k], joint ? s.ru->S_uu[k] : 0.0,
-                               joint ? s.ru->S_uy[k] : 0.0, joint ? s.ry->S_uy[k] : 0.0, 1.0, out.method);
-        ss += std::norm(b.h - r.H[k]);
-      }
-      r.H_std[k] = std::sqrt(ss / (2.0 * m * (m - 1.0)));
+}
+
+// H_std from the scatter of the runs' own estimates about the combined H
+// (inf with one run); the runs are the averages.
+void StdFromRunScatter(const std::vector<RunSpectra>& runs, bool joint, CombinedResponse* out) {
+  FrequencyResponse& r = out->frf;
+  const double m = static_cast<double>(runs.size());
+  for (size_t k = 0; k < r.f_hz.size(); ++k) {
+    if (runs.size() < 2) {
+      r.H_std[k] = std::numeric_limits<double>::infinity();
+      continue;
     }
-    // One segment per run: the estimate's averages are the runs.
-    r.effective_averages = m;
+    double ss = 0.0;
+    for (const RunSpectra& s : runs) {
+      const Bin b = Evaluate(s.uy.S_uu[k], s.uy.S_yy[k], s.uy.S_uy[k], joint ? s.ru->S_uu[k] : 0.0,
+                             joint ? s.ru->S_uy[k] : 0.0, joint ? s.ry->S_uy[k] : 0.0, 1.0, out->method);
+      ss += std::norm(b.h - r.H[k]);
+    }
+    r.H_std[k] = std::sqrt(ss / (2.0 * m * (m - 1.0)));
   }
+  // One segment per run: the estimate's averages are the runs.
+  r.effective_averages = m;
+}
+
+}  // namespace
+
+CombinedResponse CombineRuns(const std::vector<RunSpectra>& runs, Estimator estimator, StdSource std_source) {
+  if (runs.empty()) throw InputError("no run to estimate from");
+  const bool joint = runs.front().ru.has_value();
+  CheckRunsAlike(runs, joint);
+  CombinedResponse out;
+  out.method = joint ? CombinedMethod::kJoint
+                     : (estimator == Estimator::kH1 ? CombinedMethod::kH1 : CombinedMethod::kH2);
+  out.num_runs = static_cast<int>(runs.size());
+  const ExcitationSpectra x = AverageSpectra(runs, joint, &out.frf);
+  EvaluateBins(x, joint, &out);
+  if (std_source == StdSource::kRunScatter) StdFromRunScatter(runs, joint, &out);
   return out;
 }
 

@@ -376,6 +376,59 @@ void ResolveRate(const std::string& path, const LogSelect& sel, const TimeChecke
 
 }  // namespace
 
+// The input, output and time columns of a CSV log (time -1: none), how
+// messages name them, and the layout line that says what was read.
+struct CsvColumns {
+  int input = -1, output = -1, time = -1;
+  std::vector<std::string> names;  // the header's, empty without one
+  std::string layout;
+  std::string Name(int c) const {
+    return names.empty() ? "column " + std::to_string(c + 1) : "column '" + names[c].substr(0, 40) + "'";
+  }
+};
+
+CsvColumns SelectColumns(const LogSelect& sel, const CsvHeader& header, size_t ncols, const std::string& path) {
+  CsvColumns c;
+  c.names = header.names;
+  c.layout = header.layout;
+  auto find_col = [&](const std::string& spec, bool required, const char* flag) {
+    return FindColumn(spec, required, flag, c.names, ncols, path, c.layout);
+  };
+  c.input = find_col(sel.input_column, true, "LogSelect::input_column");
+  c.output = find_col(sel.output_column, true, "LogSelect::output_column");
+  const bool rate_given = sel.sample_rate_hz > 0.0;
+  c.time = sel.time_column == "none" ? -1 : find_col(sel.time_column, !rate_given, "LogSelect::time_column");
+  c.layout += "; input " + c.Name(c.input) + ", output " + c.Name(c.output) + ", time " +
+              (c.time >= 0 ? c.Name(c.time) : "none");
+  return c;
+}
+
+// Samples handed to the sink in chunks of kChunk, counted, and checked for a
+// varying input.
+struct ChunkedSink {
+  explicit ChunkedSink(const LogSink& s) : sink(s) {
+    u.reserve(kChunk);
+    y.reserve(kChunk);
+  }
+  void Add(double uv, double yv) {
+    u.push_back(uv);
+    y.push_back(yv);
+    ++rows;
+    if (u.size() == kChunk) Flush();
+  }
+  void Flush() {
+    if (u.empty()) return;
+    constant.Add(u.data(), u.size());
+    sink(u.data(), y.data(), u.size());
+    u.clear();
+    y.clear();
+  }
+  const LogSink& sink;
+  ConstantCheck constant;
+  std::vector<double> u, y;
+  size_t rows = 0;
+};
+
 LogInfo StreamCsv(const std::string& path, const LogSelect& sel, const LogSink& sink) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot open log file (does it exist?)");
@@ -393,33 +446,12 @@ LogInfo StreamCsv(const std::string& path, const LogSelect& sel, const LogSink& 
     return v;
   }();
   const CsvHeader header = ReadHeader(pre.last, *delim, ncols, first_data, path);
-  const std::vector<std::string>& names = header.names;
-  std::string layout = header.layout;
-  auto find_col = [&](const std::string& spec, bool required, const char* flag) {
-    return FindColumn(spec, required, flag, names, ncols, path, layout);
-  };
-  const int ci = find_col(sel.input_column, true, "LogSelect::input_column");
-  const int co = find_col(sel.output_column, true, "LogSelect::output_column");
   const bool rate_given = sel.sample_rate_hz > 0.0;
-  const int ct = sel.time_column == "none" ? -1 : find_col(sel.time_column, !rate_given, "LogSelect::time_column");
-  auto col_name = [&](int c) {
-    return names.empty() ? "column " + std::to_string(c + 1) : "column '" + names[c].substr(0, 40) + "'";
-  };
-  layout += "; input " + col_name(ci) + ", output " + col_name(co) + ", time " + (ct >= 0 ? col_name(ct) : "none");
-
+  const CsvColumns cols = SelectColumns(sel, header, ncols, path);
+  const int ci = cols.input, co = cols.output, ct = cols.time;
+  auto col_name = [&](int c) { return cols.Name(c); };
   TimeChecker times(path, sel.max_interval_deviation, !rate_given);
-  ConstantCheck constant;
-  std::vector<double> u, y;
-  u.reserve(kChunk);
-  y.reserve(kChunk);
-  size_t rows = 0;
-  auto flush = [&] {
-    if (u.empty()) return;
-    constant.Add(u.data(), u.size());
-    sink(u.data(), y.data(), u.size());
-    u.clear();
-    y.clear();
-  };
+  ChunkedSink out(sink);
   bool first = true;
   do {
     size_t line_no = first ? first_data : reader.line_no();
@@ -445,22 +477,19 @@ LogInfo StreamCsv(const std::string& path, const LogSelect& sel, const LogSink& 
     };
     const double uv = parse(ci), yv = parse(co);
     if (ct >= 0) times.AddLazy(parse(ct) * time_scale, [&] { return "line " + std::to_string(line_no); });
-    u.push_back(uv * sel.input_scale);
-    y.push_back(yv * sel.output_scale);
-    ++rows;
-    if (u.size() == kChunk) flush();
+    out.Add(uv * sel.input_scale, yv * sel.output_scale);
     first = false;
   } while (reader.Next(&line));
-  flush();
-  if (!constant.varies) {
+  out.Flush();
+  if (!out.constant.varies) {
     throw InputError(path + ": input " + col_name(ci) +
                      " is constant: the log has no excitation to identify from (wrong LogSelect::input_column?)");
   }
   LogInfo info;
   info.source = path;
-  info.num_samples = rows;
-  info.layout = layout;
-  ResolveRate(path, sel, times, ct, rows, ct >= 0 ? col_name(ct) : std::string(), &info);
+  info.num_samples = out.rows;
+  info.layout = cols.layout;
+  ResolveRate(path, sel, times, ct, out.rows, ct >= 0 ? col_name(ct) : std::string(), &info);
   return info;
 }
 

@@ -87,9 +87,8 @@ fit::FitOptions OptionsFrom(const py::object& modes, int max_modes, const py::ob
   return o;
 }
 
-}  // namespace
-
-void BindFit(py::module_& m) {
+// zwidth.FitResult: the outcome of a fit, read-only.
+void BindFitResult(py::module_& m) {
   py::class_<PyFitResult>(m, "FitResult", "The outcome of zwidth.fit.")
       .def_readonly("model", &PyFitResult::model, "the fitted Model (with std and sample_period_s)")
       .def_property_readonly("status", [](const PyFitResult& r) { return fit::ToString(r.result.status); },
@@ -132,7 +131,11 @@ void BindFit(py::module_& m) {
       .def("brief_report", [](const PyFitResult& r) { return r.result.BriefReport(); },
            "One line, as `zwidth fit` prints it.")
       .def("__repr__", [](const PyFitResult& r) { return "<zwidth.FitResult " + r.result.BriefReport() + ">"; });
+}
 
+// zwidth.fit: FitOptions from keywords (OptionsFrom), then RunFit.
+void BindFitFunction(py::module_& m) {
+  const fit::FitOptions d;  // the defaults of every keyword
   m.def("fit",
         [](const ident::FrequencyResponse& frf, const py::object& modes, int max_modes, const py::object& delay_samples,
            int max_auto_delay, bool allow_short, double fmin, double fmax, double min_input_power_ratio,
@@ -146,21 +149,21 @@ void BindFit(py::module_& m) {
                           max_frequency_fraction, relative_std_floor, function_tolerance);
           return RunFit(frf, o, name);
         },
-        py::arg("frf"), py::arg("modes") = fit::FitOptions{}.num_modes,
-        py::arg("max_modes") = fit::FitOptions{}.max_modes, py::arg("delay_samples") = fit::FitOptions{}.delay_samples,
-        py::arg("max_auto_delay") = fit::FitOptions{}.max_auto_delay,
-        py::arg("allow_short") = fit::FitOptions{}.allow_few_averages,
-        py::arg("fmin") = fit::FitOptions{}.band.fmin_hz, py::arg("fmax") = fit::FitOptions{}.band.fmax_hz,
-        py::arg("min_input_power_ratio") = fit::FitOptions{}.band.min_input_power_ratio,
-        py::arg("min_coherence") = fit::FitOptions{}.band.min_coherence, py::arg("init") = py::none(),
-        py::arg("max_starts") = fit::FitOptions{}.max_starts,
-        py::arg("max_iterations") = fit::FitOptions{}.max_iterations,
-        py::arg("min_damping_ratio") = fit::FitOptions{}.min_damping_ratio,
-        py::arg("max_pole_damping_ratio") = fit::FitOptions{}.max_pole_damping_ratio,
-        py::arg("max_zero_damping_ratio") = fit::FitOptions{}.max_zero_damping_ratio,
-        py::arg("max_frequency_fraction") = fit::FitOptions{}.max_frequency_fraction,
-        py::arg("relative_std_floor") = fit::FitOptions{}.relative_std_floor,
-        py::arg("function_tolerance") = fit::FitOptions{}.function_tolerance, py::arg("name") = "",
+        py::arg("frf"), py::arg("modes") = d.num_modes,
+        py::arg("max_modes") = d.max_modes, py::arg("delay_samples") = d.delay_samples,
+        py::arg("max_auto_delay") = d.max_auto_delay,
+        py::arg("allow_short") = d.allow_few_averages,
+        py::arg("fmin") = d.band.fmin_hz, py::arg("fmax") = d.band.fmax_hz,
+        py::arg("min_input_power_ratio") = d.band.min_input_power_ratio,
+        py::arg("min_coherence") = d.band.min_coherence, py::arg("init") = py::none(),
+        py::arg("max_starts") = d.max_starts,
+        py::arg("max_iterations") = d.max_iterations,
+        py::arg("min_damping_ratio") = d.min_damping_ratio,
+        py::arg("max_pole_damping_ratio") = d.max_pole_damping_ratio,
+        py::arg("max_zero_damping_ratio") = d.max_zero_damping_ratio,
+        py::arg("max_frequency_fraction") = d.max_frequency_fraction,
+        py::arg("relative_std_floor") = d.relative_std_floor,
+        py::arg("function_tolerance") = d.function_tolerance, py::arg("name") = "",
         R"doc(Fits eq. (1) with `modes` sections to a FrequencyResponse as `zwidth fit`
 does (Ceres; residual against the exact ZOH response weighted by the per-bin
 std). modes: an integer >= 0 or 'auto' (0..max_modes, lowest BIC among the
@@ -172,6 +175,13 @@ InputError unless allow_short=True (then judged 'poor'). init: a Model tried
 first. A fit that does not converge is returned with its status (check
 .converged); check .quality ('good'/'poor') and .quality_reasons before
 using the numbers; bad options raise InputError.)doc");
+}
+
+}  // namespace
+
+void BindFit(py::module_& m) {
+  BindFitResult(m);
+  BindFitFunction(m);
 }
 
 }  // namespace zwidth::python

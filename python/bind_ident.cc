@@ -1,6 +1,8 @@
 // Logs, the Welch estimate and frequency-response files: zwidth.read_log,
 // zwidth.simulate, zwidth.estimate, zwidth.FrequencyResponse.
 #include <cmath>
+#include <tuple>
+#include <utility>
 
 #include "io/atomic_file.h"
 #include "io/frf_file.h"
@@ -66,9 +68,45 @@ window 'hann' | 'hamming' | 'rect' (periodic), detrend 'none' | 'mean' |
 'linear' per segment, estimator 'h1' (S_uy/S_uu) | 'h2' (S_yy/S_yu), and the
 band [fmin, fmax] Hz kept (default fmax inf: up to Nyquist, as the CLI).)doc";
 
-}  // namespace
+// A LogSelect from read_log's and estimate's selector keywords.
+io::LogSelect SelectFrom(const std::string& input_column, const std::string& output_column,
+                         const std::string& time_column, const std::string& input_dataset,
+                         const std::string& output_dataset, const std::string& time_dataset, double rate) {
+  io::LogSelect s;
+  s.input_column = input_column;
+  s.output_column = output_column;
+  s.time_column = time_column;
+  s.input_dataset = input_dataset;
+  s.output_dataset = output_dataset;
+  s.time_dataset = time_dataset;
+  s.sample_rate_hz = rate;
+  return s;
+}
 
-void BindIdent(py::module_& m) {
+// The keywords of the log selectors (CSV columns, HDF5 datasets) with the CLI's defaults.
+auto SelectorArgs() {
+  return std::make_tuple(py::arg("input_column") = "torque", py::arg("output_column") = "position",
+                         py::arg("time_column") = "t", py::arg("input_dataset") = "/input/torque",
+                         py::arg("output_dataset") = "/output/position", py::arg("time_dataset") = "/time");
+}
+
+// The keywords of the Welch options (WelchFrom) with WelchOptions' defaults.
+auto WelchArgs() {
+  const ident::WelchOptions d;
+  return std::make_tuple(py::arg("window_length") = d.window_length, py::arg("overlap") = d.overlap,
+                         py::arg("window") = "hann", py::arg("detrend") = "linear", py::arg("estimator") = "h1",
+                         py::arg("fmin") = d.fmin_hz, py::arg("fmax") = d.fmax_hz);
+}
+
+// m.def(name, f, args..., extra...) with the keyword arguments given as a tuple.
+template <class F, class Args, class... Extra>
+void DefWith(py::module_& m, const char* name, F&& f, Args&& args, Extra&&... extra) {
+  std::apply([&](auto&&... a) { m.def(name, std::forward<F>(f), a..., std::forward<Extra>(extra)...); },
+             std::forward<Args>(args));
+}
+
+// zwidth.Log: a log in memory.
+void BindLog(py::module_& m) {
   py::class_<PyLog>(m, "Log", "A device log: torque input u [N m], position output y [rad], uniformly sampled.")
       .def(py::init([](const DoubleArray& u, const DoubleArray& y, double sample_rate_hz) {
              PyLog l;
@@ -98,19 +136,16 @@ void BindIdent(py::module_& m) {
         return "<zwidth.Log " + std::to_string(l.u.size()) + " samples at " + std::to_string(l.sample_rate_hz) +
                " Hz>";
       });
+}
 
-  m.def("read_log",
+// zwidth.read_log: a log file read with the CLI's selectors.
+void BindReadLog(py::module_& m) {
+  DefWith(m, "read_log",
         [](const std::string& path, const std::string& input_column, const std::string& output_column,
            const std::string& time_column, const std::string& input_dataset, const std::string& output_dataset,
            const std::string& time_dataset, double rate, double max_interval_deviation) {
-          io::LogSelect s;
-          s.input_column = input_column;
-          s.output_column = output_column;
-          s.time_column = time_column;
-          s.input_dataset = input_dataset;
-          s.output_dataset = output_dataset;
-          s.time_dataset = time_dataset;
-          s.sample_rate_hz = rate;
+          io::LogSelect s = SelectFrom(input_column, output_column, time_column, input_dataset, output_dataset,
+                                       time_dataset, rate);
           s.max_interval_deviation = max_interval_deviation;
           PyLog l;
           {
@@ -123,16 +158,17 @@ void BindIdent(py::module_& m) {
           }
           return l;
         },
-        py::arg("path"), py::arg("input_column") = "torque", py::arg("output_column") = "position",
-        py::arg("time_column") = "t", py::arg("input_dataset") = "/input/torque",
-        py::arg("output_dataset") = "/output/position", py::arg("time_dataset") = "/time",
-        py::arg("rate") = 0.0, py::arg("max_interval_deviation") = 0.01,
+        std::tuple_cat(std::make_tuple(py::arg("path")), SelectorArgs(),
+                       std::make_tuple(py::arg("rate") = 0.0, py::arg("max_interval_deviation") = 0.01)),
         R"doc(Reads a log (CSV or HDF5, by extension or signature) as `zwidth estimate`
 does, with the CLI's selectors: CSV columns input_column, output_column,
 time_column; HDF5 datasets input_dataset, output_dataset, time_dataset; rate
 [Hz] > 0 overrides the file's (needed for a CSV without a time column).
 Raises InputError naming the file, row or dataset.)doc");
+}
 
+// zwidth.FrequencyResponse: made, loaded, saved, read.
+void BindFrequencyResponse(py::module_& m) {
   py::class_<ident::FrequencyResponse>(m, "FrequencyResponse",
                                        "An empirical frequency response (output/input) with its coherence and "
                                        "per-bin standard deviation, as `zwidth estimate` writes it.")
@@ -204,22 +240,19 @@ Raises InputError naming the file, row or dataset.)doc");
         return "<zwidth.FrequencyResponse " + std::to_string(r.f_hz.size()) + " bins, " +
                std::to_string(r.num_averages) + " averages>";
       });
+}
 
-  m.def("estimate",
+// zwidth.estimate from a file (streamed), from arrays, from a Log.
+void BindEstimate(py::module_& m) {
+  DefWith(m, "estimate",
         [](const std::string& path, int window_length, double overlap, const std::string& window,
            const std::string& detrend, const std::string& estimator, double fmin, double fmax,
            const std::string& input_column, const std::string& output_column, const std::string& time_column,
            const std::string& input_dataset, const std::string& output_dataset, const std::string& time_dataset,
            double rate) {
           const ident::WelchOptions o = WelchFrom(window_length, overlap, window, detrend, estimator, fmin, fmax);
-          io::LogSelect s;
-          s.input_column = input_column;
-          s.output_column = output_column;
-          s.time_column = time_column;
-          s.input_dataset = input_dataset;
-          s.output_dataset = output_dataset;
-          s.time_dataset = time_dataset;
-          s.sample_rate_hz = rate;
+          const io::LogSelect s = SelectFrom(input_column, output_column, time_column, input_dataset, output_dataset,
+                                             time_dataset, rate);
           py::gil_scoped_release release;
           // The CLI's streaming pass (apps/common.cc EstimateFromLog): memory for a few windows.
           ident::WelchEstimator est(o);
@@ -231,24 +264,20 @@ Raises InputError naming the file, row or dataset.)doc");
             throw InputError(path + ": " + e.what());
           }
         },
-        py::arg("path"), py::arg("window_length") = ident::WelchOptions{}.window_length, py::arg("overlap") = ident::WelchOptions{}.overlap, py::arg("window") = "hann",
-        py::arg("detrend") = "linear", py::arg("estimator") = "h1", py::arg("fmin") = ident::WelchOptions{}.fmin_hz,
-        py::arg("fmax") = ident::WelchOptions{}.fmax_hz, py::arg("input_column") = "torque", py::arg("output_column") = "position",
-        py::arg("time_column") = "t", py::arg("input_dataset") = "/input/torque",
-        py::arg("output_dataset") = "/output/position", py::arg("time_dataset") = "/time", py::arg("rate") = 0.0,
+        std::tuple_cat(std::make_tuple(py::arg("path")), WelchArgs(), SelectorArgs(),
+                       std::make_tuple(py::arg("rate") = 0.0)),
         "estimate(path, ...): streamed from a log file as `zwidth estimate` does (a few windows in memory, "
         "whatever the log's length), with read_log's selectors.");
-  m.def("estimate",
+  DefWith(m, "estimate",
         [](const DoubleArray& u, const DoubleArray& y, double sample_rate_hz, int window_length, double overlap,
            const std::string& window, const std::string& detrend, const std::string& estimator, double fmin,
            double fmax) {
           const ident::WelchOptions o = WelchFrom(window_length, overlap, window, detrend, estimator, fmin, fmax);
           return Estimate(ToVector(u), ToVector(y), sample_rate_hz, o);
         },
-        py::arg("u"), py::arg("y"), py::arg("sample_rate_hz"), py::arg("window_length") = ident::WelchOptions{}.window_length,
-        py::arg("overlap") = ident::WelchOptions{}.overlap, py::arg("window") = "hann", py::arg("detrend") = "linear",
-        py::arg("estimator") = "h1", py::arg("fmin") = ident::WelchOptions{}.fmin_hz, py::arg("fmax") = ident::WelchOptions{}.fmax_hz, kWelchDoc);
-  m.def("estimate",
+        std::tuple_cat(std::make_tuple(py::arg("u"), py::arg("y"), py::arg("sample_rate_hz")), WelchArgs()),
+        kWelchDoc);
+  DefWith(m, "estimate",
         [](const PyLog& log, int window_length, double overlap, const std::string& window,
            const std::string& detrend, const std::string& estimator, double fmin, double fmax) {
           const ident::WelchOptions o = WelchFrom(window_length, overlap, window, detrend, estimator, fmin, fmax);
@@ -259,10 +288,11 @@ Raises InputError naming the file, row or dataset.)doc");
             throw InputError(log.source + ": " + e.what());
           }
         },
-        py::arg("log"), py::arg("window_length") = ident::WelchOptions{}.window_length, py::arg("overlap") = ident::WelchOptions{}.overlap, py::arg("window") = "hann",
-        py::arg("detrend") = "linear", py::arg("estimator") = "h1", py::arg("fmin") = ident::WelchOptions{}.fmin_hz,
-        py::arg("fmax") = ident::WelchOptions{}.fmax_hz, "estimate(log, ...): the same from a Log.");
+        std::tuple_cat(std::make_tuple(py::arg("log")), WelchArgs()), "estimate(log, ...): the same from a Log.");
+}
 
+// zwidth.simulate: a simulated log.
+void BindSimulate(py::module_& m) {
   m.def("simulate",
         [](const io::ModelFile& model, double seconds, double sample_rate_hz, double torque_rms,
            double bandwidth_hz, double encoder_step_rad, double noise_std_rad, int delay_samples, uint64_t seed) {
@@ -293,6 +323,16 @@ Raises InputError naming the file, row or dataset.)doc");
 torque through the exact sampled plant, encoder quantisation (rad per count,
 0 = none) and Gaussian sensor noise. Seeded: the same arguments give the
 same samples.)doc");
+}
+
+}  // namespace
+
+void BindIdent(py::module_& m) {
+  BindLog(m);
+  BindReadLog(m);
+  BindFrequencyResponse(m);
+  BindEstimate(m);
+  BindSimulate(m);
 }
 
 }  // namespace zwidth::python

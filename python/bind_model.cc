@@ -67,19 +67,9 @@ py::tuple StateSpaceOf(const io::ModelFile& mf, std::optional<double> period_s) 
   return py::make_tuple(s.A, B, C, D);
 }
 
-}  // namespace
-
-void BindModel(py::module_& m) {
-  py::class_<io::ModelFile>(m, "Model", R"doc(
-The plant of eq. (1) of Gil et al.: rigid body 1/(m s^2 + b s) times N
-resonance/antiresonance sections w^2 (s^2 + d s + v^2) / (v^2 (s^2 + c s + w^2)),
-with an optional integer input delay of the sampled model. SI units, rad/s.
-
-Model(m, b, modes=[], delay_samples=0, name="", sample_period_s=None)
-  modes: a list of (omega, c, v, d) tuples [rad/s].
-Model.load(path), model.save(path): the model JSON of the CLI.
-Model.table1(): Table I of the paper (PHANToM 1.0, phi axis), built in.)doc")
-      .def(py::init([](double m_, double b, const std::vector<ModeTuple>& modes, int delay_samples,
+// Model(...), load / from_json / table1, save / to_json / export.
+void DefModelConstructionAndFiles(py::class_<io::ModelFile>& cls) {
+  cls.def(py::init([](double m_, double b, const std::vector<ModeTuple>& modes, int delay_samples,
                        const std::string& name, std::optional<double> sample_period_s) {
              io::ModelFile mf;
              mf.plant.m = m_;
@@ -122,8 +112,12 @@ Model.table1(): Table I of the paper (PHANToM 1.0, phi axis), built in.)doc")
            },
            py::arg("path"), py::arg("format"), py::arg("period_s") = py::none(),
            "Exports like `zwidth export` (format json | hdf5 | matlab | python | statespace); "
-           "period_s adds the discrete model.")
-      .def_property("m", [](const io::ModelFile& mf) { return mf.plant.m; },
+           "period_s adds the discrete model.");
+}
+
+// Model: the parameters (read-write), std, covariance, fit_info.
+void DefModelParameters(py::class_<io::ModelFile>& cls) {
+  cls.def_property("m", [](const io::ModelFile& mf) { return mf.plant.m; },
                     [](io::ModelFile& mf, double v) { mf.plant.m = v; }, "rigid-body inertia [kg m^2]")
       .def_property("b", [](const io::ModelFile& mf) { return mf.plant.b; },
                     [](io::ModelFile& mf, double v) { mf.plant.b = v; }, "rigid-body viscous damping [N m s/rad]")
@@ -159,8 +153,12 @@ Model.table1(): Table I of the paper (PHANToM 1.0, phi axis), built in.)doc")
                              "the covariance's rows: log m, log b, then log omega, log c, log v, log d per section")
       .def_property_readonly("fit_info", [](const io::ModelFile& mf) { return JsonToPython(mf.fit); },
                              "the fit metrics stored with a fitted model (dict), else None")
-      .def_property_readonly("num_states", [](const io::ModelFile& mf) { return mf.plant.num_states(); })
-      .def("validate", [](const io::ModelFile& mf) { mf.plant.Validate(); },
+      .def_property_readonly("num_states", [](const io::ModelFile& mf) { return mf.plant.num_states(); });
+}
+
+// Model: validate, response, state_space, repr, pickling.
+void DefModelComputations(py::class_<io::ModelFile>& cls) {
+  cls.def("validate", [](const io::ModelFile& mf) { mf.plant.Validate(); },
            "Raises InputError naming the first invalid parameter.")
       .def("response", &Response, py::arg("f_hz"), py::arg("period_s") = py::none(),
            R"doc(Frequency response at f_hz (array-like, Hz), complex, same shape.
@@ -177,6 +175,23 @@ the input delay realised as extra states.)doc")
       })
       .def(py::pickle([](const io::ModelFile& mf) { return io::ModelToJson(mf).dump(); },
                       [](const std::string& s) { return io::ParseModelJson(s, "<pickle>"); }));
+}
+
+}  // namespace
+
+void BindModel(py::module_& m) {
+  py::class_<io::ModelFile> cls(m, "Model", R"doc(
+The plant of eq. (1) of Gil et al.: rigid body 1/(m s^2 + b s) times N
+resonance/antiresonance sections w^2 (s^2 + d s + v^2) / (v^2 (s^2 + c s + w^2)),
+with an optional integer input delay of the sampled model. SI units, rad/s.
+
+Model(m, b, modes=[], delay_samples=0, name="", sample_period_s=None)
+  modes: a list of (omega, c, v, d) tuples [rad/s].
+Model.load(path), model.save(path): the model JSON of the CLI.
+Model.table1(): Table I of the paper (PHANToM 1.0, phi axis), built in.)doc");
+  DefModelConstructionAndFiles(cls);
+  DefModelParameters(cls);
+  DefModelComputations(cls);
 }
 
 }  // namespace zwidth::python

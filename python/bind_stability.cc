@@ -97,9 +97,8 @@ std::vector<io::SceneObject> SceneFrom(const py::object& scene) {
   return out;
 }
 
-}  // namespace
-
-void BindStability(py::module_& m) {
+// zwidth.CriticalPoint: the boundary at one B.
+void BindCriticalPoint(py::module_& m) {
   py::class_<stability::CriticalPoint>(m, "CriticalPoint", "The Z-width boundary at one B (stability/zwidth.h).")
       .def_readonly("B", &stability::CriticalPoint::B, "virtual damping [N m s/rad]")
       .def_readonly("K_cr", &stability::CriticalPoint::K_cr,
@@ -120,21 +119,11 @@ void BindStability(py::module_& m) {
         return "<zwidth.CriticalPoint B=" + std::to_string(c.B) + " K_cr=" + std::to_string(c.K_cr) +
                " f_cr_hz=" + std::to_string(c.f_cr_hz) + ">";
       });
+}
 
-  py::class_<PyZWidth>(m, "ZWidth", R"doc(
-The Z-width of the sampled loop of eq. (2),
-  1 + z^-d (K + B (1 - z^-1)/T) G_d(z) = 0,
-with G_d the exact ZOH plant (the model's own delay adds to d).
-
-ZWidth(model, period_s=None, delay_samples=2, min_grid_points=2048,
-       grid_points_per_delay=64, theta_tolerance=1e-13, verify=True,
-       velocity_filter_hz=None, hand=None)
-period_s=None: the model's sample_period_s, else 1 ms (as the CLI).
-velocity_filter_hz: a first-order low-pass on the velocity of the B term,
-cut-off in (0, Nyquist) Hz (--velocity-filter-hz); None: the raw difference.
-hand: the user's hand (M, B, K) at the measured coordinate, each >= 0
-(--hand M,B,K); None: nobody holds the device.)doc")
-      .def(py::init([](const io::ModelFile& model, std::optional<double> period_s, int delay_samples,
+// ZWidth(...) and its read-only properties.
+void DefZWidthConstruction(py::class_<PyZWidth>& cls) {
+  cls.def(py::init([](const io::ModelFile& model, std::optional<double> period_s, int delay_samples,
                        int min_grid_points, int grid_points_per_delay, double theta_tolerance, bool verify,
                        std::optional<double> velocity_filter_hz,
                        std::optional<std::tuple<double, double, double>> hand) {
@@ -174,8 +163,12 @@ hand: the user's hand (M, B, K) at the measured coordinate, each >= 0
       .def_property_readonly("hand", [](const PyZWidth& z) -> py::object {
              if (z.loop.hand.IsNone()) return py::none();
              return py::make_tuple(z.loop.hand.M, z.loop.hand.B, z.loop.hand.K);
-           }, "(M, B, K) of the user's hand, None when nobody holds the device")
-      .def("stable_intervals",
+           }, "(M, B, K) of the user's hand, None when nobody holds the device");
+}
+
+// ZWidth: stable intervals and the critical point at one B.
+void DefZWidthAtB(py::class_<PyZWidth>& cls) {
+  cls.def("stable_intervals",
            [](const PyZWidth& z, double B) {
              std::vector<stability::KInterval> iv;
              {
@@ -216,8 +209,12 @@ the loop is unstable as K -> 0+ (B past B_max), inf with no crossing.)doc")
              py::gil_scoped_release release;
              return z.z->At(B);
            },
-           py::arg("B"), "The full CriticalPoint at one B (with the margin() reading and the verification).")
-      .def("boundary",
+           py::arg("B"), "The full CriticalPoint at one B (with the margin() reading and the verification).");
+}
+
+// ZWidth: the boundary over an array of B, the crossings at one B.
+void DefZWidthOverB(py::class_<PyZWidth>& cls) {
+  cls.def("boundary",
            [](const PyZWidth& z, const DoubleArray& B) {
              const py::ssize_t n = B.size();
              std::vector<stability::CriticalPoint> pts(static_cast<size_t>(n));
@@ -254,8 +251,12 @@ the loop is unstable as K -> 0+ (B past B_max), inf with no crossing.)doc")
              for (const auto& c : z.z->Crossings(B)) out.emplace_back(c.theta, c.K);
              return out;
            },
-           py::arg("B"), "Every (theta [rad/sample], K) at which a closed-loop pole is on the unit circle.")
-      .def("is_stable",
+           py::arg("B"), "Every (theta [rad/sample], K) at which a closed-loop pole is on the unit circle.");
+}
+
+// ZWidth: stability at (K, B), the summary, the characteristic polynomial.
+void DefZWidthSummary(py::class_<PyZWidth>& cls) {
+  cls.def("is_stable",
            [](const PyZWidth& z, const py::object& K, const py::object& B) -> py::object {
              py::list both = py::module_::import("numpy").attr("broadcast_arrays")(
                  py::array::ensure(DoubleArray::ensure(K)), py::array::ensure(DoubleArray::ensure(B)));
@@ -298,7 +299,31 @@ CLI's summary JSON, one entry of 'delays' (None for NaN/inf).)doc")
       .def("characteristic_polynomial",
            [](const PyZWidth& z, double K, double B) { return ToArray(z.z->CharacteristicPolynomial(K, B)); },
            py::arg("K"), py::arg("B"), "Closed-loop characteristic polynomial coefficients, z^0 first.");
+}
 
+// zwidth.ZWidth: the Z-width of one loop.
+void BindZWidth(py::module_& m) {
+  py::class_<PyZWidth> cls(m, "ZWidth", R"doc(
+The Z-width of the sampled loop of eq. (2),
+  1 + z^-d (K + B (1 - z^-1)/T) G_d(z) = 0,
+with G_d the exact ZOH plant (the model's own delay adds to d).
+
+ZWidth(model, period_s=None, delay_samples=2, min_grid_points=2048,
+       grid_points_per_delay=64, theta_tolerance=1e-13, verify=True,
+       velocity_filter_hz=None, hand=None)
+period_s=None: the model's sample_period_s, else 1 ms (as the CLI).
+velocity_filter_hz: a first-order low-pass on the velocity of the B term,
+cut-off in (0, Nyquist) Hz (--velocity-filter-hz); None: the raw difference.
+hand: the user's hand (M, B, K) at the measured coordinate, each >= 0
+(--hand M,B,K); None: nobody holds the device.)doc");
+  DefZWidthConstruction(cls);
+  DefZWidthAtB(cls);
+  DefZWidthOverB(cls);
+  DefZWidthSummary(cls);
+}
+
+// zwidth.RelayResult and zwidth.relay: the simulated relay experiment.
+void BindRelay(py::module_& m) {
   py::class_<stability::RelayResult>(m, "RelayResult", "The simulated relay experiment (stability/relay.h).")
       .def_readonly("K_cr", &stability::RelayResult::K_cr, "estimate [N m/rad]")
       .def_readonly("f_cr_hz", &stability::RelayResult::f_cr_hz)
@@ -350,7 +375,10 @@ CLI's summary JSON, one entry of 'delays' (None for NaN/inf).)doc")
         R"doc(The relay experiment of section IV, simulated as `zwidth relay` does it;
 velocity_filter_hz and hand (M, B, K) as for ZWidth (the haptic loop).
 Raises ComputationError when the loop neither oscillates nor diverges.)doc");
+}
 
+// zwidth.check: is each object of a scene stable?
+void BindCheck(py::module_& m) {
   m.def("check",
         [](const py::object& scene, const io::ModelFile& model, int delay_samples, std::optional<double> period_s,
            std::optional<double> velocity_filter_hz, std::optional<std::tuple<double, double, double>> hand) {
@@ -374,6 +402,15 @@ scene: a scene JSON path ({"objects": [...]}) or a list of dicts / (name, K, B)
 tuples; velocity_filter_hz and hand as for ZWidth. Returns the dict `zwidth
 check --json` prints (each object with its stable intervals); the CLI exits
 with status 3 when an object is unstable, this returns normally.)doc");
+}
+
+}  // namespace
+
+void BindStability(py::module_& m) {
+  BindCriticalPoint(m);
+  BindZWidth(m);
+  BindRelay(m);
+  BindCheck(m);
 }
 
 }  // namespace zwidth::python

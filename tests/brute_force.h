@@ -1,17 +1,21 @@
-// Independent brute force for the Z-width tests (stability_test,
-// stability_stress_test): closed-loop roots from companion matrices.
+// Independent brute force for the Z-width tests (zwidth_test, haptic_loop_test,
+// zwidth_stress_test): closed-loop roots from companion matrices.
 #pragma once
 
 #include <cmath>
 #include <algorithm>
+#include <functional>
 #include <limits>
 #include <utility>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 #include <Eigen/Dense>
 
 #include "model/plant.h"
 #include "model/state_space.h"
+#include "stability/zwidth.h"
 
 namespace zwidth::stability {
 
@@ -128,5 +132,70 @@ struct LoopBruteForce {
   }
   double MaxRoot(double K, double B) const { return Matrix(K, B).eigenvalues().cwiseAbs().maxCoeff(); }
 };
+
+// Points of a (K, B) grid classified by ZWidth::StableIntervals and by a brute
+// force's largest closed-loop root (stable when < 1).
+struct Tally {
+  long points = 0, stable = 0, reopened = 0, near_boundary = 0, disagree = 0;
+};
+
+// The grid: num_b values of B from 0 to b_top; at each, K on a geometric scan
+// of min_points / num_b + 1 values from 2e-4 to 2 k_top (k_top: the largest
+// finite interval end or crossing), points_inside values inside each stable
+// interval, and points 1e-4 (relative) inside and outside each finite end. A
+// disagreement counts only when the brute force's verdict is the same at
+// K (1 +- 1e-6) and B (1 +- 1e-6), i.e. outside a relative 1e-6 neighbourhood
+// of a boundary; each one is a test failure, and the classification stops
+// after the sixth.
+struct ClassifyGrid {
+  double b_top = 0.0;
+  int num_b = 0;
+  int min_points = 0;
+  int points_inside = 0;
+};
+
+inline Tally Classify(const ZWidth& z, const std::function<double(double, double)>& max_root, const Plant& p,
+                      double T, int delay, const ClassifyGrid& g) {
+  Tally t;
+  auto stable_bf = [&](double K, double B) { return max_root(K, B) < 1.0; };
+  for (int i = 0; i < g.num_b; ++i) {
+    const double B = g.b_top * i / (g.num_b - 1);
+    const std::vector<KInterval> iv = z.StableIntervals(B);
+    double k_top = 0.0;
+    for (const KInterval& v : iv) k_top = std::max(k_top, std::isfinite(v.K_hi) ? v.K_hi : v.K_lo);
+    for (const Crossing& x : z.Crossings(B)) if (x.K > 0 && std::isfinite(x.K)) k_top = std::max(k_top, x.K);
+    if (!(k_top > 0.0)) k_top = 100.0 * p.m / (T * T);
+    std::vector<double> ks;
+    const int nk = g.min_points / g.num_b + 1;
+    for (int j = 0; j < nk; ++j) ks.push_back(k_top * 2.0 * std::pow(1e-4, 1.0 - double(j) / (nk - 1)));
+    for (const KInterval& v : iv) {
+      const double lo = v.K_lo > 0 ? v.K_lo : 1e-3 * v.K_hi, hi = std::isfinite(v.K_hi) ? v.K_hi : 10 * lo;
+      for (int j = 1; j <= g.points_inside; ++j) ks.push_back(lo * std::pow(hi / lo, j / (g.points_inside + 1.0)));
+    }
+    for (const KInterval& v : iv) {
+      if (v.K_lo > 0) { ks.push_back(v.K_lo * (1 + 1e-4)); ks.push_back(v.K_lo * (1 - 1e-4)); }
+      if (std::isfinite(v.K_hi)) { ks.push_back(v.K_hi * (1 - 1e-4)); ks.push_back(v.K_hi * (1 + 1e-4)); }
+    }
+    for (double K : ks) {
+      bool mine = false, reopened = false;
+      for (const KInterval& v : iv) {
+        if (K > v.K_lo && K < v.K_hi) { mine = true; reopened = v.K_lo > 0.0; }
+      }
+      const bool ref = stable_bf(K, B);
+      ++t.points;
+      t.stable += mine;
+      t.reopened += mine && reopened;
+      if (mine == ref) continue;
+      const bool flips = stable_bf(K * (1 + 1e-6), B) != ref || stable_bf(K * (1 - 1e-6), B) != ref ||
+                         stable_bf(K, B * (1 + 1e-6)) != ref || stable_bf(K, B * (1 - 1e-6)) != ref;
+      if (flips) { ++t.near_boundary; continue; }
+      ++t.disagree;
+      ADD_FAILURE() << "d=" << delay << " B=" << B << " K=" << K << " intervals say " << mine
+                    << ", eigenvalues (max |z| " << max_root(K, B) << ") say " << ref;
+      if (t.disagree > 5) return t;
+    }
+  }
+  return t;
+}
 
 }  // namespace zwidth::stability

@@ -21,12 +21,21 @@
 namespace zwidth::fit {
 namespace {
 
-Plant RandomDevice(std::mt19937_64& rng) {
+// The rigid body of both suites (m log-uniform in [3e-4, 1e-2], b / m in [2, 22]
+// rad/s) and a number of sections 1-3, drawn in that order.
+Plant RigidBody(std::mt19937_64& rng, int* sections) {
   std::uniform_real_distribution<double> U(0, 1);
   Plant p;
   p.m = std::pow(10.0, -3.5 + 1.5 * U(rng));
   p.b = p.m * (2 + 20 * U(rng));
-  const int n = 1 + static_cast<int>(3 * U(rng));
+  *sections = 1 + static_cast<int>(3 * U(rng));
+  return p;
+}
+
+Plant RandomDevice(std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> U(0, 1);
+  int n = 0;
+  Plant p = RigidBody(rng, &n);
   double f = 30 + 40 * U(rng);
   for (int i = 0; i < n; ++i) {
     const double fp = f * (1.0 + 0.3 * U(rng)), fz = fp * (0.6 + 0.3 * U(rng));
@@ -116,10 +125,8 @@ namespace {
 // true parameters (by more than 0.1 %).
 Plant SuiteDevice(std::mt19937_64& rng) {
   std::uniform_real_distribution<double> U(0, 1);
-  Plant p;
-  p.m = std::pow(10.0, -3.5 + 1.5 * U(rng));
-  p.b = p.m * (2 + 20 * U(rng));
-  const int n = 1 + static_cast<int>(3 * U(rng));
+  int n = 0;
+  Plant p = RigidBody(rng, &n);
   for (int i = 0; i < n; ++i) {
     const double w = 2 * std::numbers::pi * (40 + 310 * U(rng));
     const double v = w * (1 - (0.10 + 0.15 * U(rng)));

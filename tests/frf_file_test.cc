@@ -3,18 +3,17 @@
 // refused by its line. Responses: seeded random values (mt19937_64, seed 7) on
 // an increasing frequency grid below Nyquist.
 #include <cmath>
-#include <filesystem>
 #include <fstream>
 #include <random>
 #include <string>
 #include <system_error>
 
-#include <unistd.h>
 
 #include <gtest/gtest.h>
 
 #include "io/frf_file.h"
 #include "model/error.h"
+#include "tests/test_util.h"
 
 namespace zwidth::io {
 namespace {
@@ -39,17 +38,12 @@ ident::FrequencyResponse RandomResponse() {
   return r;
 }
 
-std::string TempPath(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("zwidth_frf_file_test_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  return (dir / name).string();
-}
-
 class FrfFileRoundTrip : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(FrfFileRoundTrip, ReadsBackWhatItWroteBitForBit) {
   const ident::FrequencyResponse r = RandomResponse();
-  const std::string path = TempPath("frf." + GetParam());
+  const test::TempDir dir("zwidth_frf_file_test_");
+  const std::string path = dir / ("frf." + GetParam());
   WriteFrequencyResponse(path, r);
   EXPECT_TRUE(IsFrequencyResponseFile(path));
   const ident::FrequencyResponse q = ReadFrequencyResponse(path);
@@ -64,16 +58,14 @@ TEST_P(FrfFileRoundTrip, ReadsBackWhatItWroteBitForBit) {
   EXPECT_EQ(q.num_averages, r.num_averages);
   EXPECT_EQ(q.effective_averages, r.effective_averages);
   EXPECT_EQ(q.bin_correlation, r.bin_correlation);
-  std::filesystem::remove(path);
-  std::error_code ec;
-  std::filesystem::remove(std::filesystem::path(path).parent_path(), ec);  // when empty
 }
 
 INSTANTIATE_TEST_SUITE_P(Formats, FrfFileRoundTrip, ::testing::Values("csv", "h5"),
                          [](const ::testing::TestParamInfo<std::string>& i) { return i.param; });
 
 TEST(FrfFile, ATruncatedCsvRowIsRefusedByItsLine) {
-  const std::string path = TempPath("truncated.csv");
+  const test::TempDir dir("zwidth_frf_file_test_");
+  const std::string path = dir / "truncated.csv";
   WriteFrequencyResponse(path, RandomResponse());
   std::string text;
   {
@@ -88,9 +80,21 @@ TEST(FrfFile, ATruncatedCsvRowIsRefusedByItsLine) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("line 3 has 1 fields"), std::string::npos) << e.what();
   }
-  std::filesystem::remove(path);
-  std::error_code ec;
-  std::filesystem::remove(std::filesystem::path(path).parent_path(), ec);  // when empty
+}
+
+TEST(FrfCsv, ADuplicatedColumnIsRefusedNotReadPastItsRow) {
+  const test::TempDir dir("zwidth_frf_file_test_");
+  std::string text = "f_hz,H_re,H_im,coherence,coherence,coherence,coherence\n";
+  // Four distinct names, so the old reader let rows of four fields through and
+  // read "coherence" at position 6: past the row's buffer.
+  for (int k = 1; k <= 20; ++k) text += std::to_string(k) + ",1,0,1\n";
+  test::WriteFile(dir / "frf.csv", text);
+  try {
+    ReadFrequencyResponse(dir / "frf.csv", 1000.0);
+    FAIL() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("column 'coherence' appears twice"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -7,7 +7,7 @@
 // - the passivity boundary against Colgate's closed form (rigid body, no delay
 //   or filter) and against a direct evaluation of Colgate and Schenkel's
 //   condition on a fine frequency grid.
-// Random devices: seeded (tests/stability_region_test.cc's recipe).
+// Random devices: seeded (test::RandomPlausibleDevice).
 #include <cmath>
 #include <complex>
 #include <cstdio>
@@ -23,27 +23,10 @@
 #include "stability/haptic_loop.h"
 #include "stability/uncertainty.h"
 #include "tests/brute_force.h"
+#include "tests/test_util.h"
 
 namespace zwidth::stability {
 namespace {
-
-// A random plausible device: 0-3 modes between 30 and 400 Hz (T = 1 ms),
-// damping ratios 0.002-0.3, antiresonances within +-30% of their resonance.
-Plant RandomDevice(std::mt19937_64& rng, int modes) {
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  Plant p;
-  p.m = std::pow(10.0, -3.5 + 2.5 * u(rng));
-  p.b = p.m * std::pow(10.0, 0.3 + 1.2 * u(rng));
-  for (int i = 0; i < modes; ++i) {
-    Mode md;
-    md.omega = 2 * M_PI * (30.0 + 370.0 * u(rng));
-    md.c = 2 * md.omega * std::pow(10.0, -2.7 + 2.2 * u(rng));
-    md.v = md.omega * (0.7 + 0.6 * u(rng));
-    md.d = 2 * md.v * std::pow(10.0, -2.7 + 2.2 * u(rng));
-    p.modes.push_back(md);
-  }
-  return p;
-}
 
 // Hands scaled to the device (a hand on a small device is heavy for it):
 // 0 none; 1 light grasp (M = 0.3 m, B = b, hand-arm resonance 2 Hz with the
@@ -72,7 +55,7 @@ LoopBruteForce MakeBrute(const Plant& p, const LoopOptions& loop, int delay, dou
 TEST(HapticLoop, HandStateSpaceIsGOverOnePlusGZ) {
   std::mt19937_64 rng(16);
   for (int k = 0; k < 8; ++k) {
-    const Plant p = RandomDevice(rng, k % 4);
+    const Plant p = test::RandomPlausibleDevice(rng, k % 4);
     const Hand h = HandOf(1 + k % 2, p);
     const StateSpace s = ContinuousStateSpaceWithHand(p, h);
     const int n = static_cast<int>(s.A.rows());
@@ -117,7 +100,7 @@ TEST(HapticLoop, DefaultOptionsAreValidAndBadOnesNameTheirField) {
 TEST(HapticLoop, WithoutFilterOrHandItIsThePapersLoop) {
   std::mt19937_64 rng(3);
   for (int k = 0; k < 4; ++k) {
-    const Plant p = RandomDevice(rng, k);
+    const Plant p = test::RandomPlausibleDevice(rng, k);
     const ZWidth a(p, 1e-3, 3), b(p, 1e-3, 3, LoopOptions{});
     // F = b0/(a0) = 1 written as a filter goes through the filtered code path.
     LoopOptions one;
@@ -132,55 +115,15 @@ TEST(HapticLoop, WithoutFilterOrHandItIsThePapersLoop) {
   }
 }
 
-struct Tally {
-  long points = 0, stable = 0, near_boundary = 0, disagree = 0;
-};
-
-// As stability_region_test's Classify: K on a geometric scan plus points inside
-// and 1e-4 around every interval end, on 60 values of B; a disagreement counts
-// only where the brute force's verdict holds at K, B (1 +- 1e-6).
+// tests/brute_force.h's Classify with the filter and hand: 60 values of B up
+// to 1.3 B_max, 10 points inside each interval.
 Tally Classify(const Plant& p, int delay, const LoopOptions& loop, int min_points) {
   const double T = 1e-3;
   const ZWidth z(p, T, delay, loop);
   const LoopBruteForce bf = MakeBrute(p, loop, delay, T);
   const DelaySummary s = z.Summarize();
-  Tally t;
-  const double b_top = 1.3 * (std::isfinite(s.B_max) && s.B_max > 0 ? s.B_max : p.m / T);
-  const int nb = 60;
-  auto stable_bf = [&](double K, double B) { return bf.MaxRoot(K, B) < 1.0; };
-  for (int i = 0; i < nb; ++i) {
-    const double B = b_top * i / (nb - 1);
-    const std::vector<KInterval> iv = z.StableIntervals(B);
-    double k_top = 0.0;
-    for (const KInterval& v : iv) k_top = std::max(k_top, std::isfinite(v.K_hi) ? v.K_hi : v.K_lo);
-    for (const Crossing& x : z.Crossings(B)) if (x.K > 0 && std::isfinite(x.K)) k_top = std::max(k_top, x.K);
-    if (!(k_top > 0.0)) k_top = 100.0 * p.m / (T * T);
-    std::vector<double> ks;
-    const int nk = min_points / nb + 1;
-    for (int j = 0; j < nk; ++j) ks.push_back(k_top * 2.0 * std::pow(1e-4, 1.0 - double(j) / (nk - 1)));
-    for (const KInterval& v : iv) {
-      const double lo = v.K_lo > 0 ? v.K_lo : 1e-3 * v.K_hi, hi = std::isfinite(v.K_hi) ? v.K_hi : 10 * lo;
-      for (int j = 1; j <= 10; ++j) ks.push_back(lo * std::pow(hi / lo, j / 11.0));
-      if (v.K_lo > 0) { ks.push_back(v.K_lo * (1 + 1e-4)); ks.push_back(v.K_lo * (1 - 1e-4)); }
-      if (std::isfinite(v.K_hi)) { ks.push_back(v.K_hi * (1 - 1e-4)); ks.push_back(v.K_hi * (1 + 1e-4)); }
-    }
-    for (double K : ks) {
-      bool mine = false;
-      for (const KInterval& v : iv) mine = mine || (K > v.K_lo && K < v.K_hi);
-      const bool ref = stable_bf(K, B);
-      ++t.points;
-      t.stable += mine;
-      if (mine == ref) continue;
-      const bool flips = stable_bf(K * (1 + 1e-6), B) != ref || stable_bf(K * (1 - 1e-6), B) != ref ||
-                         stable_bf(K, B * (1 + 1e-6)) != ref || stable_bf(K, B * (1 - 1e-6)) != ref;
-      if (flips) { ++t.near_boundary; continue; }
-      ++t.disagree;
-      ADD_FAILURE() << "d=" << delay << " B=" << B << " K=" << K << " intervals say " << mine
-                    << ", eigenvalues (max |z| " << bf.MaxRoot(K, B) << ") say " << ref;
-      if (t.disagree > 5) return t;
-    }
-  }
-  return t;
+  const ClassifyGrid g{1.3 * (std::isfinite(s.B_max) && s.B_max > 0 ? s.B_max : p.m / T), 60, min_points, 10};
+  return stability::Classify(z, [&](double K, double B) { return bf.MaxRoot(K, B); }, p, T, delay, g);
 }
 
 TEST(HapticLoop, StableIntervalsAgreeWithClosedLoopEigenvaluesWithFilterAndHand) {
@@ -189,7 +132,7 @@ TEST(HapticLoop, StableIntervalsAgreeWithClosedLoopEigenvaluesWithFilterAndHand)
   std::uniform_real_distribution<double> u(0.0, 1.0);
   long total = 0, stable = 0, near = 0;
   for (int k = 0; k < 16; ++k) {
-    const Plant p = RandomDevice(rng, k % 4);
+    const Plant p = test::RandomPlausibleDevice(rng, k % 4);
     const int d = k == 0 ? 0 : k == 1 ? 20 : delay(rng);
     LoopOptions loop;
     const double T = 1e-3;
@@ -221,7 +164,7 @@ TEST(HapticLoop, StableIntervalsAgreeWithClosedLoopEigenvaluesWithFilterAndHand)
 
 TEST(HapticLoop, IntersectionOfHandsIsStableForEveryHand) {
   std::mt19937_64 rng(8);
-  const Plant p = RandomDevice(rng, 2);
+  const Plant p = test::RandomPlausibleDevice(rng, 2);
   std::vector<ZWidth> zs;
   for (int h = 0; h < 3; ++h) {
     LoopOptions l;
@@ -254,7 +197,7 @@ TEST(HapticLoop, KcrStdWithFilterAndHandMatchesFiniteDifferencesOfKcr) {
   std::mt19937_64 rng(21);
   int compared = 0;
   for (int k = 0; k < 3; ++k) {
-    const Plant p = RandomDevice(rng, 1 + k);
+    const Plant p = test::RandomPlausibleDevice(rng, 1 + k);
     LoopOptions l;
     SetLowPassFilter(40.0 + 30.0 * k, 1e-3, &l);
     if (k > 0) l.hand = HandOf(k, p);
@@ -495,28 +438,31 @@ TEST(Passivity, BothEndsAndEmptySetsMatchTheTheoremEvaluatedDirectly) {
   EXPECT_GE(empty_checked, 5);
 }
 
-TEST(Passivity, RigidBodyPassiveWallIsStable) {
+class PassivityDelays : public ::testing::TestWithParam<int> {};
+
+TEST_P(PassivityDelays, RigidBodyPassiveWallIsStable) {
   // Passivity of the sampled rigid body with its wall implies a stable loop:
   // K_P(B) <= K_CR(B) at every B where both exist.
   Plant p;
   p.m = 1e-3;
   p.b = 4e-3;
-  for (int d : {0, 2, 8}) {
-    LoopOptions l;
-    SetLowPassFilter(50.0, 1e-3, &l);
-    const ZWidth z(p, 1e-3, d, l);
-    const Passivity pa(p.b, 1e-3, d, l);
-    for (double B : {0.0, 0.001, 0.002, 0.003}) {
-      const PassiveInterval r = pa.At(B);
-      if (r.passive_set_empty) continue;
-      EXPECT_LE(r.K_hi, z.At(B).K_cr * (1 + 1e-9)) << "d=" << d << " B=" << B;
-    }
+  const int d = GetParam();
+  LoopOptions l;
+  SetLowPassFilter(50.0, 1e-3, &l);
+  const ZWidth z(p, 1e-3, d, l);
+  const Passivity pa(p.b, 1e-3, d, l);
+  for (double B : {0.0, 0.001, 0.002, 0.003}) {
+    const PassiveInterval r = pa.At(B);
+    if (r.passive_set_empty) continue;
+    EXPECT_LE(r.K_hi, z.At(B).K_cr * (1 + 1e-9)) << "d=" << d << " B=" << B;
   }
 }
 
+INSTANTIATE_TEST_SUITE_P(RigidBody, PassivityDelays, ::testing::Values(0, 2, 8), test::DelayName());
+
 TEST(CutoffSweep, BestCutoffHasTheLargestMeasure) {
   std::mt19937_64 rng(4);
-  const Plant p = RandomDevice(rng, 1);
+  const Plant p = test::RandomPlausibleDevice(rng, 1);
   CutoffSweepOptions o;
   for (int i = 0; i < 8; ++i) o.cutoffs_hz.push_back(5.0 * std::pow(40.0, i / 7.0));
   const CutoffSweepResult r = SweepCutoff(p, 1e-3, 2, LoopOptions{}, o);

@@ -14,6 +14,7 @@
 
 #include "model/plant.h"
 #include "model/state_space.h"
+#include "tests/test_util.h"
 
 namespace zwidth {
 namespace {
@@ -21,19 +22,16 @@ namespace {
 using ld = long double;
 using cld = std::complex<ld>;
 
-Plant RandomModel(std::mt19937_64& rng, int modes, double fs) {
-  std::uniform_real_distribution<double> U(0, 1);
-  Plant p;
-  p.m = std::pow(10.0, -5 + 5 * U(rng));
-  p.b = p.m * std::pow(10.0, -1 + 3 * U(rng));
-  for (int i = 0; i < modes; ++i) {
-    const double w = 2 * std::numbers::pi * fs * (0.005 + 0.445 * U(rng));
-    const double v = 2 * std::numbers::pi * fs * (0.005 + 0.445 * U(rng));
-    const double zc = std::pow(10.0, -4 + std::log10(2e4) * U(rng));  // 1e-4 .. 2
-    const double zd = std::pow(10.0, -4 + std::log10(2e4) * U(rng));
-    p.modes.push_back({w, 2 * zc * w, v, 2 * zd * v});
-  }
-  return p;
+// The ranges of the header comment: poles and zeros drawn independently.
+test::RandomPlantRanges StressRanges(double fs) {
+  test::RandomPlantRanges r;
+  r.log10_m_kg_m2 = {-5, 5};
+  r.log10_b_over_m_rad_s = {-1, 3};
+  r.hz_unit = fs;
+  r.pole_hz = {0.005, 0.445};
+  r.zero_independent = true;
+  r.log10_zeta = {-4, std::log10(2e4)};  // 1e-4 .. 2
+  return r;
 }
 
 TEST(ModelStress, ZohAndResponseAgreeWithLongDouble) {
@@ -41,7 +39,7 @@ TEST(ModelStress, ZohAndResponseAgreeWithLongDouble) {
   const double fs = 1000, T = 1 / fs;
   double worst = 0;
   for (int trial = 0; trial < 200; ++trial) {
-    const Plant p = RandomModel(rng, trial % 5, fs);
+    const Plant p = test::RandomPlant(rng, StressRanges(fs), trial % 5);
     const StateSpace c = ContinuousStateSpace(p);
     const int n = static_cast<int>(c.A.rows());
     Eigen::Matrix<ld, Eigen::Dynamic, Eigen::Dynamic> M =

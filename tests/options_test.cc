@@ -3,6 +3,7 @@
 // names that field as Struct::field, the form the CLI maps to its flag.
 #include <functional>
 #include <string>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -44,76 +45,38 @@ std::function<bool(std::string*)> Valid(O o) {
   return [o](std::string* why) { return o.IsValid(why); };
 }
 
-OptionsCase Welch() {
-  ident::WelchOptions bad;
-  bad.window_length = 8;
-  return {"WelchOptions", Valid(ident::WelchOptions{}), Valid(bad), "WelchOptions::window_length"};
-}
-OptionsCase Band() {
-  ident::BandOptions bad;
-  bad.min_coherence = 1.0;
-  return {"BandOptions", Valid(ident::BandOptions{}), Valid(bad), "BandOptions::min_coherence"};
-}
-OptionsCase Excitation() {
-  ident::ExcitationOptions bad;
-  bad.rms = -1.0;
-  return {"ExcitationOptions", Valid(ident::ExcitationOptions{}), Valid(bad), "ExcitationOptions::rms"};
-}
-OptionsCase Fit() {
-  fit::FitOptions bad;
-  bad.max_modes = 9;
-  return {"FitOptions", Valid(fit::FitOptions{}), Valid(bad), "FitOptions::max_modes"};
-}
-OptionsCase FitBand() {  // a FitOptions refuses its band's bad field by the band's name
-  fit::FitOptions bad;
-  bad.band.min_input_power_ratio = 2.0;
-  return {"FitOptionsBand", Valid(fit::FitOptions{}), Valid(bad), "BandOptions::min_input_power_ratio"};
+// O's defaults, and an O with one field put out of range by spoil(&o).
+template <typename O, typename Spoil>
+OptionsCase Case(std::string name, Spoil spoil, std::string field) {
+  O bad;
+  spoil(&bad);
+  return {std::move(name), Valid(O{}), Valid(bad), std::move(field)};
 }
 
-OptionsCase Simulate() {
-  SimulateOptions bad;
-  bad.seconds = -1.0;
-  return {"SimulateOptions", Valid(SimulateOptions{}), Valid(bad), "SimulateOptions::seconds"};
-}
-OptionsCase Boundary() {
-  stability::BoundaryOptions bad;
-  bad.grid_points_per_delay = 4;
-  return {"BoundaryOptions", Valid(stability::BoundaryOptions{}), Valid(bad), "BoundaryOptions::grid_points_per_delay"};
-}
-OptionsCase BGrid() {
-  stability::BGridOptions bad;
-  bad.b_points = 1;
-  return {"BGridOptions", Valid(stability::BGridOptions{}), Valid(bad), "BGridOptions::b_points"};
-}
-OptionsCase Loop() {
-  stability::LoopOptions bad;
-  bad.hand.K = -1.0;
-  return {"LoopOptions", Valid(stability::LoopOptions{}), Valid(bad), "hand.K"};
-}
-OptionsCase Relay() {
-  stability::RelayOptions bad;
-  bad.seconds = 0.0;
-  return {"RelayOptions", Valid(stability::RelayOptions{}), Valid(bad), "RelayOptions::seconds"};
-}
-OptionsCase RelayLoop() {  // a RelayOptions refuses its loop's bad field by the loop's name
-  stability::RelayOptions bad;
-  bad.loop.filter_b = {1.0};
-  return {"RelayOptionsLoop", Valid(stability::RelayOptions{}), Valid(bad), "RelayOptions::loop.filter_b"};
-}
-OptionsCase Passivity() {
-  stability::PassivityOptions bad;
-  bad.min_grid_points = 10;
-  return {"PassivityOptions", Valid(stability::PassivityOptions{}), Valid(bad), "PassivityOptions::min_grid_points"};
-}
-OptionsCase Uncertainty() {
-  stability::UncertaintyOptions bad;
-  bad.log_step = 0.5;
-  return {"UncertaintyOptions", Valid(stability::UncertaintyOptions{}), Valid(bad), "UncertaintyOptions::log_step"};
-}
-
-INSTANTIATE_TEST_SUITE_P(EveryOptionsStruct, Options, ::testing::Values(Welch(), Band(), Excitation(), Fit(), FitBand(), Simulate(), Boundary(), BGrid(),
-                                                          Loop(), Relay(), RelayLoop(), Passivity(), Uncertainty()),
-                         [](const ::testing::TestParamInfo<OptionsCase>& i) { return i.param.name; });
+INSTANTIATE_TEST_SUITE_P(
+    EveryOptionsStruct, Options,
+    ::testing::Values(
+        Case<ident::WelchOptions>("WelchOptions", [](auto* o) { o->window_length = 8; }, "WelchOptions::window_length"),
+        Case<ident::BandOptions>("BandOptions", [](auto* o) { o->min_coherence = 1.0; }, "BandOptions::min_coherence"),
+        Case<ident::ExcitationOptions>("ExcitationOptions", [](auto* o) { o->rms = -1.0; }, "ExcitationOptions::rms"),
+        Case<fit::FitOptions>("FitOptions", [](auto* o) { o->max_modes = 9; }, "FitOptions::max_modes"),
+        // A FitOptions refuses its band's bad field by the band's name.
+        Case<fit::FitOptions>("FitOptionsBand", [](auto* o) { o->band.min_input_power_ratio = 2.0; },
+                              "BandOptions::min_input_power_ratio"),
+        Case<SimulateOptions>("SimulateOptions", [](auto* o) { o->seconds = -1.0; }, "SimulateOptions::seconds"),
+        Case<stability::BoundaryOptions>("BoundaryOptions", [](auto* o) { o->grid_points_per_delay = 4; },
+                                         "BoundaryOptions::grid_points_per_delay"),
+        Case<stability::BGridOptions>("BGridOptions", [](auto* o) { o->b_points = 1; }, "BGridOptions::b_points"),
+        Case<stability::LoopOptions>("LoopOptions", [](auto* o) { o->hand.K = -1.0; }, "hand.K"),
+        Case<stability::RelayOptions>("RelayOptions", [](auto* o) { o->seconds = 0.0; }, "RelayOptions::seconds"),
+        // A RelayOptions refuses its loop's bad field by the loop's name.
+        Case<stability::RelayOptions>("RelayOptionsLoop", [](auto* o) { o->loop.filter_b = {1.0}; },
+                                      "RelayOptions::loop.filter_b"),
+        Case<stability::PassivityOptions>("PassivityOptions", [](auto* o) { o->min_grid_points = 10; },
+                                          "PassivityOptions::min_grid_points"),
+        Case<stability::UncertaintyOptions>("UncertaintyOptions", [](auto* o) { o->log_step = 0.5; },
+                                            "UncertaintyOptions::log_step")),
+    [](const ::testing::TestParamInfo<OptionsCase>& i) { return i.param.name; });
 
 }  // namespace
 }  // namespace zwidth

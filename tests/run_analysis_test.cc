@@ -1,62 +1,19 @@
 // analysis::Analyse (the `run` pipeline after the estimate and the fit) on a
-// synthetic model, checked against the exact ZOH response of model/ and
-// against identities; report::WriteRunReport's files on the same analysis.
+// synthetic model (tests/run_input.h), checked against the exact ZOH response
+// of model/ and against identities (report::WriteRunReport: run_report_test.cc).
 #include <cmath>
 #include <complex>
-#include <filesystem>
-#include <fstream>
 #include <numbers>
-#include <random>
 
 #include <gtest/gtest.h>
 
 #include "analysis/run.h"
-#include "io/atomic_file.h"
 #include "model/error.h"
 #include "model/state_space.h"
-#include "report/run_report.h"
+#include "tests/run_input.h"
 
 namespace zwidth {
 namespace {
-
-constexpr double kT = 1e-3;
-
-Plant TestPlant() {  // a PHANToM-like device: inertia, damping, one mode, three samples of delay
-  Plant p;
-  p.m = 2e-3;
-  p.b = 5e-3;
-  const double w = 2 * std::numbers::pi * 60, v = 2 * std::numbers::pi * 40;
-  p.modes.push_back({w, 0.1 * w, v, 0.1 * v});
-  p.delay_samples = 3;
-  return p;
-}
-
-// The "measured" response: the model's exact ZOH response turned by
-// phase_offset [rad] (so the unwrapped phases differ by exactly that).
-analysis::RunInput TestInput(double phase_offset) {
-  analysis::RunInput in;
-  in.model.plant = TestPlant();
-  in.model.sample_period_s = kT;
-  in.fit.status = fit::FitStatus::kConverged;
-  in.fit.plant = in.model.plant;
-  ident::FrequencyResponse& frf = in.response.frf;
-  frf.sample_rate_hz = 1 / kT;
-  const DiscreteResponse g(DiscretizeZoh(in.model.plant, kT));
-  for (int k = 1; k <= 450; ++k) {
-    frf.f_hz.push_back(k);
-    frf.H.push_back(g.AtTheta(2 * std::numbers::pi * k * kT) * std::polar(1.0, phase_offset));
-    frf.coherence.push_back(1.0);
-    frf.H_std.push_back(0.01 * std::abs(frf.H.back()));
-    frf.S_uu.push_back(1.0);  // unit input PSD: S_yy = |H|^2, S_uy = H
-    frf.S_yy.push_back(std::norm(frf.H.back()));
-    frf.S_uy.push_back(frf.H.back());
-    in.fit.band.used.push_back(k >= 5 && k <= 300);
-  }
-  in.total_samples = 30000;
-  in.source = "synthetic";
-  in.logs = {"synthetic"};
-  return in;
-}
 
 TEST(RunAnalysis, DefaultOptionsAreValidAndFieldsAreNamed) {
   analysis::RunOptions o;
@@ -126,30 +83,6 @@ TEST(RunAnalysis, AModelComparedWithItselfHasTheModelsCurvesAndNoRigidModes) {
   std::vector<std::string> names;
   for (const auto& s : a.stages) names.push_back(s.name);
   EXPECT_EQ(names, (std::vector<std::string>{"boundary", "compare (reference Z-width)", "figure data (reference, rigid)"}));
-}
-
-TEST(RunReport, WritesEveryFileIntoTheFolderAndNothingWithoutFigures) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
-                                    ("zwidth_run_report_" + std::to_string(std::random_device{}()));
-  analysis::RunOptions o;
-  o.figures = false;
-  analysis::RunInput in = TestInput(0.0);
-  in.model.fit = {{"quality_reasons", nlohmann::json::array()}};
-  const analysis::RunAnalysis a = analysis::Analyse(std::move(in), o);
-  {
-    io::OutputFolder folder(dir.string(), false);
-    const report::RunReport r = report::WriteRunReport(a, folder);
-    EXPECT_EQ(r.figures, report::FiguresStatus::kNotRequested);
-    folder.Commit();
-  }
-  for (const char* f : {"model.json", "frf.csv", "boundary.csv", "summary.json", "report.html"}) {
-    EXPECT_TRUE(std::filesystem::is_regular_file(dir / f)) << f;
-  }
-  EXPECT_FALSE(std::filesystem::exists(dir / "figures"));
-  std::ifstream html(dir / "report.html");
-  const std::string text((std::istreambuf_iterator<char>(html)), std::istreambuf_iterator<char>());
-  EXPECT_NE(text.find("No figures"), std::string::npos);
-  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -1,6 +1,6 @@
-// The fit's judgement of itself: order selection, the excited band, the
-// quality verdict, short logs. Logs are simulated by SimulateLog (exact ZOH
-// plant, band-limited white torque, encoder quantisation), seeded, 1 kHz.
+// The fit's judgement of itself (fit/quality.cc): the excited band, the
+// quality verdict, short logs (order selection: order_test.cc). Logs are
+// simulated by SimulateLog (tests/fit_devices.h), seeded, 1 kHz.
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -12,59 +12,10 @@
 #include "model/error.h"
 #include "model/plant.h"
 #include "model/simulate.h"
+#include "tests/fit_devices.h"
 
 namespace zwidth::fit {
 namespace {
-
-constexpr double kHz = 2 * std::numbers::pi;
-
-ident::FrequencyResponse Frf(const Plant& p, uint64_t seed, double seconds = 30, double bandwidth_hz = 450) {
-  SimulateOptions so;
-  so.seed = seed;
-  so.seconds = seconds;
-  so.bandwidth_hz = bandwidth_hz;
-  so.torque_rms = 0.03 * p.m / 1.168e-3;  // the encoder's resolution weighs alike
-  const SimulatedLog log = SimulateLog(p, so);
-  return ident::EstimateFrequencyResponse(log.torque, log.position, so.sample_rate_hz, ident::WelchOptions{});
-}
-
-// Rigid body of Table I plus sections at the given pole frequencies [Hz], each
-// zero 15 % below its pole, damping ratios 0.05 (poles) and 0.04 (zeros).
-Plant Device(const std::vector<double>& poles_hz) {
-  Plant p = PhantomTable1();
-  p.modes.clear();
-  for (double f : poles_hz) p.modes.push_back({kHz * f, 2 * 0.05 * kHz * f, kHz * 0.85 * f, 2 * 0.04 * kHz * 0.85 * f});
-  return p;
-}
-
-const std::vector<double> kPoles[] = {{}, {120}, {60, 210}, {50, 130, 290}};
-
-class AutoOrder : public ::testing::TestWithParam<int> {};
-
-TEST_P(AutoOrder, PicksTheTrueNumberOfModes) {
-  const int n = GetParam();
-  for (uint64_t seed : {11u, 12u}) {
-    FitOptions o;
-    o.auto_modes = true;
-    const FitResult r = FitModel(Frf(Device(kPoles[n]), seed), o);
-    ASSERT_EQ(r.status, FitStatus::kConverged);
-    std::string table;
-    for (const OrderTrial& t : r.order_table) {
-      table += "\n" + std::to_string(t.num_modes) + " chi2/dof " + std::to_string(t.chi2_per_dof) + " BIC " +
-               std::to_string(t.bic) + " poles";
-      for (double f : t.pole_hz) table += " " + std::to_string(f);
-      for (const std::string& x : t.spurious) table += "; " + x;
-    }
-    EXPECT_EQ(static_cast<int>(r.plant.modes.size()), n) << r.order_choice << table;
-    EXPECT_EQ(r.order_table.size(), 5u);  // 0..max_modes = 4
-    EXPECT_EQ(r.quality, FitQuality::kGood) << (r.reasons.empty() ? "" : r.reasons[0].message);
-    for (size_t i = 0; i < r.plant.modes.size(); ++i) {
-      EXPECT_NEAR(r.plant.modes[i].omega / (kHz * kPoles[n][i]), 1.0, 0.02);
-    }
-  }
-}
-INSTANTIATE_TEST_SUITE_P(Fit, AutoOrder, ::testing::Values(0, 1, 2, 3),
-                         [](const auto& info) { return std::to_string(info.param) + "Modes"; });
 
 TEST(FitQuality, UnderFittedLogIsPoor) {
   FitOptions o;

@@ -9,10 +9,12 @@
 #include <string>
 
 #include <gtest/gtest.h>
+#include <hdf5.h>
 #include <matio.h>
 
 #include "io/log.h"
 #include "model/error.h"
+#include "tests/test_util.h"
 
 namespace zwidth::io {
 namespace {
@@ -45,16 +47,7 @@ std::string Num(double v) {
 
 class LogFormats : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("zwidth_logfmt_" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string Write(const std::string& name, const std::string& bytes) {
-    const std::string p = (dir_ / name).string();
-    std::ofstream(p, std::ios::binary) << bytes;
-    return p;
-  }
+  std::string Write(const std::string& name, const std::string& bytes) { return dir_.Write(name, bytes); }
   // Rows "t<d>u<d>y" with the given line end; time scaled by time_factor.
   static std::string Rows(const Signals& s, const std::string& d, const std::string& eol, double time_factor = 1.0) {
     std::string out;
@@ -83,7 +76,7 @@ class LogFormats : public ::testing::Test {
     ADD_FAILURE() << path << " was accepted";
     return "";
   }
-  fs::path dir_;
+  test::TempDir dir_{"zwidth_logfmt_"};
 };
 
 TEST_F(LogFormats, CommaHeaderLf) {
@@ -232,7 +225,7 @@ TEST_F(LogFormats, MatV5AndV73ByContent) {
   sel.input_column = "u";
   sel.output_column = "Theta";
   for (auto [version, name] : {std::pair{MAT_FT_MAT5, "v5.csv"}, std::pair{MAT_FT_MAT73, "v73.txt"}}) {
-    const std::string p = (dir_ / name).string();
+    const std::string p = dir_ / name;
     WriteMat(p, version, s);
     EXPECT_EQ(DetectLogFormat(p), LogFormat::kMat) << name;
     ExpectSame(ReadLog(p, sel), s);
@@ -242,6 +235,50 @@ TEST_F(LogFormats, MatV5AndV73ByContent) {
     EXPECT_NE(m.find("variables: "), std::string::npos) << m;
     EXPECT_NE(m.find("Theta"), std::string::npos) << m;
   }
+}
+
+// An HDF5 log whose sample_rate_hz attribute holds `n` values.
+void WriteLogWithArrayRate(const std::string& path, hsize_t n) {
+  const hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  const hsize_t len = 4096;
+  std::vector<double> u(len), y(len);
+  for (hsize_t k = 0; k < len; ++k) { u[k] = std::sin(0.1 * k * k); y[k] = std::cos(0.03 * k); }
+  const hid_t lcpl = H5Pcreate(H5P_LINK_CREATE);
+  H5Pset_create_intermediate_group(lcpl, 1);
+  const hid_t space = H5Screate_simple(1, &len, nullptr);
+  for (auto [name, data] : {std::pair{"/input/torque", &u}, std::pair{"/output/position", &y}}) {
+    const hid_t d = H5Dcreate2(f, name, H5T_IEEE_F64LE, space, lcpl, H5P_DEFAULT, H5P_DEFAULT);
+    H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, data->data());
+    H5Dclose(d);
+  }
+  const hid_t aspace = H5Screate_simple(1, &n, nullptr);
+  const hid_t a = H5Acreate2(f, "sample_rate_hz", H5T_IEEE_F64LE, aspace, H5P_DEFAULT, H5P_DEFAULT);
+  std::vector<double> rates(n, 1000.0);
+  H5Awrite(a, H5T_NATIVE_DOUBLE, rates.data());
+  H5Aclose(a);
+  H5Sclose(aspace);
+  H5Sclose(space);
+  H5Pclose(lcpl);
+  H5Fclose(f);
+}
+
+TEST(Hdf5Log, AnArrayAttributeIsRefusedInTheChildAndInProcess) {
+  const test::TempDir dir("zwidth_log_test_");
+  for (hsize_t n : {2, 1000}) {
+    SCOPED_TRACE(n);
+    WriteLogWithArrayRate(dir / "log.h5", n);
+    const std::string expect = "attribute sample_rate_hz has " + std::to_string(n) + " values";
+    try {
+      ReadLog(dir / "log.h5");
+      ADD_FAILURE() << "accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(expect), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(internal::StreamHdf5InProcess(dir / "log.h5", {}, [](const double*, const double*, size_t) {}),
+                 InputError);
+  }
+  WriteLogWithArrayRate(dir / "log.h5", 1);  // one value: a scalar in all but name
+  EXPECT_EQ(ReadLog(dir / "log.h5").info.sample_rate_hz, 1000.0);
 }
 
 }  // namespace

@@ -1,0 +1,56 @@
+// io/model_json.h: the model file's nesting bound, ranges and file kind
+// (written by the tests in a temporary folder). Moved from io_safety_test.cc.
+#include <filesystem>
+#include <string>
+
+#include <sys/stat.h>
+
+#include <gtest/gtest.h>
+
+#include "io/model_json.h"
+#include "model/error.h"
+#include "tests/test_util.h"
+
+namespace zwidth::io {
+namespace {
+namespace fs = std::filesystem;
+using test::TempDir;
+using test::WriteFile;
+
+// depth nested JSON arrays.
+std::string Nested(int depth) { return std::string(depth, '[') + std::string(depth, ']'); }
+
+TEST(ModelJson, NestingIsBoundedBeforeParsing) {
+  const std::string head = R"({"m": 1e-3, "b": 5e-3, "modes": [], "fit": )";
+  // "fit" sits at depth 1, so its value may nest kMaxJsonDepth - 1 levels.
+  EXPECT_NO_THROW(ParseModelJson(head + Nested(kMaxJsonDepth - 1) + "}", "ok.json"));
+  EXPECT_THROW(ParseModelJson(head + Nested(kMaxJsonDepth) + "}", "deep.json"), InputError);
+  EXPECT_THROW(ParseModelJson(Nested(100000), "deep.json"), InputError);
+  // Brackets inside strings are text, not nesting.
+  EXPECT_NO_THROW(ParseModelJson(R"({"m": 1e-3, "b": 5e-3, "modes": [], "name": ")" + std::string(1000, '[') +
+                                     R"(\"]"})", "name.json"));
+}
+
+TEST(ModelJson, DelaysAndParametersOutsideTheirRangesAreRefused) {
+  const std::string head = R"({"m": 1e-3, "b": 5e-3, "modes": [], "delay_samples": )";
+  for (const char* d : {"4294967298", "2147483647", "18446744073709551615", "-1", "1001"}) {
+    SCOPED_TRACE(d);
+    EXPECT_THROW(ParseModelJson(head + d + "}", "model.json"), InputError);
+  }
+  EXPECT_EQ(ParseModelJson(head + "1000}", "model.json").plant.delay_samples, 1000);
+  EXPECT_THROW(ParseModelJson(R"({"m": 1e-300, "b": 5e-3, "modes": []})", "model.json"), InputError);
+  EXPECT_THROW(ParseModelJson(R"({"m": 1e-3, "b": 5e300, "modes": []})", "model.json"), InputError);
+  std::string modes;
+  for (size_t i = 0; i <= kMaxModes; ++i) modes += std::string(i ? "," : "") + R"({"omega": 400, "c": 80, "v": 380, "d": 70})";
+  EXPECT_THROW(ParseModelJson(R"({"m": 1e-3, "b": 5e-3, "modes": [)" + modes + "]}", "model.json"), InputError);
+}
+
+TEST(ModelJson, AModelFileMustBeARegularFile) {
+  EXPECT_THROW(ReadModelJson("/dev/zero"), InputError);
+  TempDir dir("zwidth_model_json_test_");
+  ASSERT_EQ(::mkfifo((dir / "model.json").c_str(), 0600), 0);
+  EXPECT_THROW(ReadModelJson(dir / "model.json"), InputError);  // refused at once, never opened
+}
+
+}  // namespace
+}  // namespace zwidth::io

@@ -1,0 +1,98 @@
+// stability/uncertainty.h: the standard deviation of K_cr by the delta method
+// against a seeded Monte Carlo over the model's parameters.
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <gtest/gtest.h>
+
+#include "model/error.h"
+#include "model/plant.h"
+#include "stability/uncertainty.h"
+#include "stability/zwidth.h"
+#include "tests/test_util.h"
+
+namespace zwidth::stability {
+namespace {
+
+// A covariance with 1-2% relative std and some correlation, seeded.
+std::vector<double> TestCovariance(const Plant& p, double rel_std, unsigned seed) {
+  const int n = NumLogParameters(p);
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g;
+  Eigen::MatrixXd A(n, n);
+  for (int i = 0; i < n; ++i) for (int j = 0; j < n; ++j) A(i, j) = g(rng);
+  Eigen::MatrixXd S = 0.3 * A * A.transpose() / n + Eigen::MatrixXd::Identity(n, n);
+  S *= rel_std * rel_std;
+  return std::vector<double>(S.data(), S.data() + n * n);
+}
+
+class UncertaintyDelays : public ::testing::TestWithParam<int> {};
+
+TEST_P(UncertaintyDelays, DeltaMethodAgreesWithMonteCarlo) {
+  // Table I at d = 2 (a transition and an interior-free K_CR^max at B_t) and
+  // d = 8, 1% relative std; 300 seeded samples (std of a sample std ~ 4%).
+  const Plant p = PhantomTable1();
+  const std::vector<double> cov = TestCovariance(p, 0.01, 3);
+  const int d = GetParam();
+  const ZWidth z(p, 1e-3, d);
+  const DelaySummary s = z.Summarize();
+  const SummaryStd dm = SummaryStdDelta(p, cov, 1e-3, d, s);
+  const MonteCarloResult mc = SummaryMonteCarlo(p, cov, 1e-3, d, 300, 11);
+  const double pairs[4][2] = {{dm.K_cr_at_zero_B, mc.std.K_cr_at_zero_B}, {dm.B_t, mc.std.B_t},
+                              {dm.K_cr_max, mc.std.K_cr_max}, {dm.B_max, mc.std.B_max}};
+  for (int q = 0; q < 4; ++q) {
+    if (q == 1 && !s.has_transition) continue;
+    ASSERT_TRUE(std::isfinite(pairs[q][0]) && pairs[q][0] > 0) << d << " " << q;
+    EXPECT_LT(pairs[q][0] / pairs[q][1], 1.5) << "d=" << d << " quantity " << q;
+    EXPECT_GT(pairs[q][0] / pairs[q][1], 1 / 1.5) << "d=" << d << " quantity " << q;
+    std::printf("d=%d q=%d delta %.4g monte carlo %.4g ratio %.3f\n", d, q, pairs[q][0], pairs[q][1],
+                pairs[q][0] / pairs[q][1]);
+  }
+  // K_CR(B) at a few B below the transition: implicit differentiation
+  // against Monte Carlo of At(B).
+  std::vector<CriticalPoint> pts;
+  for (double f : {0.0, 0.3, 0.6}) pts.push_back(z.At(f * (s.has_transition ? s.B_t : s.B_max_from_zero)));
+  const std::vector<double> sd = KcrStd(p, cov, 1e-3, d, pts);
+  const int n = NumLogParameters(p);
+  const Eigen::MatrixXd S = Eigen::Map<const Eigen::MatrixXd>(cov.data(), n, n);
+  const Eigen::MatrixXd L = S.llt().matrixL();
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> g;
+  std::vector<double> s1(pts.size()), s2(pts.size());
+  const int N = 400;
+  for (int k = 0; k < N; ++k) {
+    Eigen::VectorXd u(n);
+    for (int i = 0; i < n; ++i) u[i] = g(rng);
+    const Eigen::VectorXd dx = L * u;
+    const ZWidth zs(PerturbLog(p, std::vector<double>(dx.data(), dx.data() + n)), 1e-3, d);
+    for (size_t j = 0; j < pts.size(); ++j) {
+      const double v = zs.At(pts[j].B).K_cr - pts[j].K_cr;
+      s1[j] += v;
+      s2[j] += v * v;
+    }
+  }
+  for (size_t j = 0; j < pts.size(); ++j) {
+    const double m = s1[j] / N, mc_sd = std::sqrt((s2[j] - N * m * m) / (N - 1));
+    EXPECT_LT(sd[j] / mc_sd, 1.5) << d << " B=" << pts[j].B;
+    EXPECT_GT(sd[j] / mc_sd, 1 / 1.5) << d << " B=" << pts[j].B;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(TableOne, UncertaintyDelays, ::testing::Values(2, 8), test::DelayName());
+
+TEST(Uncertainty, RejectsABadCovariance) {
+  const Plant p = PhantomTable1();
+  EXPECT_THROW(CheckLogCovariance(p, {1.0, 0.0}), InputError);
+  std::vector<double> c = TestCovariance(p, 0.01, 1);
+  c[1] += 1.0;  // not symmetric
+  EXPECT_THROW(CheckLogCovariance(p, c), InputError);
+  const int n = NumLogParameters(p);
+  std::vector<double> neg(n * n, 0.0);
+  neg[0] = -1.0;
+  EXPECT_THROW(CheckLogCovariance(p, neg), InputError);
+}
+
+}  // namespace
+}  // namespace zwidth::stability
