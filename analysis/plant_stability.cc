@@ -1,6 +1,6 @@
 #include "analysis/plant_stability.h"
 
-#include "analysis/parallel_internal.h"
+#include "model/parallel.h"
 
 #include <algorithm>
 #include <cmath>

@@ -13,6 +13,7 @@
 #include "fit/bin_correlated_covariance.h"
 #include "fit/fit_internal.h"
 #include "model/error.h"
+#include "model/parallel.h"
 #include "model/zoh_modal.h"
 
 namespace zwidth::fit {
@@ -89,11 +90,16 @@ void ScreenDelay(const ident::FrequencyResponse& sub, const FitOptions& o, int n
   FitOptions screen = o;
   screen.max_iterations = std::min(o.max_iterations, 8);
   const Bins coarse = MakeBins(sub, d, o.relative_std_floor, usable > 600 ? 6 : 1);
+  // The starts are independent: solved on their own threads, then taken in
+  // order, so the outcome does not depend on timing.
+  std::vector<SingleFit> fits(starts.size());
+  ParallelFor(starts.size(), [&](size_t i) {
+    std::vector<double> xs = ToLog(starts[i]);
+    fits[i] = Solve(coarse, n, xs, screen);
+  });
   double best_here = std::numeric_limits<double>::infinity();
-  for (const Plant& s : starts) {
+  for (const SingleFit& f : fits) {
     ++sc->starts_tried;
-    std::vector<double> xs = ToLog(s);
-    const SingleFit f = Solve(coarse, n, xs, screen);
     sc->iterations += f.iterations;
     best_here = std::min(best_here, f.cost);
     if (std::isfinite(f.cost)) sc->screened.push_back({f, d});
@@ -137,19 +143,28 @@ SingleFit ConvergeBest(const ident::FrequencyResponse& sub, const FitOptions& o,
                        int* delay) {
   auto& screened = sc->screened;
   std::sort(screened.begin(), screened.end(), [](const auto& a, const auto& b) { return a.first.cost < b.first.cost; });
-  SingleFit fin;
-  int converged_starts = 0;
-  for (size_t i = 0; i < screened.size() && converged_starts < o.max_converged_starts; ++i) {
+  // The runners-up to converge are known before any is solved; they are
+  // solved on their own threads and compared in order.
+  std::vector<size_t> chosen;
+  for (size_t i = 0; i < screened.size() && static_cast<int>(chosen.size()) < o.max_converged_starts; ++i) {
     if (i > 0 && screened[i].first.cost > o.runner_up_cost_ratio * screened[0].first.cost) break;
-    ++converged_starts;
-    Bins here = MakeBins(sub, screened[i].second, o.relative_std_floor);
-    std::vector<double> xs = screened[i].first.x;
-    const SingleFit f = Solve(here, n, xs, o);
+    chosen.push_back(i);
+  }
+  std::vector<Bins> here(chosen.size());
+  std::vector<SingleFit> fits(chosen.size());
+  ParallelFor(chosen.size(), [&](size_t k) {
+    here[k] = MakeBins(sub, screened[chosen[k]].second, o.relative_std_floor);
+    std::vector<double> xs = screened[chosen[k]].first.x;
+    fits[k] = Solve(here[k], n, xs, o);
+  });
+  SingleFit fin;
+  for (size_t k = 0; k < chosen.size(); ++k) {
+    const SingleFit& f = fits[k];
     sc->iterations += f.iterations;
-    if (i == 0 || (f.converged && !fin.converged) || (f.converged == fin.converged && f.cost < fin.cost)) {
+    if (k == 0 || (f.converged && !fin.converged) || (f.converged == fin.converged && f.cost < fin.cost)) {
       fin = f;
-      *bins = std::move(here);
-      *delay = screened[i].second;
+      *bins = std::move(here[k]);
+      *delay = screened[chosen[k]].second;
     }
   }
   return fin;

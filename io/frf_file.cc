@@ -21,23 +21,21 @@ namespace zwidth::io {
 namespace {
 
 void WriteCsv(const std::string& tmp, const ident::FrequencyResponse& r) {
-  std::FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (!f) throw InputError("cannot create '" + tmp + "'");
-  std::fputs("f_hz,H_re,H_im,coherence,H_std,H_mag,H_phase_deg,S_uu,S_yy,sample_rate_hz,"
-             "num_averages,effective_averages,bin_correlation", f);
+  std::string text =
+      "f_hz,H_re,H_im,coherence,H_std,H_mag,H_phase_deg,S_uu,S_yy,sample_rate_hz,"
+      "num_averages,effective_averages,bin_correlation";
   const bool used = r.used_by_fit.size() == r.f_hz.size();  // the fit's bins, when known
-  std::fputs(used ? ",used_by_fit\n" : "\n", f);
+  text += used ? ",used_by_fit\n" : "\n";
+  internal::CsvLine line(&text);
   for (size_t k = 0; k < r.f_hz.size(); ++k) {
-    std::fprintf(f, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%.17g,%.17g",
-                 r.f_hz[k], r.H[k].real(), r.H[k].imag(), r.coherence[k], r.H_std[k],
-                 std::abs(r.H[k]), std::arg(r.H[k]) * 180.0 / std::numbers::pi, r.S_uu[k],
-                 r.S_yy[k], r.sample_rate_hz, r.num_averages, r.effective_averages,
-                 r.bin_correlation);
-    if (used) std::fprintf(f, ",%d", r.used_by_fit[k] ? 1 : 0);
-    std::fputc('\n', f);
+    line.G(r.f_hz[k], 17).G(r.H[k].real(), 17).G(r.H[k].imag(), 17).G(r.coherence[k], 17).G(r.H_std[k], 17);
+    line.G(std::abs(r.H[k]), 17).G(std::arg(r.H[k]) * 180.0 / std::numbers::pi, 17).G(r.S_uu[k], 17);
+    line.G(r.S_yy[k], 17).G(r.sample_rate_hz, 17).Int(r.num_averages).G(r.effective_averages, 17);
+    line.G(r.bin_correlation, 17);
+    if (used) line.Int(r.used_by_fit[k] ? 1 : 0);
+    line.End();
   }
-  const bool ok = std::ferror(f) == 0;
-  if (std::fclose(f) != 0 || !ok) throw InputError("failed writing '" + tmp + "'");
+  internal::WriteWholeFile(tmp, text, tmp);
 }
 
 void WriteH5(const std::string& tmp, const ident::FrequencyResponse& r) {

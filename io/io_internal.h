@@ -19,4 +19,29 @@ void SplitFields(std::string_view line, char sep, std::vector<std::string_view>*
 // dataset), closed before return so that a write error throws here.
 void WriteDoubleAttr(H5::H5Object& obj, const std::string& name, double v);
 
+// Text output of numbers without printf: appends v to *out exactly as
+// printf("%.<digits>g") would (std::to_chars in the general format with that
+// precision is specified so, nan and inf included), and ints as "%d". About
+// five times faster than fprintf for the boundary and response CSVs.
+void AppendG(std::string* out, double v, int digits);
+void AppendInt(std::string* out, long long v);
+
+// Lines of a CSV: fields separated by ',', each line ended by '\n'.
+class CsvLine {
+ public:
+  explicit CsvLine(std::string* out) : out_(out) {}
+  CsvLine& G(double v, int digits) { Sep(); AppendG(out_, v, digits); return *this; }
+  CsvLine& Int(long long v) { Sep(); AppendInt(out_, v); return *this; }
+  void End() { out_->push_back('\n'); first_ = true; }
+
+ private:
+  void Sep() { if (!first_) out_->push_back(','); first_ = false; }
+  std::string* out_;
+  bool first_ = true;
+};
+
+// Writes `text` to a new file at `tmp` (binary); InputError "cannot create
+// '<tmp>'" or "failed writing '<shown>'".
+void WriteWholeFile(const std::string& tmp, const std::string& text, const std::string& shown);
+
 }  // namespace zwidth::io::internal

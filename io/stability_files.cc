@@ -1,5 +1,7 @@
 #include "io/stability_files.h"
 
+#include "io/io_internal.h"
+
 #include <limits>
 #include <cmath>
 #include <cstdio>
@@ -18,24 +20,24 @@ nlohmann::json NumberOrNull(double v) {
 
 void WriteBoundaryCsv(const std::string& path, const std::vector<BoundaryRow>& rows) {
   WriteAtomically(path, [&](const std::string& tmp) {
-    std::FILE* f = std::fopen(tmp.c_str(), "wb");
-    if (!f) throw InputError("cannot create '" + tmp + "'");
-    std::fputs("delay_samples,B,interval,num_intervals,K_lo,K_hi,f_lo_hz,f_hi_hz,interval_verified,"
-               "K_cr,K_cr_std,f_cr_hz,K_margin,f_margin_hz,unstable_at_zero_k,margin_agrees,verified,K_passive\n", f);
+    std::string text =
+        "delay_samples,B,interval,num_intervals,K_lo,K_hi,f_lo_hz,f_hi_hz,interval_verified,"
+        "K_cr,K_cr_std,f_cr_hz,K_margin,f_margin_hz,unstable_at_zero_k,margin_agrees,verified,K_passive\n";
+    internal::CsvLine line(&text);
     const double nan = std::numeric_limits<double>::quiet_NaN();
     for (const BoundaryRow& r : rows) {
       const auto& p = r.point;
       const int n = static_cast<int>(r.intervals.size());
       for (int i = 0; i < std::max(n, 1); ++i) {
         const stability::KInterval iv = n ? r.intervals[i] : stability::KInterval{nan, nan, nan, nan, false};
-        std::fprintf(f, "%d,%.12g,%d,%d,%.15g,%.15g,%.15g,%.15g,%d,%.15g,%.6g,%.15g,%.15g,%.15g,%d,%d,%d,%.15g\n",
-                     r.delay_samples, p.B, n ? i : -1, n, iv.K_lo, iv.K_hi, iv.f_lo_hz, iv.f_hi_hz,
-                     iv.verified ? 1 : 0, p.K_cr, r.K_cr_std, p.f_cr_hz, p.K_margin, p.f_margin_hz,
-                     p.unstable_at_zero_k ? 1 : 0, p.AgreesWithMargin() ? 1 : 0, p.verified ? 1 : 0, r.K_passive);
+        line.Int(r.delay_samples).G(p.B, 12).Int(n ? i : -1).Int(n);
+        line.G(iv.K_lo, 15).G(iv.K_hi, 15).G(iv.f_lo_hz, 15).G(iv.f_hi_hz, 15).Int(iv.verified ? 1 : 0);
+        line.G(p.K_cr, 15).G(r.K_cr_std, 6).G(p.f_cr_hz, 15).G(p.K_margin, 15).G(p.f_margin_hz, 15);
+        line.Int(p.unstable_at_zero_k ? 1 : 0).Int(p.AgreesWithMargin() ? 1 : 0).Int(p.verified ? 1 : 0);
+        line.G(r.K_passive, 15).End();
       }
     }
-    const bool ok = std::ferror(f) == 0;
-    if (std::fclose(f) != 0 || !ok) throw InputError("failed writing '" + path + "'");
+    internal::WriteWholeFile(tmp, text, path);
   });
 }
 

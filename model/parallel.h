@@ -13,7 +13,7 @@
 #include <thread>
 #include <vector>
 
-namespace zwidth::analysis {
+namespace zwidth {
 
 template <class F>
 void ParallelFor(size_t n, F&& f) {
@@ -38,4 +38,4 @@ void ParallelFor(size_t n, F&& f) {
   if (error) std::rethrow_exception(error);
 }
 
-}  // namespace zwidth::analysis
+}  // namespace zwidth
