@@ -28,6 +28,7 @@ struct RunFlags {
   stability::BGridOptions grid;
   bool force = false;
   bool no_figures = false;
+  bool png = false;
   double report_filter_hz = 50.0;
   LoopFlags loop;
 };
@@ -76,7 +77,7 @@ void Run(RunFlags& f) {
   if (f.loop.hands.size() > 1) throw InputError("run takes one --hand (boundary takes several)");
   o.loop = ResolveLoops(f.loop, 1.0 / in.response.frf.sample_rate_hz)[0];
   const analysis::RunAnalysis a = analysis::Analyse(std::move(in), o);
-  const report::RunReport rep = report::WriteRunReport(a, folder, {.draw_figures = true, .fit_report = FitReport(a.input.fit)});
+  const report::RunReport rep = report::WriteRunReport(a, folder, {.draw_figures = true, .png = f.png, .fit_report = FitReport(a.input.fit)});
   for (const analysis::RunStage& s : a.stages) {
     if (s.name.rfind("figure", 0) == 0) continue;
     PrintStage(s.name, s.ms);
@@ -106,6 +107,7 @@ void AddRunCommand(CLI::App& app) {
   cmd->add_option("-o,--output", f->outdir, "output folder: new, or existing and empty (its parent must exist)")->required();
   cmd->add_flag("--force", f->force, "write into a non-empty output folder, replacing zwidth's files there");
   cmd->add_flag("--no-figures", f->no_figures, "no figures/ folder, no gnuplot: the data files and the report only");
+  cmd->add_flag("--png", f->png, "also draw every figure as PNG (the report uses the SVGs)")->excludes("--no-figures");
   cmd->add_option("--reference", f->reference, "compare with: table1 (the paper's PHANToM, built in) or a model JSON (default: no comparison)");
   cmd->add_option("--delays", f->delays, "loop delays [samples]")->delimiter(',')->capture_default_str();
   f->fit.modes = "auto";  // run chooses the order unless told

@@ -1,6 +1,7 @@
 // figures.gp of `zwidth run`: the gnuplot script drawing every figure from the
 // .dat files beside it.
 #include <sstream>
+#include <vector>
 
 #include "report/report_internal.h"
 
@@ -18,7 +19,9 @@ std::string FigureScript(const FigureScriptOptions& o) {
     dl += std::to_string(o.delays[i]);
   }
   gp << "delays = '" << dl << "'\n";
-  for (const char* term : {"svg size 900,640 font 'sans,12'", "pngcairo size 900,640 font 'sans,10'"}) {
+  std::vector<const char*> terms = {"svg size 900,640 font 'sans,12'"};
+  if (o.png) terms.push_back("pngcairo size 900,640 font 'sans,10'");
+  for (const char* term : terms) {
     const std::string ext = std::string(term).rfind("svg", 0) == 0 ? "svg" : "png";
     gp << "set terminal " << term << "\n";
     gp << "set output 'bode." << ext << "'\nset multiplot layout 2,1 title 'Bode diagram: measured (" << ident::ToString(o.method) << ") and fitted model (exact ZOH) - Fig. 3'\n"

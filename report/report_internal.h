@@ -20,9 +20,10 @@ struct FigureScriptOptions {
   double k_clip = 1.0;                    // upper K of the region figure [N m/rad]
   double k_clip_loop = 1.0;               // upper K of the loop figure [N m/rad]
   double report_filter_hz = 50.0;         // the loop figure's velocity low-pass [Hz]
+  bool png = false;                       // PNGs as well as SVGs
 };
 
-// figures.gp: every figure in SVG and PNG, read from the .dat files beside it.
+// figures.gp: every figure in SVG (and PNG when asked), read from the .dat files beside it.
 std::string FigureScript(const FigureScriptOptions& o);
 
 // report.html; have_figures: figures/*.svg exist.

@@ -158,7 +158,7 @@ std::string Table2Dat(const std::vector<int>& delays) {
 }
 
 // figures/: the .dat files and figures.gp.
-void WriteFigureFiles(const analysis::RunAnalysis& a, const fs::path& fig) {
+void WriteFigureFiles(const analysis::RunAnalysis& a, const fs::path& fig, bool png) {
   const analysis::FigureData& f = *a.figures;
   fs::create_directories(fig);
   io::WriteTextAtomically((fig / "bode.dat").string(), BodeDat(a));
@@ -173,7 +173,7 @@ void WriteFigureFiles(const analysis::RunAnalysis& a, const fs::path& fig) {
   const FigureScriptOptions so{a.options.delays, a.input.response.method,
                                a.input.response.method == ident::CombinedMethod::kJoint,
                                a.options.linear, a.input.reference.has_value(), table1,
-                               k_clip, k_clip_loop, a.options.report_filter_hz};
+                               k_clip, k_clip_loop, a.options.report_filter_hz, png};
   io::WriteTextAtomically((fig / "figures.gp").string(), FigureScript(so));
 }
 
@@ -195,7 +195,7 @@ RunReport WriteRunReport(const analysis::RunAnalysis& a, const io::OutputFolder&
   r.stages.push_back({"write outputs", laps.Lap()});
   if (a.figures) {
     const fs::path fig = out / "figures";
-    WriteFigureFiles(a, fig);
+    WriteFigureFiles(a, fig, options.png);
     r.stages.push_back({"figure files", laps.Lap()});
     r.figures = FiguresStatus::kNotDrawn;
     if (options.draw_figures) {

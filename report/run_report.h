@@ -14,6 +14,9 @@ namespace zwidth::report {
 
 struct RunReportOptions {
   bool draw_figures = true;  // run gnuplot on figures/figures.gp (when the analysis has figure data)
+  // figures.gp draws PNGs beside the SVGs (report.html uses the SVGs; the
+  // PNGs took about 3/4 of gnuplot's time: 445 of 566 ms on the shipped run).
+  bool png = false;
   // The fit's report as the user reads it in report.html (the CLI gives its
   // flags where the library names option fields); analysis::FitReport when empty.
   std::string fit_report;

@@ -109,7 +109,11 @@ evil="$T/it's \$(touch pwned) \`touch pwned2\`; touch pwned3 '"
 (cd "$T" && "$ZW" run good.csv -o "$evil" >/dev/null 2>"$T/stderr"); rc=$?
 check run-evil-name-no-injection "[ $rc -eq 0 ] && [ -z \"\$(find '$T' -name 'pwned*' | head -1)\" ] && [ -f \"\$evil/report.html\" ]"
 if command -v gnuplot >/dev/null; then
-  check run-evil-name-figures '[ -s "$evil/figures/bode.svg" ]'
+  check run-evil-name-figures '[ -s "$evil/figures/bode.svg" ] && [ -z "$(ls "$evil/figures" | grep png)" ]'
+  # --png: the six figures as PNG as well (and never with --no-figures).
+  "$ZW" run "$T/good.csv" -o "$T/run_png" --png >/dev/null 2>&1
+  check run-png '[ "$(ls "$T/run_png/figures" | grep -c "\.png$")" = 6 ] && head -c 8 "$T/run_png/figures/bode.png" | grep -q PNG'
+  expect run-png-no-figures "excludes" -- "$ZW" run "$T/good.csv" -o "$T/run_png2" --png --no-figures
 fi
 mkdir "$T/empty_dir"
 "$ZW" run "$T/good.csv" -o "$T/empty_dir" >/dev/null 2>"$T/stderr"; rc=$?
