@@ -15,13 +15,11 @@
 #include <sys/stat.h>
 
 #include <H5Cpp.h>
-#include <matio.h>
 
 #include "io/atomic_file.h"
 #include "io/h5_safety.h"
 #include "io/io_internal.h"
 #include "io/log_internal.h"
-#include "io/isolated.h"
 #include "model/error.h"
 
 
@@ -307,14 +305,6 @@ LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& sel, const
 namespace internal {
 
 
-// The file is read in a child process (io/isolated.h) that streams the chunks
-// through a pipe: a crash in libhdf5 becomes an InputError here, and the data
-// is still read once, in bounded memory. Frames: 'c' then u[n], y[n] (a chunk);
-// 'i' then the sample count (uint64) and the rate (the end).
-LogInfo StreamHdf5(const std::string& path, const LogSelect& sel, const LogSink& sink) {
-  return StreamIsolatedLog(path, "HDF5 file", sel, sink, internal::StreamHdf5InProcess);
-}
-
 namespace {
 
 void WriteStringAttr(H5::H5Object& obj, const std::string& name, const std::string& value) {
@@ -325,6 +315,12 @@ void WriteStringAttr(H5::H5Object& obj, const std::string& name, const std::stri
 }
 
 }  // namespace
+
+void WriteDoubleAttr(H5::H5Object& obj, const std::string& name, double v) {
+  H5::Attribute a = obj.createAttribute(name, H5::PredType::IEEE_F64LE, H5::DataSpace(H5S_SCALAR));
+  a.write(H5::PredType::NATIVE_DOUBLE, &v);
+  a.close();
+}
 
 void WriteHdf5Log(const std::string& tmp, double rate, const std::vector<double>& u,
                   const std::vector<double>& y) {
