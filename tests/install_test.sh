@@ -39,6 +39,7 @@ done
 # Internal headers stay out, and every installed header compiles with only the
 # installed ones (no public header reaches an internal or missing one).
 for f in fit/fit_internal.h fit/bin_correlated_covariance.h io/io_internal.h io/log_internal.h io/isolated.h \
+         io/hdf5_api.h fit/fit_api.h \
          io/h5_safety.h; do
   [ ! -e "$P/include/zwidth/$f" ] || fail "the internal header $f is installed"
 done
