@@ -10,8 +10,8 @@
 #include <sstream>
 
 #include "io/reference_models.h"
-#include <glog/logging.h>
 
+#include "fit/fit_api.h"
 #include "io/fit_file.h"
 #include "io/stability_files.h"
 #include "model/error.h"
@@ -75,11 +75,9 @@ void ResolveDelayFlag(const std::string& flag, fit::FitOptions* o) {
 
 io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::FitOptions& o,
                              const std::string& source, fit::FitResult* out) {
-  // Ceres logs through glog (e.g. "Covariance matrix is near rank
-  // deficient"): keep it off the terminal; what matters reaches the fit's own
-  // warnings and quality reasons.
-  FLAGS_minloglevel = google::GLOG_FATAL;
-  const fit::FitResult r = fit::FitModel(frf, o);
+  // Ceres' glog output (e.g. "Covariance matrix is near rank deficient") is
+  // kept off the terminal; the fit is in a plugin loaded here (fit/fit_api.h).
+  const fit::FitResult r = fit::FitLibrary().fit_model_quiet(frf, o);
   if (out) *out = r;
   for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", WithFlags(w).c_str());
   if (r.status != fit::FitStatus::kConverged) throw ComputationError(r.message);

@@ -324,39 +324,6 @@ Fixed FitFixed(const ident::FrequencyResponse& sub, const FitOptions& o, int n, 
 
 using namespace internal;
 
-bool FitOptions::IsValid(std::string* why) const {
-  auto bad = [&](const std::string& m) { if (why) *why = m; return false; };
-  if (num_modes < 0 || num_modes > 20) return bad("FitOptions::num_modes must be in [0, 20]");
-  if (delay_samples < 0) return bad("FitOptions::delay_samples must be >= 0");
-  if (max_auto_delay < 0 || max_auto_delay > 1000) return bad("FitOptions::max_auto_delay must be in [0, 1000]");
-  if (!(min_damping_ratio > 0 && min_damping_ratio < max_pole_damping_ratio)) return bad("FitOptions::min_damping_ratio must be in (0, FitOptions::max_pole_damping_ratio)");
-  if (!(max_pole_damping_ratio < 1.0)) return bad("FitOptions::max_pole_damping_ratio must be < 1");
-  if (!(max_zero_damping_ratio > min_damping_ratio)) return bad("FitOptions::max_zero_damping_ratio must be > FitOptions::min_damping_ratio");
-  if (!(max_frequency_fraction > 0 && max_frequency_fraction < 1)) return bad("FitOptions::max_frequency_fraction must be in (0, 1)");
-  if (!(relative_std_floor >= 0)) return bad("FitOptions::relative_std_floor must be >= 0");
-  if (max_iterations < 1) return bad("FitOptions::max_iterations must be >= 1");
-  if (!(function_tolerance > 0)) return bad("FitOptions::function_tolerance must be > 0");
-  if (max_starts < 1) return bad("FitOptions::max_starts must be >= 1");
-  if (max_modes < 0 || max_modes > 8) return bad("FitOptions::max_modes must be in [0, 8]");
-  if (min_averages < 1) return bad("FitOptions::min_averages must be >= 1");
-  if (max_converged_starts < 1) return bad("FitOptions::max_converged_starts must be >= 1");
-  if (!(runner_up_cost_ratio >= 1.0)) return bad("FitOptions::runner_up_cost_ratio must be >= 1");
-  if (std::string w; !band.IsValid(&w)) return bad(w);
-  if (!auto_modes && init && static_cast<int>(init->modes.size()) != num_modes) {
-    return bad("FitOptions::init has " + std::to_string(init->modes.size()) + " modes but FitOptions::num_modes is " + std::to_string(num_modes));
-  }
-  return true;
-}
-
-std::string ToString(FitStatus s) {
-  switch (s) {
-    case FitStatus::kNotRun: return "not run";
-    case FitStatus::kConverged: return "converged";
-    case FitStatus::kNoConvergence: return "no convergence";
-  }
-  return "?";
-}
-
 void CanonicalOrder(Plant* plant, Plant* std_errors) {
   const size_t n = plant->modes.size();
   std::vector<size_t> ip(n), iz(n);
@@ -475,14 +442,6 @@ FitResult FitModel(const ident::FrequencyResponse& frf, const FitOptions& o) {
   ResponseWarnings(frf, sub, &res);
   if (res.status == FitStatus::kConverged) Verdict(chosen, sub, o, &res);
   return res;
-}
-
-std::string FitResult::BriefReport() const {
-  std::ostringstream os;
-  os << "fit " << ToString(status) << ": chi2/dof " << chi2_per_dof << ", fit " << nrmse_fit_percent
-     << "% (NRMSE of H; unweighted, so a large misfit where |H| is small hardly shows), worst misfit at "
-     << worst_misfit_hz << " Hz, " << starts_tried << " starts, " << iterations << " iterations";
-  return os.str();
 }
 
 }  // namespace zwidth::fit

@@ -13,11 +13,11 @@
 #include <utility>
 
 #include <fcntl.h>
-#include <hdf5.h>
 #include <sys/stat.h>
 #include <sys/syscall.h>
 #include <unistd.h>
 
+#include "io/hdf5_api.h"
 #include "model/error.h"
 
 namespace zwidth::io {
@@ -292,12 +292,12 @@ void WriteAtomically(const std::string& path, const std::function<void(const std
   const std::string dest = Destination(path);
   CheckNotAnInput(path, dest, {});
   TempGuard tmp(CreateTemp(dest));
-  const ssize_t h5_open_before = H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_ALL);
+  const long h5_open_before = internal::Hdf5OpenObjects();
   write(tmp.path);
   // An HDF5 writer whose file or objects failed to close (a full disk at the
   // final flush: the C++ API swallows that error in its destructors) leaves
   // them open. Such a file is corrupt: it is never renamed into place.
-  if (H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_ALL) > h5_open_before) {
+  if (internal::Hdf5OpenObjects() > h5_open_before) {
     static std::once_flag once;
     std::call_once(once, [] { std::atexit(ExitBeforeHdf5Cleanup); });
     throw InputError("failed writing '" + path + "': the HDF5 library could not close the file "

@@ -4,9 +4,8 @@
 #include <cstdio>
 #include <sstream>
 
-#include <H5Cpp.h>
-
 #include "io/atomic_file.h"
+#include "io/hdf5_api.h"
 #include "model/error.h"
 #include "model/state_space.h"
 
@@ -172,62 +171,6 @@ nlohmann::json StateSpaceJson(const ModelFile& mf, double T) {
   return j;
 }
 
-void WriteH5(const std::string& tmp, const ModelFile& mf, double T) {
-  H5::Exception::dontPrint();
-  try {
-    H5::H5File f(tmp, H5F_ACC_TRUNC);
-    auto units = [](H5::H5Object& o, const std::string& u) {
-      H5::StrType st(H5::PredType::C_S1, u.size());
-      o.createAttribute("units", st, H5::DataSpace(H5S_SCALAR)).write(st, u);
-    };
-    auto vec = [&](H5::Group& g, const std::string& name, const std::vector<double>& v, const std::string& u) {
-      const hsize_t n = v.size();
-      H5::DataSpace sp(1, &n);
-      H5::DataSet ds = g.createDataSet(name, H5::PredType::IEEE_F64LE, sp);
-      if (n) ds.write(v.data(), H5::PredType::NATIVE_DOUBLE);
-      units(ds, u);
-    };
-    auto int_attr = [](H5::H5Object& o, const char* name, int v) {
-      o.createAttribute(name, H5::PredType::STD_I32LE, H5::DataSpace(H5S_SCALAR)).write(H5::PredType::NATIVE_INT, &v);
-    };
-    auto mat = [&](H5::Group& g, const std::string& name, const Eigen::MatrixXd& M) {
-      const hsize_t dims[2] = {static_cast<hsize_t>(M.rows()), static_cast<hsize_t>(M.cols())};
-      H5::DataSpace sp(2, dims);
-      H5::DataSet ds = g.createDataSet(name, H5::PredType::IEEE_F64LE, sp);
-      const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> R = M;
-      ds.write(R.data(), H5::PredType::NATIVE_DOUBLE);
-    };
-    auto params = [&](const std::string& gname, const Plant& p) {
-      H5::Group g = f.createGroup(gname);
-      vec(g, "m", {p.m}, "kg m^2");
-      vec(g, "b", {p.b}, "N m s/rad");
-      std::vector<double> w, c, v, d;
-      for (const Mode& md : p.modes) { w.push_back(md.omega); c.push_back(md.c); v.push_back(md.v); d.push_back(md.d); }
-      vec(g, "omega", w, "rad/s"); vec(g, "c", c, "rad/s"); vec(g, "v", v, "rad/s"); vec(g, "d", d, "rad/s");
-    };
-    params("/parameters", mf.plant);
-    if (mf.std_errors) params("/std", *mf.std_errors);
-    const StateSpace c = ContinuousStateSpace(mf.plant);
-    H5::Group gc = f.createGroup("/continuous");
-    mat(gc, "A", c.A); mat(gc, "B", c.B); mat(gc, "C", c.C); mat(gc, "D", Eigen::MatrixXd::Constant(1, 1, c.D));
-    H5::Group root = f.openGroup("/");
-    auto attr = [&](H5::Group& g, const char* name, double v) {
-      H5::Attribute a = g.createAttribute(name, H5::PredType::IEEE_F64LE, H5::DataSpace(H5S_SCALAR));
-      a.write(H5::PredType::NATIVE_DOUBLE, &v);
-    };
-    int_attr(root, "delay_samples", mf.plant.delay_samples);
-    if (T > 0) {
-      const StateSpace d = WithDelayStates(DiscretizeZoh(mf.plant, T));
-      H5::Group gd = f.createGroup("/discrete");
-      mat(gd, "A", d.A); mat(gd, "B", d.B); mat(gd, "C", d.C); mat(gd, "D", Eigen::MatrixXd::Constant(1, 1, d.D));
-      attr(gd, "period_s", T);
-      int_attr(gd, "delay_samples_realised_as_states", mf.plant.delay_samples);
-    }
-  } catch (const H5::Exception& e) {
-    throw InputError("cannot write HDF5 '" + tmp + "': " + e.getDetailMsg());
-  }
-}
-
 }  // namespace
 
 std::string ToString(ExportFormat f) {
@@ -256,7 +199,7 @@ void ExportModel(const ModelFile& mf, ExportFormat fmt, double T, const std::str
     case ExportFormat::kMatlab: WriteTextAtomically(path, Matlab(mf, T)); break;
     case ExportFormat::kPython: WriteTextAtomically(path, Python(mf, T)); break;
     case ExportFormat::kStateSpace: WriteTextAtomically(path, StateSpaceJson(mf, T).dump(2) + "\n"); break;
-    case ExportFormat::kHdf5: WriteAtomically(path, [&](const std::string& tmp) { WriteH5(tmp, mf, T); }); break;
+    case ExportFormat::kHdf5: WriteAtomically(path, [&](const std::string& tmp) { internal::Hdf5().write_model_hdf5(tmp, mf, T); }); break;
   }
 }
 

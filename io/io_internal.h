@@ -17,6 +17,7 @@ void SplitFields(std::string_view line, char sep, std::vector<std::string_view>*
 
 // A scalar IEEE double attribute `name` = v on obj (a file's group or a
 // dataset), closed before return so that a write error throws here.
+// Defined in io/log_hdf5.cc (with the HDF5 code, see io/hdf5_api.h).
 void WriteDoubleAttr(H5::H5Object& obj, const std::string& name, double v);
 
 // Text output of numbers without printf: appends v to *out exactly as

@@ -1,5 +1,3 @@
-#include <H5Cpp.h>
-
 #include "io/io_internal.h"
 
 namespace zwidth::io::internal {
@@ -13,12 +11,6 @@ void SplitFields(std::string_view line, char sep, std::vector<std::string_view>*
     if (p == std::string_view::npos) return;
     start = p + 1;
   }
-}
-
-void WriteDoubleAttr(H5::H5Object& obj, const std::string& name, double v) {
-  H5::Attribute a = obj.createAttribute(name, H5::PredType::IEEE_F64LE, H5::DataSpace(H5S_SCALAR));
-  a.write(H5::PredType::NATIVE_DOUBLE, &v);
-  a.close();
 }
 
 }  // namespace zwidth::io::internal

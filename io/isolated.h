@@ -27,6 +27,21 @@ using FrameSender = std::function<void(const void* data, size_t size)>;
 // In sanitizer builds a child that exits with a code other than zwidth's own
 // (a sanitizer report: ASan/UBSan exit with 1 by default, see ASAN_OPTIONS
 // exitcode), or dies of SIGABRT (abort_on_error=1), aborts this process, so that tests and fuzzers count it as a crash.
+//
+// Its cost, measured (bench/io_benchmark.cc, the shipped 30 s log, on a
+// 2-core VM shared with other builds): fork + pipe + wait alone 1.3-2.5 ms
+// wall, 0.6-0.8 ms CPU (BM_IsolationOnly); the read 0.9-1.6 ms in process
+// against 7.8-15 ms in the child (BM_ReadHdf5Log/0 and /1), most of it page
+// faults of the fresh child (~700 a read: libhdf5 callocs its metadata cache
+// at every file open, and every page first written after fork() faults).
+// Kept: a crash, an endless loop or a huge allocation in libhdf5 or libmatio
+// on a hostile file (our fuzzing found a crash) must end as an InputError,
+// and no in-process guard (signal handlers, seccomp) survives a corrupted
+// heap. A few ms per file is small beside loading libhdf5 itself (~12 ms,
+// the plugin zwidth-hdf5.so). The plugin is loaded by the parent before the
+// fork (io/log.cc), once per process: loading it in each child instead would
+// keep its ~40 libraries out of the parent but pay them for every file, and
+// the parent needs them anyway to write HDF5.
 void RunIsolated(const std::string& path, const std::function<void(const FrameSender&)>& produce,
                  const std::function<void(std::string_view frame)>& consume);
 

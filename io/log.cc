@@ -14,11 +14,8 @@
 
 #include <sys/stat.h>
 
-#include <H5Cpp.h>
-#include <matio.h>
-
 #include "io/atomic_file.h"
-#include "io/h5_safety.h"
+#include "io/hdf5_api.h"
 #include "io/io_internal.h"
 #include "io/log_internal.h"
 #include "io/isolated.h"
@@ -71,6 +68,19 @@ LogInfo StreamIsolatedLog(const std::string& path, const std::string& what, cons
         }
       });
   if (!ended) throw InputError(path + ": could not read the " + what + " (corrupt or truncated?)");
+  return info;
+}
+
+// The binary formats are parsed in a child process (io/isolated.h) that
+// streams the chunks through a pipe: a crash in libhdf5 or libmatio becomes an
+// InputError here, and the data is still read once, in bounded memory.
+LogInfo StreamHdf5(const std::string& path, const LogSelect& sel, const LogSink& sink) {
+  return StreamIsolatedLog(path, "HDF5 file", sel, sink, Hdf5().stream_hdf5_log);
+}
+
+LogInfo StreamMat(const std::string& path, const LogSelect& sel, const LogSink& sink) {
+  LogInfo info = StreamIsolatedLog(path, ".mat file", sel, sink, Hdf5().stream_mat_log);
+  info.layout = "MATLAB .mat (libmatio)";
   return info;
 }
 
@@ -172,7 +182,7 @@ void WriteLog(const std::string& path, double rate, const std::vector<double>& u
   // By extension: the file is about to be (re)written.
   const bool h5 = HasExtension(path, {".h5", ".hdf5", ".he5"});
   WriteAtomically(path, [&](const std::string& tmp) {
-    if (h5) WriteHdf5Log(tmp, rate, u, y);
+    if (h5) Hdf5().write_hdf5_log(tmp, rate, u, y);
     else WriteCsvLog(tmp, rate, u, y);
   });
 }

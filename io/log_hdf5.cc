@@ -15,13 +15,11 @@
 #include <sys/stat.h>
 
 #include <H5Cpp.h>
-#include <matio.h>
 
 #include "io/atomic_file.h"
 #include "io/h5_safety.h"
 #include "io/io_internal.h"
 #include "io/log_internal.h"
-#include "io/isolated.h"
 #include "model/error.h"
 
 
@@ -217,6 +215,109 @@ double ReadH5ScalarAttribute(hid_t object, const std::string& name, const std::s
   return v;
 }
 
+namespace {
+
+// Samples per read and per frame to the parent: 64 kB a buffer, so that the
+// buffers come from the heap and are reused. In the forked reader every page
+// first touched costs a fault (a copy-on-write one in the inherited heap):
+// with 65536-sample buffers (512 kB each, zero-filled) faults were most of
+// the child's time, 8-10 ms for the 30 s log against 1.4 ms in process.
+constexpr size_t kHdf5Chunk = 8192;
+
+// The datasets of a log, opened and checked (lengths agree, data written),
+// and the root attribute sample_rate_hz (0 when absent).
+struct Hdf5LogSets {
+  H5::DataSet u, y, t;
+  bool have_time = false;
+  size_t n = 0;
+  double attr_rate_hz = 0.0;
+};
+
+Hdf5LogSets OpenLogDatasets(H5::H5File& file, const std::string& path, const LogSelect& sel) {
+  Hdf5LogSets s;
+  s.u = OpenDataset(file, path, sel.input_dataset, "LogSelect::input_dataset");
+  s.y = OpenDataset(file, path, sel.output_dataset, "LogSelect::output_dataset");
+  s.n = Length1D(s.u, H5Where(path, sel.input_dataset));
+  if (Length1D(s.y, H5Where(path, sel.output_dataset)) != s.n) {
+    throw InputError(path + ": '" + sel.input_dataset + "' and '" + sel.output_dataset + "' have different lengths");
+  }
+  if (s.n == 0) throw InputError(path + ": dataset '" + sel.input_dataset + "' is empty");
+  CheckWritten(s.u, H5Where(path, sel.input_dataset));
+  CheckWritten(s.y, H5Where(path, sel.output_dataset));
+  if (file.attrExists("sample_rate_hz")) {
+    s.attr_rate_hz = ReadH5ScalarAttribute(file.getId(), "sample_rate_hz", path);
+    if (!(s.attr_rate_hz > 0.0) || !std::isfinite(s.attr_rate_hz)) {
+      throw InputError(path + ": attribute sample_rate_hz = " + std::to_string(s.attr_rate_hz) +
+                       " must be finite and > 0");
+    }
+  }
+  s.have_time = H5LinkExists(file.getId(), path, sel.time_dataset);
+  if (s.have_time) {
+    s.t = OpenDataset(file, path, sel.time_dataset, "LogSelect::time_dataset");
+    if (Length1D(s.t, H5Where(path, sel.time_dataset)) != s.n) {
+      throw InputError(path + ": '" + sel.time_dataset + "' has a different length from the signals");
+    }
+    CheckWritten(s.t, H5Where(path, sel.time_dataset));
+  } else if (s.attr_rate_hz <= 0.0 && sel.sample_rate_hz <= 0.0) {
+    throw InputError(path + ": neither a '" + sel.time_dataset +
+                     "' dataset nor a sample_rate_hz attribute; pass LogSelect::sample_rate_hz");
+  }
+  return s;
+}
+
+// Reads the samples in chunks of kHdf5Chunk, checks them (finite, time increasing
+// and uniform, input not constant) and hands each chunk to sink. Returns the
+// rate of the time stamps (0 without them). The text of an error is built
+// only when there is one (it used to be built for every sample: 5 strings a
+// sample, ~60 % of the read's time).
+double StreamLogChunks(const Hdf5LogSets& s, const std::string& path, const LogSelect& sel, const LogSink& sink) {
+  TimeChecker times(path, sel.max_interval_deviation, sel.sample_rate_hz <= 0.0);  // --rate: only increasing
+  ConstantCheck constant;
+  const size_t chunk = std::min(kHdf5Chunk, s.n);
+  std::vector<double> u(chunk), y(chunk), t(s.have_time ? chunk : 0);
+  for (size_t off = 0; off < s.n; off += chunk) {
+    const size_t cnt = std::min(chunk, s.n - off);
+    ReadSlab(s.u, off, cnt, u.data(), H5Where(path, sel.input_dataset));
+    ReadSlab(s.y, off, cnt, y.data(), H5Where(path, sel.output_dataset));
+    if (s.have_time) ReadSlab(s.t, off, cnt, t.data(), H5Where(path, sel.time_dataset));
+    for (size_t i = 0; i < cnt; ++i) {
+      const auto where = [&] { return "sample " + std::to_string(off + i); };
+      if (!std::isfinite(u[i]) || !std::isfinite(y[i]) || (s.have_time && !std::isfinite(t[i]))) {
+        CheckFinite(u[i], H5Where(path, sel.input_dataset), where());
+        CheckFinite(y[i], H5Where(path, sel.output_dataset), where());
+        if (s.have_time) CheckFinite(t[i], H5Where(path, sel.time_dataset), where());
+      }
+      if (s.have_time) times.AddLazy(t[i], [&] { return where() + " of " + sel.time_dataset; });
+    }
+    constant.Add(u.data(), cnt);
+    sink(u.data(), y.data(), cnt);
+  }
+  if (!constant.varies) {
+    throw InputError(path + ": input dataset '" + sel.input_dataset +
+                     "' is constant: the log has no excitation to identify from");
+  }
+  return s.have_time ? times.Rate() : 0.0;
+}
+
+// The rate: LogSelect's if given, else the attribute's (which must agree with
+// the time stamps within 1 %), else the time stamps'.
+double LogRate(const std::string& path, const LogSelect& sel, double attr_rate_hz, double time_rate_hz) {
+  double rate = time_rate_hz;
+  if (sel.sample_rate_hz > 0.0) {
+    rate = sel.sample_rate_hz;
+  } else if (attr_rate_hz > 0.0) {
+    if (time_rate_hz > 0.0 && std::abs(time_rate_hz - attr_rate_hz) > 0.01 * attr_rate_hz) {
+      throw InputError(path + ": attribute sample_rate_hz = " + std::to_string(attr_rate_hz) +
+                       " disagrees with the time stamps (" + std::to_string(time_rate_hz) + " Hz)");
+    }
+    rate = attr_rate_hz;
+  }
+  if (!(rate > 0.0)) throw InputError(path + ": cannot tell the sample rate; pass LogSelect::sample_rate_hz");
+  return rate;
+}
+
+}  // namespace
+
 LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& sel, const LogSink& sink) {
   H5::Exception::dontPrint();
   std::unique_ptr<H5::H5File> file;
@@ -227,75 +328,12 @@ LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& sel, const
     throw InputError(path + ": cannot open as HDF5 (missing, truncated or corrupt file)");
   }
   try {
-    H5::DataSet du = OpenDataset(*file, path, sel.input_dataset, "LogSelect::input_dataset");
-    H5::DataSet dy = OpenDataset(*file, path, sel.output_dataset, "LogSelect::output_dataset");
-    const size_t n = Length1D(du, H5Where(path, sel.input_dataset));
-    if (Length1D(dy, H5Where(path, sel.output_dataset)) != n) {
-      throw InputError(path + ": '" + sel.input_dataset + "' and '" + sel.output_dataset +
-                       "' have different lengths");
-    }
-    if (n == 0) throw InputError(path + ": dataset '" + sel.input_dataset + "' is empty");
-    CheckWritten(du, H5Where(path, sel.input_dataset));
-    CheckWritten(dy, H5Where(path, sel.output_dataset));
-    double attr_rate = 0.0;
-    if (file->attrExists("sample_rate_hz")) {
-      attr_rate = ReadH5ScalarAttribute(file->getId(), "sample_rate_hz", path);
-      if (!(attr_rate > 0.0) || !std::isfinite(attr_rate)) {
-        throw InputError(path + ": attribute sample_rate_hz = " + std::to_string(attr_rate) +
-                         " must be finite and > 0");
-      }
-    }
-    const bool have_time = H5LinkExists(file->getId(), path, sel.time_dataset);
-    H5::DataSet dt;
-    if (have_time) {
-      dt = OpenDataset(*file, path, sel.time_dataset, "LogSelect::time_dataset");
-      if (Length1D(dt, H5Where(path, sel.time_dataset)) != n) {
-        throw InputError(path + ": '" + sel.time_dataset + "' has a different length from the signals");
-      }
-      CheckWritten(dt, H5Where(path, sel.time_dataset));
-    } else if (attr_rate <= 0.0 && sel.sample_rate_hz <= 0.0) {
-      throw InputError(path + ": neither a '" + sel.time_dataset +
-                       "' dataset nor a sample_rate_hz attribute; pass LogSelect::sample_rate_hz");
-    }
-    TimeChecker times(path, sel.max_interval_deviation, sel.sample_rate_hz <= 0.0);  // --rate: only increasing
-    ConstantCheck constant;
-    std::vector<double> u(kChunk), y(kChunk), t(kChunk);
-    for (size_t off = 0; off < n; off += kChunk) {
-      const size_t cnt = std::min(kChunk, n - off);
-      ReadSlab(du, off, cnt, u.data(), H5Where(path, sel.input_dataset));
-      ReadSlab(dy, off, cnt, y.data(), H5Where(path, sel.output_dataset));
-      if (have_time) ReadSlab(dt, off, cnt, t.data(), H5Where(path, sel.time_dataset));
-      for (size_t i = 0; i < cnt; ++i) {
-        const std::string where = "sample " + std::to_string(off + i);
-        CheckFinite(u[i], H5Where(path, sel.input_dataset), where);
-        CheckFinite(y[i], H5Where(path, sel.output_dataset), where);
-        if (have_time) {
-          CheckFinite(t[i], H5Where(path, sel.time_dataset), where);
-          times.Add(t[i], where + " of " + sel.time_dataset);
-        }
-      }
-      constant.Add(u.data(), cnt);
-      sink(u.data(), y.data(), cnt);
-    }
-    if (!constant.varies) {
-      throw InputError(path + ": input dataset '" + sel.input_dataset +
-                       "' is constant: the log has no excitation to identify from");
-    }
+    const Hdf5LogSets sets = OpenLogDatasets(*file, path, sel);
+    const double time_rate_hz = StreamLogChunks(sets, path, sel, sink);
     LogInfo info;
     info.source = path;
-    info.num_samples = n;
-    const double time_rate = have_time ? times.Rate() : 0.0;
-    if (sel.sample_rate_hz > 0.0) info.sample_rate_hz = sel.sample_rate_hz;
-    else if (attr_rate > 0.0) {
-      if (time_rate > 0.0 && std::abs(time_rate - attr_rate) > 0.01 * attr_rate) {
-        throw InputError(path + ": attribute sample_rate_hz = " + std::to_string(attr_rate) +
-                         " disagrees with the time stamps (" + std::to_string(time_rate) + " Hz)");
-      }
-      info.sample_rate_hz = attr_rate;
-    } else {
-      info.sample_rate_hz = time_rate;
-    }
-    if (!(info.sample_rate_hz > 0.0)) throw InputError(path + ": cannot tell the sample rate; pass LogSelect::sample_rate_hz");
+    info.num_samples = sets.n;
+    info.sample_rate_hz = LogRate(path, sel, sets.attr_rate_hz, time_rate_hz);
     return info;
   } catch (const H5::Exception& e) {
     throw InputError(path + ": HDF5 error (" + e.getDetailMsg() + "): truncated or corrupt file?");
@@ -307,14 +345,6 @@ LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& sel, const
 namespace internal {
 
 
-// The file is read in a child process (io/isolated.h) that streams the chunks
-// through a pipe: a crash in libhdf5 becomes an InputError here, and the data
-// is still read once, in bounded memory. Frames: 'c' then u[n], y[n] (a chunk);
-// 'i' then the sample count (uint64) and the rate (the end).
-LogInfo StreamHdf5(const std::string& path, const LogSelect& sel, const LogSink& sink) {
-  return StreamIsolatedLog(path, "HDF5 file", sel, sink, internal::StreamHdf5InProcess);
-}
-
 namespace {
 
 void WriteStringAttr(H5::H5Object& obj, const std::string& name, const std::string& value) {
@@ -325,6 +355,12 @@ void WriteStringAttr(H5::H5Object& obj, const std::string& name, const std::stri
 }
 
 }  // namespace
+
+void WriteDoubleAttr(H5::H5Object& obj, const std::string& name, double v) {
+  H5::Attribute a = obj.createAttribute(name, H5::PredType::IEEE_F64LE, H5::DataSpace(H5S_SCALAR));
+  a.write(H5::PredType::NATIVE_DOUBLE, &v);
+  a.close();
+}
 
 void WriteHdf5Log(const std::string& tmp, double rate, const std::vector<double>& u,
                   const std::vector<double>& y) {

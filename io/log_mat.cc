@@ -14,14 +14,12 @@
 
 #include <sys/stat.h>
 
-#include <H5Cpp.h>
 #include <matio.h>
 
 #include "io/atomic_file.h"
-#include "io/h5_safety.h"
+#include "io/hdf5_api.h"
 #include "io/io_internal.h"
 #include "io/log_internal.h"
-#include "io/isolated.h"
 #include "model/error.h"
 
 
@@ -110,6 +108,8 @@ bool ReadMatVector(mat_t* mat, const std::string& path, const std::string& spec,
   return true;
 }
 
+}  // namespace
+
 LogInfo StreamMatInProcess(const std::string& path, const LogSelect& sel, const LogSink& sink) {
   Mat_LogInitFunc("zwidth", [](int, char*) {});  // no stderr chatter from libmatio
   std::unique_ptr<mat_t, MatCloser> mat(Mat_Open(path.c_str(), MAT_ACC_RDONLY));
@@ -161,14 +161,6 @@ LogInfo StreamMatInProcess(const std::string& path, const LogSelect& sel, const 
   if (!(info.sample_rate_hz > 0.0) || !std::isfinite(info.sample_rate_hz)) {
     throw InputError(path + ": cannot tell the sample rate (fewer than 2 samples?); pass LogSelect::sample_rate_hz");
   }
-  return info;
-}
-
-}  // namespace
-
-LogInfo StreamMat(const std::string& path, const LogSelect& sel, const LogSink& sink) {
-  LogInfo info = StreamIsolatedLog(path, ".mat file", sel, sink, StreamMatInProcess);
-  info.layout = "MATLAB .mat (libmatio)";
   return info;
 }
 

@@ -32,9 +32,14 @@ for f in bin/zwidth include/zwidth/model/plant.h include/zwidth/stability/zwidth
   [ -e "$P/$f" ] || fail "$f is not installed"
 done
 [ -n "$(find "$P/lib" -name libzwidth_stability.a)" ] || fail "libzwidth_stability.a is not installed"
+# The executable's plugins (apps/plugins.cc): <libdir>/zwidth/, found from bin/zwidth's real path.
+for f in zwidth-hdf5.so zwidth-fit.so; do
+  [ -n "$(find "$P/lib" -path "*/zwidth/$f")" ] || fail "the plugin $f is not installed"
+done
 # Internal headers stay out, and every installed header compiles with only the
 # installed ones (no public header reaches an internal or missing one).
 for f in fit/fit_internal.h fit/bin_correlated_covariance.h io/io_internal.h io/log_internal.h io/isolated.h \
+         io/hdf5_api.h fit/fit_api.h \
          io/h5_safety.h; do
   [ ! -e "$P/include/zwidth/$f" ] || fail "the internal header $f is installed"
 done
@@ -63,7 +68,14 @@ cd "$W"
 "$P/bin/zwidth" --version
 "$P/bin/zwidth" --version | grep -q "^zwidth [0-9]" || { echo "FAIL: --version"; exit 1; }
 "$P/bin/zwidth" simulate --model "$P/share/zwidth/phantom/table1.json" --seconds 20 -o log.h5 2>/dev/null
-"$P/bin/zwidth" fit log.h5 -o model.json >/dev/null
+# fit on an .h5 log loads both plugins, from the prefix (not from the build tree).
+LD_DEBUG=files "$P/bin/zwidth" fit log.h5 -o model.json 2>ld.txt >/dev/null || { grep -v '^ *[0-9]*:' ld.txt; exit 1; }
+for f in zwidth-hdf5.so zwidth-fit.so; do
+  grep -q "file=$P/.*/zwidth/$f .*generating link map" ld.txt || { echo "FAIL: $f not loaded from $P"; exit 1; }
+done
+if LD_DEBUG=files "$P/bin/zwidth" --help 2>&1 >/dev/null | grep -qE 'zwidth-(hdf5|fit)\.so|libhdf5|libcholmod'; then
+  echo "FAIL: --help loads a plugin"; exit 1
+fi
 "$P/bin/zwidth" boundary model.json --delays 2 --b-step 0.01 -o b.csv --summary s.json >/dev/null
 "$P/bin/zwidth" compare model.json --reference table1 >/dev/null || { echo "FAIL: compare with the built-in Table I"; exit 1; }
 echo "CLI: simulate -> fit -> boundary ran from the prefix"
