@@ -8,6 +8,7 @@
 
 #include "analysis/laps.h"
 #include "model/error.h"
+#include "model/parallel.h"
 
 namespace zwidth::analysis {
 namespace {
@@ -37,11 +38,10 @@ BodeData MakeBode(const ident::FrequencyResponse& frf, const stability::SampledP
 // K_CR curves on the run's B grid, one per ZWidth.
 std::vector<std::vector<stability::CriticalPoint>> Curves(const std::vector<stability::ZWidth>& zs,
                                                           const std::vector<double>& b_grid) {
-  std::vector<std::vector<stability::CriticalPoint>> c;
-  for (const stability::ZWidth& z : zs) {
-    c.emplace_back();
-    for (double B : b_grid) c.back().push_back(z.At(B));
-  }
+  std::vector<std::vector<stability::CriticalPoint>> c(zs.size());
+  ParallelFor(zs.size(), [&](size_t i) {
+    for (double B : b_grid) c[i].push_back(zs[i].At(B));
+  });
   return c;
 }
 
@@ -54,8 +54,8 @@ std::vector<LoopFigureDelay> LoopFigure(const RunAnalysis& a) {
   stability::LoopOptions lf, lr;
   lf.hand = lr.hand = loop.hand;
   stability::SetLowPassFilter(a.options.report_filter_hz, T, &lf);
-  std::vector<LoopFigureDelay> out;
-  for (size_t i = 0; i < st.delays.size(); ++i) {
+  std::vector<LoopFigureDelay> out(st.delays.size());
+  ParallelFor(st.delays.size(), [&](size_t i) {
     const stability::ZWidth zf(st.sampled, st.delays[i], lf), zr(st.sampled, st.delays[i], lr);
     const stability::Passivity pf(a.input.model.plant.b, T, zf.total_delay(), lf);
     const stability::Passivity pr(a.input.model.plant.b, T, zr.total_delay(), lr);
@@ -71,8 +71,8 @@ std::vector<LoopFigureDelay> LoopFigure(const RunAnalysis& a) {
       f.K_passive_raw.push_back(pr.At(B).K_hi);
       f.K_passive_filtered.push_back(pf.At(B).K_hi);
     }
-    out.push_back(std::move(f));
-  }
+    out[i] = std::move(f);
+  });
   return out;
 }
 
@@ -134,11 +134,9 @@ RunAnalysis Analyse(RunInput input, const RunOptions& o) {
   if (a.input.reference) {
     const io::ModelFile& ref = *a.input.reference;
     const stability::SampledPlant ref_sampled(ref.plant, T);
-    std::vector<stability::DelaySummary> ref_sums;
-    for (int d : o.delays) {
-      ref_zs.emplace_back(ref_sampled, d);
-      ref_sums.push_back(ref_zs.back().Summarize());
-    }
+    for (int d : o.delays) ref_zs.emplace_back(ref_sampled, d);
+    std::vector<stability::DelaySummary> ref_sums(o.delays.size());
+    ParallelFor(o.delays.size(), [&](size_t i) { ref_sums[i] = ref_zs[i].Summarize(); });
     const PlantStability& st = a.stability;
     const bool plain = !o.loop.HasFilter() && o.loop.hand.IsNone();
     const DelayStability model_st =
