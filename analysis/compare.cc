@@ -14,13 +14,13 @@ namespace {
 
 struct Row { std::string name, unit; double value, std; };
 
-std::vector<Row> Rows(const Plant& p, const Plant* s, bool linear = false) {
+std::vector<Row> Rows(const model::Plant& p, const model::Plant* s, bool linear = false) {
   const double inf = std::numeric_limits<double>::infinity();
   std::vector<Row> r = {{"m", linear ? "kg" : "kg m^2", p.m, s ? s->m : inf},
                         {"b", linear ? "N s/m" : "N m s/rad", p.b, s ? s->b : inf}};
   for (size_t i = 0; i < p.modes.size(); ++i) {
     const std::string k = std::to_string(i + 1);
-    const Mode* e = s ? &s->modes[i] : nullptr;
+    const model::Mode* e = s ? &s->modes[i] : nullptr;
     r.push_back({"omega" + k, "rad/s", p.modes[i].omega, e ? e->omega : inf});
     r.push_back({"c" + k, "rad/s", p.modes[i].c, e ? e->c : inf});
     r.push_back({"v" + k, "rad/s", p.modes[i].v, e ? e->v : inf});

@@ -85,7 +85,7 @@ FigureData MakeFigures(const RunAnalysis& a, const std::vector<stability::ZWidth
   f.bode = plain_hand ? MakeBode(a.input.response.frf, a.stability.sampled, T)
                       : MakeBode(a.input.response.frf, stability::SampledPlant(a.input.model.plant, T), T);
   if (!reference.empty()) f.kcr_reference = Curves(reference, a.stability.b_grid);
-  Plant rigid = a.input.model.plant;
+  model::Plant rigid = a.input.model.plant;
   rigid.modes.clear();
   const stability::SampledPlant rigid_sampled(rigid, T);
   std::vector<stability::ZWidth> rigid_zs;

@@ -12,7 +12,7 @@ namespace zwidth::app {
 void AddSimulateCommand(CLI::App& app) {
   struct Flags {
     std::string model, out;
-    SimulateOptions o;
+    model::SimulateOptions o;
   };
   auto f = std::make_shared<Flags>();
   CLI::App* cmd = app.add_subcommand("simulate", "simulate a white-noise torque log from a model");
@@ -40,7 +40,7 @@ void AddSimulateCommand(CLI::App& app) {
                        std::to_string(io::kMaxDelaySamples));
     }
     const io::ModelFile mf = io::ReadModelJson(f->model);
-    const SimulatedLog log = SimulateLog(mf.plant, f->o);
+    const model::SimulatedLog log = model::SimulateLog(mf.plant, f->o);
     io::WriteLog(f->out, log.sample_rate_hz, log.torque, log.position);
     std::fprintf(stderr, "wrote %zu samples at %g Hz to %s\n", log.torque.size(),
                  log.sample_rate_hz, f->out.c_str());

@@ -22,15 +22,15 @@
 namespace zwidth {
 namespace {
 
-const SimulatedLog& Log() {
-  static const SimulatedLog log = [] { SimulateOptions o; o.seed = 1; return SimulateLog(PhantomTable1(), o); }();
+const model::SimulatedLog& Log() {
+  static const model::SimulatedLog log = [] { model::SimulateOptions o; o.seed = 1; return model::SimulateLog(model::PhantomTable1(), o); }();
   return log;
 }
 
 // 95th-percentile relative error against the exact sampled response over bins
 // with coherence > 0.99.
 double ResponseError(const ident::FrequencyResponse& r) {
-  const DiscreteResponse g(DiscretizeZoh(PhantomTable1(), 1e-3));
+  const model::DiscreteResponse g(model::DiscretizeZoh(model::PhantomTable1(), 1e-3));
   std::vector<double> e;
   for (size_t k = 0; k < r.f_hz.size(); ++k) {
     if (r.coherence[k] < 0.99) continue;
@@ -58,10 +58,10 @@ BENCHMARK(BM_Estimate)->ArgsProduct({{1024, 2048, 4096}, {0, 50, 75}})->Unit(ben
 // An hour at 1 kHz (3.6 M samples), streamed through the estimator in 64 k
 // chunks as the log readers deliver it.
 void BM_EstimateHour(benchmark::State& state) {
-  static const SimulatedLog hour = [] {
-    SimulateOptions o;
+  static const model::SimulatedLog hour = [] {
+    model::SimulateOptions o;
     o.seconds = 3600;
-    return SimulateLog(PhantomTable1(), o);
+    return model::SimulateLog(model::PhantomTable1(), o);
   }();
   ident::FrequencyResponse r;
   for (auto _ : state) {
@@ -76,7 +76,7 @@ void BM_EstimateHour(benchmark::State& state) {
 }
 BENCHMARK(BM_EstimateHour)->Unit(benchmark::kMillisecond);
 
-double MaxParamError(const Plant& a, const Plant& b) {
+double MaxParamError(const model::Plant& a, const model::Plant& b) {
   double e = std::max(std::abs(a.m / b.m - 1), std::abs(a.b / b.b - 1));
   for (size_t i = 0; i < a.modes.size(); ++i) {
     e = std::max({e, std::abs(a.modes[i].omega / b.modes[i].omega - 1), std::abs(a.modes[i].v / b.modes[i].v - 1)});
@@ -92,7 +92,7 @@ void BM_Fit(benchmark::State& state) {
   o.function_tolerance = std::pow(10.0, -static_cast<double>(state.range(1)));
   fit::FitResult res;
   for (auto _ : state) res = fit::FitModel(r, o);
-  state.counters["max_rel_err_m_b_freqs"] = MaxParamError(res.plant, PhantomTable1());
+  state.counters["max_rel_err_m_b_freqs"] = MaxParamError(res.plant, model::PhantomTable1());
   state.counters["chi2_per_dof"] = res.chi2_per_dof;
   state.counters["converged"] = res.status == fit::FitStatus::kConverged;
 }
@@ -113,7 +113,7 @@ void BM_FitAutoModes(benchmark::State& state) {
   state.counters["chosen_modes"] = static_cast<double>(res.plant.modes.size());
   state.counters["chosen_delay"] = res.plant.delay_samples;
   state.counters["max_rel_err_m_b_freqs"] =
-      res.plant.modes.size() == 2 ? MaxParamError(res.plant, PhantomTable1()) : NAN;
+      res.plant.modes.size() == 2 ? MaxParamError(res.plant, model::PhantomTable1()) : NAN;
   state.counters["good"] = res.quality == fit::FitQuality::kGood;
 }
 BENCHMARK(BM_FitAutoModes)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
@@ -126,13 +126,13 @@ void BM_BoundarySweep(benchmark::State& state) {
   o.verify = state.range(1) != 0;
   stability::BoundaryOptions ref_o;
   ref_o.min_grid_points = 32768;
-  const stability::ZWidth ref(PhantomTable1(), 1e-3, 2, ref_o);
+  const stability::ZWidth ref(model::PhantomTable1(), 1e-3, 2, ref_o);
   double err = 0;
   for (auto _ : state) {
-    const stability::ZWidth z(PhantomTable1(), 1e-3, 2, o);
+    const stability::ZWidth z(model::PhantomTable1(), 1e-3, 2, o);
     for (int i = 0; i < 100; ++i) benchmark::DoNotOptimize(z.At(0.001 * i).K_cr);
   }
-  const stability::ZWidth z(PhantomTable1(), 1e-3, 2, o);
+  const stability::ZWidth z(model::PhantomTable1(), 1e-3, 2, o);
   for (int i = 0; i < 100; ++i) {
     const double a = z.At(0.001 * i).K_cr, b = ref.At(0.001 * i).K_cr;
     if (b > 0) err = std::max(err, std::abs(a / b - 1));
@@ -148,7 +148,7 @@ BENCHMARK(BM_BoundarySweep)->ArgsProduct({{256, 2048}, {0, 1}})->Unit(benchmark:
 // bisection) at every 100th B of every delay (90 points).
 void BM_BoundaryMap(benchmark::State& state) {
   for (auto _ : state) {
-    const stability::SampledPlant sp(PhantomTable1(), 1e-3);
+    const stability::SampledPlant sp(model::PhantomTable1(), 1e-3);
     for (int d = 1; d <= 10; ++d) {
       const stability::ZWidth z(sp, d);
       for (int i = 0; i <= 800; ++i) benchmark::DoNotOptimize(z.At(0.0005 * i).K_cr);
@@ -156,8 +156,8 @@ void BM_BoundaryMap(benchmark::State& state) {
   }
   double err = 0;
   for (int d = 1; d <= 10; ++d) {
-    const stability::ZWidth z(PhantomTable1(), 1e-3, d);
-    const stability::BruteForce bf(PhantomTable1(), 1e-3, d);
+    const stability::ZWidth z(model::PhantomTable1(), 1e-3, d);
+    const stability::BruteForce bf(model::PhantomTable1(), 1e-3, d);
     for (int i = 0; i <= 800; i += 100) {
       const double a = z.At(0.0005 * i).K_cr, b = bf.KCritical(0.0005 * i);
       if (b > 0 && std::isfinite(b)) err = std::max(err, std::abs(a / b - 1));
@@ -172,8 +172,8 @@ BENCHMARK(BM_BoundaryMap)->Unit(benchmark::kMillisecond);
 // included): Table I at d = 2 (arg 0) and the reopened-band device at
 // d = 4 (arg 1), B from 0 to 1.05 B_max. Error: the largest relative
 // difference of any interval end from a reference with a 16x finer theta grid.
-Plant BandDevice() {
-  Plant p;
+model::Plant BandDevice() {
+  model::Plant p;
   p.m = 2e-3;
   p.b = 0.008;
   p.delay_samples = 1;
@@ -181,7 +181,7 @@ Plant BandDevice() {
   return p;
 }
 void BM_StableIntervals(benchmark::State& state) {
-  const Plant p = state.range(0) == 0 ? PhantomTable1() : BandDevice();
+  const model::Plant p = state.range(0) == 0 ? model::PhantomTable1() : BandDevice();
   const int d = state.range(0) == 0 ? 2 : 4;
   const double b_max = stability::ZWidth(p, 1e-3, d).Summarize().B_max;
   std::vector<double> grid(1000);
@@ -214,7 +214,7 @@ BENCHMARK(BM_StableIntervals)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 // end of 100 of the B values against a bisection (60 steps) of the brute
 // force's eigenvalues (tests/brute_force.h, the closed loop as one matrix).
 void BM_LoopBoundary(benchmark::State& state) {
-  const Plant p = PhantomTable1();
+  const model::Plant p = model::PhantomTable1();
   stability::LoopOptions l;
   stability::SetLowPassFilter(50.0, 1e-3, &l);
   const double w = 2 * std::numbers::pi * 2.0;
@@ -227,7 +227,7 @@ void BM_LoopBoundary(benchmark::State& state) {
     const stability::ZWidth z(p, 1e-3, d, l);
     for (double B : grid) benchmark::DoNotOptimize(z.StableIntervals(B).size());
   }
-  const StateSpace c = stability::ContinuousStateSpaceWithHand(p, l.hand);
+  const model::StateSpace c = stability::ContinuousStateSpaceWithHand(p, l.hand);
   const int n = static_cast<int>(c.A.rows());
   Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n + 1, n + 1);
   M.topLeftCorner(n, n) = c.A * 1e-3;
@@ -261,7 +261,7 @@ BENCHMARK(BM_LoopBoundary)->Unit(benchmark::kMillisecond);
 // The cut-off sweep: 20 log-spaced cut-offs 5-250 Hz, K_CR^max, Table I at
 // d = 2; error: K_CR(0) of the best cut-off against the brute force's bisection.
 void BM_CutoffSweep(benchmark::State& state) {
-  const Plant p = PhantomTable1();
+  const model::Plant p = model::PhantomTable1();
   stability::CutoffSweepOptions o;
   for (int i = 0; i < 20; ++i) o.cutoffs_hz.push_back(5.0 * std::pow(50.0, i / 19.0));
   stability::CutoffSweepResult r;
@@ -271,7 +271,7 @@ void BM_CutoffSweep(benchmark::State& state) {
   }
   stability::LoopOptions l;
   stability::SetLowPassFilter(r.cutoffs_hz[r.best], 1e-3, &l);
-  const StateSpace dz = DiscretizeZoh(p, 1e-3);
+  const model::StateSpace dz = model::DiscretizeZoh(p, 1e-3);
   const stability::LoopBruteForce bf(dz.A, dz.B, dz.C, l.filter_b, l.filter_a, 2 + p.delay_samples, 1e-3);
   const double k = stability::ZWidth(p, 1e-3, 2, l).At(0.0).K_cr;
   double lo = 0.9 * k, hi = 1.1 * k;
@@ -291,7 +291,7 @@ BENCHMARK(BM_CutoffSweep)->Unit(benchmark::kMillisecond);
 // uniform theta, relative to K_hi(0) (the brute force's own grid error is of
 // order 1e-9).
 void BM_PassivityRows(benchmark::State& state) {
-  const double T = 1e-3, b = PhantomTable1().b;
+  const double T = 1e-3, b = model::PhantomTable1().b;
   stability::LoopOptions loop;
   stability::SetLowPassFilter(50.0, T, &loop);
   const int D = 4;
@@ -323,7 +323,7 @@ BENCHMARK(BM_PassivityRows)->Unit(benchmark::kMillisecond);
 // summary quantities (local finite differences). Error: largest relative
 // change of the summary std when the difference step is halved.
 void BM_DeltaMethodStd(benchmark::State& state) {
-  const Plant p = PhantomTable1();
+  const model::Plant p = model::PhantomTable1();
   const int n = stability::NumLogParameters(p);
   std::vector<double> cov(n * n, 0.0);
   std::mt19937_64 rng(3);
@@ -354,7 +354,7 @@ BENCHMARK(BM_DeltaMethodStd)->Unit(benchmark::kMillisecond);
 // estimate and of the paper's reading, at B = 0 and 0.9 B_t (where the plain
 // relay locks onto a cycle 40 samples long).
 void BM_Relay(benchmark::State& state) {
-  const Plant p = PhantomTable1();
+  const model::Plant p = model::PhantomTable1();
   const stability::ZWidth z(p, 1e-3, 2);
   stability::RelayOptions o;
   o.delay_samples = 2;
@@ -380,7 +380,7 @@ BENCHMARK(BM_Relay)->ArgsProduct({{10, 30, 120}, {0, 90}})->Unit(benchmark::kMil
 // length (s) against the error of the estimate from the exact Z-width of the
 // same loop, at B = 0.5 B_t of that loop (of B_max_from_zero: it has no B_t).
 void BM_RelayLoop(benchmark::State& state) {
-  const Plant p = PhantomTable1();
+  const model::Plant p = model::PhantomTable1();
   stability::RelayOptions o;
   o.delay_samples = 4;
   o.seconds = static_cast<double>(state.range(0));

@@ -80,13 +80,13 @@ struct Screening {
 // Screens every start at delay d with a few iterations on every 6th bin; only
 // the best go on to convergence on all bins (most of the time would
 // otherwise go into starts that lose).
-void ScreenDelay(const ident::FrequencyResponse& sub, const FitOptions& o, int n, const std::vector<Plant>& extra,
+void ScreenDelay(const ident::FrequencyResponse& sub, const FitOptions& o, int n, const std::vector<model::Plant>& extra,
                  size_t usable, int d, Screening* sc) {
   if (d < 0 || (d < static_cast<int>(sc->tried_cost.size()) && std::isfinite(sc->tried_cost[d]))) return;
-  std::vector<Plant> starts;
+  std::vector<model::Plant> starts;
   if (o.init && static_cast<int>(o.init->modes.size()) == n) starts.push_back(*o.init);
-  for (const Plant& s : extra) starts.push_back(s);
-  for (Plant& s : AutomaticStarts(sub, n, d, o.max_starts)) starts.push_back(s);
+  for (const model::Plant& s : extra) starts.push_back(s);
+  for (model::Plant& s : AutomaticStarts(sub, n, d, o.max_starts)) starts.push_back(s);
   FitOptions screen = o;
   screen.max_iterations = std::min(o.max_iterations, 8);
   const Bins coarse = MakeBins(sub, d, o.relative_std_floor, usable > 600 ? 6 : 1);
@@ -117,7 +117,7 @@ void ScreenDelay(const ident::FrequencyResponse& sub, const FitOptions& o, int n
 // --delay-samples auto: delays around the phase slope's suggestion (+-2),
 // extended while the best is at an end that is not a limit. Returns why.
 std::string SearchDelay(const ident::FrequencyResponse& sub, const FitOptions& o, int n,
-                        const std::vector<Plant>& extra, size_t usable, Screening* sc) {
+                        const std::vector<model::Plant>& extra, size_t usable, Screening* sc) {
   const double suggested = PhaseSlopeDelay(sub);
   const int d0 = std::isfinite(suggested) ? std::clamp(static_cast<int>(std::lround(suggested)), 0, o.max_auto_delay) : 0;
   const int lo = std::max(0, d0 - 2), hi = std::min(o.max_auto_delay, d0 + 2);
@@ -194,7 +194,7 @@ std::vector<double> StdErrors(const Bins& bins, int n, const std::vector<double>
   res->std_errors = res->plant;
   const double inf = std::numeric_limits<double>::infinity();
   res->std_errors.m = res->std_errors.b = inf;
-  for (Mode& md : res->std_errors.modes) md = {inf, inf, inf, inf};
+  for (model::Mode& md : res->std_errors.modes) md = {inf, inf, inf, inf};
   std::vector<double> A_inv;
   Eigen::MatrixXd J;
   Eigen::VectorXd r;
@@ -213,8 +213,8 @@ std::vector<double> StdErrors(const Bins& bins, int n, const std::vector<double>
   res->std_errors.b = res->plant.b * std::sqrt(s(1, 1));
   for (int i = 0; i < n; ++i) {
     const int w = 2 + 4 * i, zc = 3 + 4 * i, v = 4 + 4 * i, zd = 5 + 4 * i;
-    Mode& e = res->std_errors.modes[i];
-    const Mode& m = res->plant.modes[i];
+    model::Mode& e = res->std_errors.modes[i];
+    const model::Mode& m = res->plant.modes[i];
     e.omega = m.omega * std::sqrt(s(w, w));
     e.c = m.c * std::sqrt(std::max(0.0, s(zc, zc) + s(w, w) + 2 * s(zc, w)));
     e.v = m.v * std::sqrt(s(v, v));
@@ -227,9 +227,9 @@ std::vector<double> StdErrors(const Bins& bins, int n, const std::vector<double>
 // quality tests), "fit %" (NRMSE) and the bin of the worst misfit.
 void Diagnostics(const Bins& bins, Fixed* out) {
   FitResult& res = out->res;
-  ZohModalForm<double> f;
+  model::ZohModalForm<double> f;
   std::vector<double> sec;
-  for (const Mode& md : res.plant.modes) { sec.push_back(md.omega); sec.push_back(md.c); sec.push_back(md.v); sec.push_back(md.d); }
+  for (const model::Mode& md : res.plant.modes) { sec.push_back(md.omega); sec.push_back(md.c); sec.push_back(md.v); sec.push_back(md.d); }
   f.Build(res.plant.m, res.plant.b, sec.data(), static_cast<int>(res.plant.modes.size()), bins.period_s);
   cd mean = 0.0;
   for (const cd& h : bins.H) mean += h;
@@ -237,7 +237,7 @@ void Diagnostics(const Bins& bins, Fixed* out) {
   double err2 = 0, var2 = 0, worst = -1;
   size_t worst_k = 0;
   for (size_t k = 0; k < bins.z.size(); ++k) {
-    const Cx<double> g = f.At(bins.z[k].real(), bins.z[k].imag());
+    const model::Cx<double> g = f.At(bins.z[k].real(), bins.z[k].imag());
     const cd model = cd(g.re, g.im) * bins.delay[k];
     err2 += std::norm(bins.H[k] - model);
     var2 += std::norm(bins.H[k] - mean);
@@ -253,7 +253,7 @@ void Diagnostics(const Bins& bins, Fixed* out) {
 // The solver's covariance fit_cov (sections as solved) to FitResult's
 // log_covariance: (log m, log b, log omega, log c, log v, log d) with log c =
 // log 2 + log zeta_c + log omega (and d alike), in canonical order.
-void CanonicalCovariance(const Plant& as_solved, const std::vector<double>& fit_cov, FitResult* res) {
+void CanonicalCovariance(const model::Plant& as_solved, const std::vector<double>& fit_cov, FitResult* res) {
   const int n = static_cast<int>(as_solved.modes.size()), p = 2 + 4 * n;
   assert(fit_cov.size() == static_cast<size_t>(p * p));
   // Row r of A expresses output parameter r in the solver's parameters.
@@ -276,7 +276,7 @@ void CanonicalCovariance(const Plant& as_solved, const std::vector<double>& fit_
 
 }  // namespace
 
-Fixed FitFixed(const ident::FrequencyResponse& sub, const FitOptions& o, int n, const std::vector<Plant>& extra) {
+Fixed FitFixed(const ident::FrequencyResponse& sub, const FitOptions& o, int n, const std::vector<model::Plant>& extra) {
   const int p = 2 + 4 * n;
   Fixed out;
   FitResult& res = out.res;
@@ -313,7 +313,7 @@ Fixed FitFixed(const ident::FrequencyResponse& sub, const FitOptions& o, int n, 
   res.std_scale = res.chi2_per_dof * std::max(1.0, sub.bin_correlation);
   const std::vector<double> fit_cov = StdErrors(bins, n, fin.x, sub.bin_correlation, &res);
   Diagnostics(bins, &out);
-  const Plant as_solved = res.plant;
+  const model::Plant as_solved = res.plant;
   CanonicalOrder(&res.plant, &res.std_errors);
   if (!fit_cov.empty()) CanonicalCovariance(as_solved, fit_cov, &res);
   if (res.status != FitStatus::kConverged) res.message = "the solver did not converge: " + res.message;
@@ -324,14 +324,14 @@ Fixed FitFixed(const ident::FrequencyResponse& sub, const FitOptions& o, int n, 
 
 using namespace internal;
 
-void CanonicalOrder(Plant* plant, Plant* std_errors) {
+void CanonicalOrder(model::Plant* plant, model::Plant* std_errors) {
   const size_t n = plant->modes.size();
   std::vector<size_t> ip(n), iz(n);
   for (size_t i = 0; i < n; ++i) ip[i] = iz[i] = i;
   std::sort(ip.begin(), ip.end(), [&](size_t a, size_t b) { return plant->modes[a].omega < plant->modes[b].omega; });
   std::sort(iz.begin(), iz.end(), [&](size_t a, size_t b) { return plant->modes[a].v < plant->modes[b].v; });
-  auto apply = [&](Plant* p) {
-    std::vector<Mode> m(n);
+  auto apply = [&](model::Plant* p) {
+    std::vector<model::Mode> m(n);
     for (size_t i = 0; i < n; ++i) {
       m[i].omega = p->modes[ip[i]].omega;
       m[i].c = p->modes[ip[i]].c;

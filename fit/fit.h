@@ -53,7 +53,7 @@ struct FitOptions {
   // When the fit has a spurious section (SpuriousSections), fit one section
   // fewer, grow it back where the misfit peaks, and keep the lower cost.
   bool retry_spurious = true;
-  std::optional<Plant> init;             // a user's starting point (tried first)
+  std::optional<model::Plant> init;             // a user's starting point (tried first)
 
   bool IsValid(std::string* why) const;
 };
@@ -97,8 +97,8 @@ struct OrderTrial {
 struct FitResult {
   FitStatus status = FitStatus::kNotRun;
   std::string message;
-  Plant plant;                   // canonical order: poles by omega, zeros by v
-  Plant std_errors;              // same shape; +inf where unknown
+  model::Plant plant;                   // canonical order: poles by omega, zeros by v
+  model::Plant std_errors;              // same shape; +inf where unknown
   bool covariance_ok = false;
   // Full parameter covariance (the sandwich of fit/bin_correlated_covariance.h:
   // the bins' correlation measured from the residuals), row-major (2 + 4 N)^2, in
@@ -148,6 +148,6 @@ std::vector<std::string> SpuriousSections(const FitResult& r, const FitOptions& 
 
 // Sorts pole pairs by omega and zero pairs by v (G is unchanged); permutes
 // std_errors alike when given.
-void CanonicalOrder(Plant* plant, Plant* std_errors);
+void CanonicalOrder(model::Plant* plant, model::Plant* std_errors);
 
 }  // namespace zwidth::fit

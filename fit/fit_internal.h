@@ -38,8 +38,8 @@ struct Bins {
 Bins MakeBins(const ident::FrequencyResponse& frf, int delay, double floor, int stride = 1);
 
 // The solver's log-space parameters (see fit.h) and back.
-std::vector<double> ToLog(const Plant& p);
-Plant FromLog(const std::vector<double>& x, int num_modes);
+std::vector<double> ToLog(const model::Plant& p);
+model::Plant FromLog(const std::vector<double>& x, int num_modes);
 
 struct SingleFit {
   bool converged = false;
@@ -69,7 +69,7 @@ struct Fixed {
 // Fits n sections to the used bins `sub` at o.delay_samples (or over the
 // automatic delay search), from the automatic starts and `extra` starts.
 Fixed FitFixed(const ident::FrequencyResponse& sub, const FitOptions& o, int num_modes,
-               const std::vector<Plant>& extra);
+               const std::vector<model::Plant>& extra);
 
 // The bins of frf where used[k] != 0, with every per-bin vector kept aligned.
 ident::FrequencyResponse Restrict(const ident::FrequencyResponse& frf, const std::vector<char>& used);
@@ -79,14 +79,14 @@ ident::FrequencyResponse Restrict(const ident::FrequencyResponse& frf, const std
 double PhaseSlopeDelay(const ident::FrequencyResponse& r);
 
 // Starts.
-Plant EstimateRigid(const ident::FrequencyResponse& frf, int delay);
+model::Plant EstimateRigid(const ident::FrequencyResponse& frf, int delay);
 struct Extremum { size_t index; double prominence; };
 std::vector<Extremum> Peaks(const std::vector<double>& v);  // local maxima by prominence
 // The automatic starting points tried by FitFixed, at most max_starts.
-std::vector<Plant> AutomaticStarts(const ident::FrequencyResponse& frf, int num_modes, int delay_samples,
+std::vector<model::Plant> AutomaticStarts(const ident::FrequencyResponse& frf, int num_modes, int delay_samples,
                                    int max_starts);
 // Starts for n + 1 sections from an n-section fit.
-std::vector<Plant> GrowStarts(const Fixed& prev);
+std::vector<model::Plant> GrowStarts(const Fixed& prev);
 
 // Roots of the real polynomial sum_i a[i] x^i; second-order factors (w, 2 zeta w) of roots.
 std::vector<cd> Roots(const std::vector<double>& a);
@@ -96,7 +96,7 @@ std::vector<std::pair<double, double>> Quadratics(std::vector<cd> r);
 // reweighted linear least-squares passes of N(s) - s H(s) D'(s), the delay and
 // the ZOH's half sample taken out), factored into eq. (1). nullopt when the
 // rational fit has real poles or zeros that do not pair into n sections.
-std::optional<Plant> LinearRationalStart(const ident::FrequencyResponse& frf, int num_modes, int delay_samples,
+std::optional<model::Plant> LinearRationalStart(const ident::FrequencyResponse& frf, int num_modes, int delay_samples,
                                          int iterations = 6);
 
 // Quality.

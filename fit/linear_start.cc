@@ -103,7 +103,7 @@ bool SkPasses(const std::vector<cd>& F, const std::vector<cd>& sig, const std::v
 
 // The rational fit's roots (in sigma = s / w0) as eq. (1) with m = 1: the
 // real pole nearest 0 is the rigid pole -b/m, the rest pair into sections.
-std::optional<Plant> ModalShape(const std::vector<double>& num, const std::vector<double>& den, int n, double w0) {
+std::optional<model::Plant> ModalShape(const std::vector<double>& num, const std::vector<double>& den, int n, double w0) {
   // Poles: the real root nearest 0 is the rigid pole -b/m; the rest pair up.
   std::vector<cd> poles = Roots(den), zeros = Roots(num);
   if (num[2 * n] == 0.0 || poles.empty()) return std::nullopt;
@@ -117,7 +117,7 @@ std::optional<Plant> ModalShape(const std::vector<double>& num, const std::vecto
   poles.erase(poles.begin() + ia);
   auto qp = Quadratics(poles), qz = Quadratics(zeros);
   if (static_cast<int>(qp.size()) != n || static_cast<int>(qz.size()) != n) return std::nullopt;
-  Plant p;
+  model::Plant p;
   p.m = 1.0;
   p.b = std::max(std::abs(a), 1e-3);
   for (int i = 0; i < n; ++i) {
@@ -130,7 +130,7 @@ std::optional<Plant> ModalShape(const std::vector<double>& num, const std::vecto
 
 }  // namespace
 
-std::optional<Plant> LinearRationalStart(const ident::FrequencyResponse& frf, int n, int delay, int iterations) {
+std::optional<model::Plant> LinearRationalStart(const ident::FrequencyResponse& frf, int n, int delay, int iterations) {
   const size_t nb = frf.f_hz.size();
   const int dd = 2 * n + 1;  // D'(s) monic of degree 2n + 1, N(s) of degree 2n
   const int unknowns = dd + 2 * n + 1;
@@ -153,14 +153,14 @@ std::optional<Plant> LinearRationalStart(const ident::FrequencyResponse& frf, in
   }
   std::vector<double> num, den;
   if (!SkPasses(F, sig, wt, n, iterations, &num, &den)) return std::nullopt;
-  std::optional<Plant> shape = ModalShape(num, den, n, w0);
+  std::optional<model::Plant> shape = ModalShape(num, den, n, w0);
   if (!shape) return std::nullopt;
-  Plant p = *shape;
+  model::Plant p = *shape;
   // 1 / m by weighted least squares on H = G_1 / m (G_1: this shape with m = 1).
   double num_m = 0, den_m = 0;
   for (size_t k = 0; k < nb; ++k) {
     const double w = kTwoPi * frf.f_hz[k];
-    const cd g1 = ContinuousResponse(p, w) * std::polar(1.0, -w * T * (delay + 0.5));
+    const cd g1 = model::ContinuousResponse(p, w) * std::polar(1.0, -w * T * (delay + 0.5));
     const double q = weight(k) * w;
     num_m += q * q * (std::conj(g1) * frf.H[k]).real();
     den_m += q * q * std::norm(g1);

@@ -30,7 +30,7 @@ OrderTrial TableRow(const Fixed& fx, int n, const OrderTrial* prev, const FitOpt
   t.converged = fx.res.status == FitStatus::kConverged;
   t.chi2_per_dof = fx.res.chi2_per_dof;
   t.delay_samples = fx.res.plant.delay_samples;
-  for (const Mode& md : fx.res.plant.modes) t.pole_hz.push_back(md.omega / kHz);
+  for (const model::Mode& md : fx.res.plant.modes) t.pole_hz.push_back(md.omega / kHz);
   for (double f : t.pole_hz) {
     bool persists = false;
     if (prev) for (double g : prev->pole_hz) persists |= std::abs(f / g - 1) < 0.02;
@@ -63,7 +63,7 @@ Fixed FitOrders(const ident::FrequencyResponse& sub, const ident::ExcitedBand& b
   std::vector<OrderTrial> table;
   for (int n = 0; n <= o.max_modes; ++n) {
     if (2 * band.num_used <= 2 + 4 * n) break;
-    std::vector<Plant> extra;
+    std::vector<model::Plant> extra;
     if (n > 0 && fits.back().res.status == FitStatus::kConverged) extra = GrowStarts(fits.back());
     fits.push_back(FitFixed(sub, o, n, extra));
     Fixed& fx = fits.back();

@@ -119,17 +119,17 @@ std::string ToString(FitQuality q) {
 
 std::vector<std::string> SpuriousSections(const FitResult& r, const FitOptions& o) {
   std::vector<std::string> out;
-  const Plant& p = r.plant;
+  const model::Plant& p = r.plant;
   const double nyq_w = std::numbers::pi * r.band_sample_rate_hz;
   for (size_t i = 0; i < p.modes.size(); ++i) {
     const std::string name = "section " + std::to_string(i + 1);
-    const Mode& md = p.modes[i];
+    const model::Mode& md = p.modes[i];
     // Nearest zero to this pole.
     size_t j = 0;
     for (size_t q = 1; q < p.modes.size(); ++q) {
       if (std::abs(std::log(p.modes[q].v / md.omega)) < std::abs(std::log(p.modes[j].v / md.omega))) j = q;
     }
-    const Mode& mz = p.modes[j];
+    const model::Mode& mz = p.modes[j];
     const cd s(0.0, md.omega);
     const cd ratio = (s * s + mz.d * s + mz.v * mz.v) / (s * s + md.c * s + md.omega * md.omega);
     // Cancelled: the pair changes G by less than 5 % at the pole, or by less
@@ -155,7 +155,7 @@ std::vector<std::string> SpuriousSections(const FitResult& r, const FitOptions& 
       out.push_back(name + ": a frequency is at its bound (near Nyquist)");
     }
     if (r.std_errors.modes.size() == p.modes.size()) {
-      const Mode& e = r.std_errors.modes[i];
+      const model::Mode& e = r.std_errors.modes[i];
       if (!(e.omega < md.omega && e.c < md.c && e.v < md.v && e.d < md.d)) {
         out.push_back(name + ": a parameter's std is larger than its value (or unknown)");
       }

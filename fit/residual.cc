@@ -99,7 +99,7 @@ class ZohResidual : public ceres::CostFunction {
       J m, b;
       std::vector<J> sec;
       Physical(xj.data(), n_, &m, &b, &sec);
-      ZohModalForm<J> fj;
+      model::ZohModalForm<J> fj;
       if (!fj.Build(m, b, sec.data(), n_, bins_->period_s)) return false;
       for (int q = s; q < std::min(p_, s + 8); ++q) {
         d->dI[q] = fj.integrator.v[q - s];
@@ -116,7 +116,7 @@ class ZohResidual : public ceres::CostFunction {
 
   bool EvaluateUncached(const double* x, double* residuals, double* jacobian) const {
     const int nb = static_cast<int>(bins_->z.size());
-    ZohModalForm<double> f;
+    model::ZohModalForm<double> f;
     {
       double m, b;
       std::vector<double> sec;
@@ -181,9 +181,9 @@ class ZohResidual : public ceres::CostFunction {
   mutable std::vector<double> cache_x_, cache_r_, cache_j_;
 };
 
-std::vector<double> ToLog(const Plant& p) {
+std::vector<double> ToLog(const model::Plant& p) {
   std::vector<double> x = {std::log(p.m), std::log(p.b)};
-  for (const Mode& md : p.modes) {
+  for (const model::Mode& md : p.modes) {
     x.push_back(std::log(md.omega));
     x.push_back(std::log(md.c / (2.0 * md.omega)));
     x.push_back(std::log(md.v));
@@ -192,8 +192,8 @@ std::vector<double> ToLog(const Plant& p) {
   return x;
 }
 
-Plant FromLog(const std::vector<double>& x, int n) {
-  Plant p;
+model::Plant FromLog(const std::vector<double>& x, int n) {
+  model::Plant p;
   std::vector<double> sec;
   Physical(x.data(), n, &p.m, &p.b, &sec);
   for (int i = 0; i < n; ++i) p.modes.push_back({sec[4 * i], sec[4 * i + 1], sec[4 * i + 2], sec[4 * i + 3]});

@@ -13,7 +13,7 @@ namespace zwidth::fit::internal {
 
 // Rigid body from the lowest 5% of the band: 1/G(jw) = -m w^2 + j b w, after
 // undoing the ZOH's half-sample and the input delay's phase.
-Plant EstimateRigid(const ident::FrequencyResponse& frf, int delay) {
+model::Plant EstimateRigid(const ident::FrequencyResponse& frf, int delay) {
   const double T = 1.0 / frf.sample_rate_hz;
   const double f_lo = frf.f_hz.front(), f_hi = frf.f_hz.back();
   const double limit = f_lo + 0.05 * (f_hi - f_lo);
@@ -27,7 +27,7 @@ Plant EstimateRigid(const ident::FrequencyResponse& frf, int delay) {
     sb_num += wt * Y.imag() * w;
     sb_den += wt * w * w;
   }
-  Plant p;
+  model::Plant p;
   p.m = sm_num / sm_den;
   if (!(p.m > 0.0) || !std::isfinite(p.m)) {
     // Fall back on the magnitude alone.
@@ -55,20 +55,20 @@ std::vector<Extremum> Peaks(const std::vector<double>& v) {
   return out;
 }
 
-std::vector<Plant> AutomaticStarts(const ident::FrequencyResponse& frf, int n, int delay, int max_starts) {
-  const Plant rigid = EstimateRigid(frf, delay);
-  std::vector<Plant> starts;
+std::vector<model::Plant> AutomaticStarts(const ident::FrequencyResponse& frf, int n, int delay, int max_starts) {
+  const model::Plant rigid = EstimateRigid(frf, delay);
+  std::vector<model::Plant> starts;
   if (n == 0) { starts.push_back(rigid); return starts; }
   const double T = 1.0 / frf.sample_rate_hz;
   const double nyq_w = std::numbers::pi / T;
   // R = H / G_rigid,d: the sections' product, with unit gain at low frequency.
-  ZohModalForm<double> rf;
+  model::ZohModalForm<double> rf;
   rf.Build(rigid.m, rigid.b, nullptr, 0, T);
   const size_t nb = frf.f_hz.size();
   std::vector<double> logr(nb), wgt(nb);
   for (size_t k = 0; k < nb; ++k) {
     const double theta = 2.0 * std::numbers::pi * frf.f_hz[k] * T;
-    const Cx<double> g = rf.At(std::cos(theta), std::sin(theta));
+    const model::Cx<double> g = rf.At(std::cos(theta), std::sin(theta));
     const cd gr = cd(g.re, g.im) * std::polar(1.0, -theta * delay);
     logr[k] = std::log(std::abs(frf.H[k] / gr));
     wgt[k] = std::max(frf.coherence[k], 1e-6);
@@ -104,7 +104,7 @@ std::vector<Plant> AutomaticStarts(const ident::FrequencyResponse& frf, int n, i
     return w;
   };
   auto make = [&](const std::vector<double>& wp, const std::vector<double>& wz, double zeta) {
-    Plant p = rigid;
+    model::Plant p = rigid;
     for (int i = 0; i < n; ++i) p.modes.push_back({wp[i], 2.0 * zeta * wp[i], wz[i], 2.0 * zeta * wz[i]});
     return p;
   };
@@ -114,7 +114,7 @@ std::vector<Plant> AutomaticStarts(const ident::FrequencyResponse& frf, int n, i
   // which does not depend on spotting peaks that closely spaced or interlaced
   // modes hide. It takes the place of the last peak-swap start.
   if (max_starts > 1) {
-    if (std::optional<Plant> sk = LinearRationalStart(frf, n, delay)) starts.push_back(*sk);
+    if (std::optional<model::Plant> sk = LinearRationalStart(frf, n, delay)) starts.push_back(*sk);
   }
   for (double zeta : {0.03, 0.3}) starts.push_back(make(wp, wz, zeta));
   for (int s = n - 1; s >= 0 && static_cast<int>(starts.size()) < max_starts + 2; --s) {
@@ -141,8 +141,8 @@ std::vector<Plant> AutomaticStarts(const ident::FrequencyResponse& frf, int n, i
 // resonance/antiresonance pair sits there), as a pole above a zero and as a
 // zero above a pole, at the three largest misfit peaks; and each section
 // split in two.
-std::vector<Plant> GrowStarts(const Fixed& prev) {
-  std::vector<Plant> out;
+std::vector<model::Plant> GrowStarts(const Fixed& prev) {
+  std::vector<model::Plant> out;
   const size_t nb = prev.r.size();
   if (nb < 8) return out;
   const int h = std::max<int>(2, static_cast<int>(nb / 100));
@@ -159,7 +159,7 @@ std::vector<Plant> GrowStarts(const Fixed& prev) {
   for (size_t i = 0; i < peaks.size() && i < 3; ++i) {
     const double w = kHz * prev.f_hz[peaks[i].index];
     for (const auto& [fp, fz] : {std::pair{1.08, 0.92}, std::pair{1.0, 0.8}, std::pair{1.25, 1.0}}) {
-      Plant p = prev.res.plant;
+      model::Plant p = prev.res.plant;
       p.modes.push_back({w * fp, 2 * 0.05 * w * fp, w * fz, 2 * 0.05 * w * fz});
       CanonicalOrder(&p, nullptr);
       out.push_back(p);
@@ -168,8 +168,8 @@ std::vector<Plant> GrowStarts(const Fixed& prev) {
   // Each section split in two, 8 % apart (two close modes that the smaller
   // fit merged into one).
   for (size_t i = 0; i < prev.res.plant.modes.size(); ++i) {
-    Plant p = prev.res.plant;
-    const Mode m = p.modes[i];
+    model::Plant p = prev.res.plant;
+    const model::Mode m = p.modes[i];
     p.modes[i] = {m.omega * 0.92, m.c * 0.5, m.v * 0.92, m.d * 0.5};
     p.modes.push_back({m.omega * 1.08, m.c * 0.5, m.v * 1.08, m.d * 0.5});
     CanonicalOrder(&p, nullptr);

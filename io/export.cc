@@ -91,7 +91,7 @@ nlohmann::json MatrixJson(const Eigen::MatrixXd& M) {
 }
 
 std::string Matlab(const ModelFile& mf, double T) {
-  const Plant& p = mf.plant;
+  const model::Plant& p = mf.plant;
   std::ostringstream os;
   os << "% zwidth model export for MATLAB or GNU Octave (pkg load control).\n"
      << "% The parameters of eq. (1) as named variables (SI units, rad/s); G(s) built from its\n"
@@ -100,7 +100,7 @@ std::string Matlab(const ModelFile& mf, double T) {
      << "m = " << Num(p.m) << ";  % rigid-body inertia [kg m^2]\n"
      << "b = " << Num(p.b) << ";  % rigid-body viscous damping [N m s/rad]\n";
   for (size_t i = 0; i < p.modes.size(); ++i) {
-    const Mode& md = p.modes[i];
+    const model::Mode& md = p.modes[i];
     const std::string k = std::to_string(i + 1);
     os << "w" << k << " = " << Num(md.omega) << "; c" << k << " = " << Num(md.c) << "; v" << k << " = "
        << Num(md.v) << "; d" << k << " = " << Num(md.d) << ";  % section " << k
@@ -131,8 +131,8 @@ std::string Matlab(const ModelFile& mf, double T) {
 }
 
 std::string Python(const ModelFile& mf, double T) {
-  const Plant& p = mf.plant;
-  const StateSpace c = ContinuousStateSpace(p);
+  const model::Plant& p = mf.plant;
+  const model::StateSpace c = model::ContinuousStateSpace(p);
   std::ostringstream os;
   os << "\"\"\"zwidth model export. Needs NumPy and SciPy; python-control objects too when it is installed.\n\n"
      << "name: the model's name. m, b, modes, delay_samples: the parameters of eq. (1).\n"
@@ -143,12 +143,12 @@ std::string Python(const ModelFile& mf, double T) {
      << "\"\"\"\nimport numpy as np\nfrom scipy import signal\n\n"
      << "name = " << PythonString(p.name) << "\n"
      << "m = " << Num(p.m) << "  # kg m^2\nb = " << Num(p.b) << "  # N m s/rad\nmodes = [  # (omega, c, v, d) rad/s\n";
-  for (const Mode& md : p.modes) os << "    (" << Num(md.omega) << ", " << Num(md.c) << ", " << Num(md.v) << ", " << Num(md.d) << "),\n";
+  for (const model::Mode& md : p.modes) os << "    (" << Num(md.omega) << ", " << Num(md.c) << ", " << Num(md.v) << ", " << Num(md.d) << "),\n";
   os << "]\ndelay_samples = " << p.delay_samples << "\n\n"
      << "G = signal.StateSpace(np.array(" << Matrix(c.A, true) << "),\n    np.array(" << Matrix(c.B, true)
      << "),\n    np.array(" << Matrix(c.C, true) << "),\n    np.array([[" << Num(c.D) << "]]))\n";
   if (T > 0) {
-    const StateSpace d = WithDelayStates(DiscretizeZoh(p, T));
+    const model::StateSpace d = model::WithDelayStates(model::DiscretizeZoh(p, T));
     os << "T = " << Num(T) << "  # s\n"
        << "Gz = signal.StateSpace(np.array(" << Matrix(d.A, true) << "),\n    np.array(" << Matrix(d.B, true)
        << "),\n    np.array(" << Matrix(d.C, true) << "),\n    np.array([[" << Num(d.D) << "]]), dt=T)\n";
@@ -160,10 +160,10 @@ std::string Python(const ModelFile& mf, double T) {
 }
 
 nlohmann::json StateSpaceJson(const ModelFile& mf, double T) {
-  const StateSpace c = ContinuousStateSpace(mf.plant);
+  const model::StateSpace c = model::ContinuousStateSpace(mf.plant);
   nlohmann::json j = {{"continuous", {{"A", MatrixJson(c.A)}, {"B", MatrixJson(c.B)}, {"C", MatrixJson(c.C)}, {"D", c.D}}}};
   if (T > 0) {
-    const StateSpace d = WithDelayStates(DiscretizeZoh(mf.plant, T));
+    const model::StateSpace d = model::WithDelayStates(model::DiscretizeZoh(mf.plant, T));
     j["discrete"] = {{"A", MatrixJson(d.A)}, {"B", MatrixJson(d.B)}, {"C", MatrixJson(d.C)}, {"D", d.D},
                      {"period_s", T}, {"delay_samples_realised_as_states", mf.plant.delay_samples}};
   }

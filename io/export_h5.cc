@@ -36,17 +36,17 @@ void WriteModelHdf5(const std::string& tmp, const ModelFile& mf, double T) {
       const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> R = M;
       ds.write(R.data(), H5::PredType::NATIVE_DOUBLE);
     };
-    auto params = [&](const std::string& gname, const Plant& p) {
+    auto params = [&](const std::string& gname, const model::Plant& p) {
       H5::Group g = f.createGroup(gname);
       vec(g, "m", {p.m}, "kg m^2");
       vec(g, "b", {p.b}, "N m s/rad");
       std::vector<double> w, c, v, d;
-      for (const Mode& md : p.modes) { w.push_back(md.omega); c.push_back(md.c); v.push_back(md.v); d.push_back(md.d); }
+      for (const model::Mode& md : p.modes) { w.push_back(md.omega); c.push_back(md.c); v.push_back(md.v); d.push_back(md.d); }
       vec(g, "omega", w, "rad/s"); vec(g, "c", c, "rad/s"); vec(g, "v", v, "rad/s"); vec(g, "d", d, "rad/s");
     };
     params("/parameters", mf.plant);
     if (mf.std_errors) params("/std", *mf.std_errors);
-    const StateSpace c = ContinuousStateSpace(mf.plant);
+    const model::StateSpace c = model::ContinuousStateSpace(mf.plant);
     H5::Group gc = f.createGroup("/continuous");
     mat(gc, "A", c.A); mat(gc, "B", c.B); mat(gc, "C", c.C); mat(gc, "D", Eigen::MatrixXd::Constant(1, 1, c.D));
     H5::Group root = f.openGroup("/");
@@ -56,7 +56,7 @@ void WriteModelHdf5(const std::string& tmp, const ModelFile& mf, double T) {
     };
     int_attr(root, "delay_samples", mf.plant.delay_samples);
     if (T > 0) {
-      const StateSpace d = WithDelayStates(DiscretizeZoh(mf.plant, T));
+      const model::StateSpace d = model::WithDelayStates(model::DiscretizeZoh(mf.plant, T));
       H5::Group gd = f.createGroup("/discrete");
       mat(gd, "A", d.A); mat(gd, "B", d.B); mat(gd, "C", d.C); mat(gd, "D", Eigen::MatrixXd::Constant(1, 1, d.D));
       attr(gd, "period_s", T);

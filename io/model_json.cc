@@ -58,10 +58,10 @@ void CheckPlausible(double v, const std::string& source, const std::string& name
   }
 }
 
-Plant ParsePlant(const json& j, const std::string& source, const std::string& where,
+model::Plant ParsePlant(const json& j, const std::string& source, const std::string& where,
                  bool is_std) {
   if (!j.is_object()) Fail(source, "'" + (where.empty() ? "(top level)" : where) + "' must be an object");
-  Plant p;
+  model::Plant p;
   p.m = Number(j, "m", source, where, is_std);
   p.b = Number(j, "b", source, where, is_std);
   auto modes = j.find("modes");
@@ -84,7 +84,7 @@ Plant ParsePlant(const json& j, const std::string& source, const std::string& wh
     CheckPlausible(p.b, source, where + "b");
     for (size_t i = 0; i < p.modes.size(); ++i) {
       const std::string w = where + "modes[" + std::to_string(i) + "].";
-      const Mode& md = p.modes[i];
+      const model::Mode& md = p.modes[i];
       CheckPlausible(md.omega, source, w + "omega");
       CheckPlausible(md.c, source, w + "c");
       CheckPlausible(md.v, source, w + "v");
@@ -96,12 +96,12 @@ Plant ParsePlant(const json& j, const std::string& source, const std::string& wh
 
 json NumberOrNull(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
-json PlantToJson(const Plant& p) {
+json PlantToJson(const model::Plant& p) {
   json j;
   j["m"] = NumberOrNull(p.m);
   j["b"] = NumberOrNull(p.b);
   j["modes"] = json::array();
-  for (const Mode& md : p.modes) {
+  for (const model::Mode& md : p.modes) {
     j["modes"].push_back({{"omega", NumberOrNull(md.omega)}, {"c", NumberOrNull(md.c)},
                           {"v", NumberOrNull(md.v)}, {"d", NumberOrNull(md.d)}});
   }
@@ -259,9 +259,9 @@ json ModelToJson(const ModelFile& mf) {
 void WriteModelJson(const std::string& path, const ModelFile& mf) {
   // A model with a NaN or inf parameter would be written as null and refused
   // when read back: it is a failed computation, not an output.
-  const Plant& p = mf.plant;
+  const model::Plant& p = mf.plant;
   bool finite = std::isfinite(p.m) && std::isfinite(p.b);
-  for (const Mode& md : p.modes) {
+  for (const model::Mode& md : p.modes) {
     finite = finite && std::isfinite(md.omega) && std::isfinite(md.c) && std::isfinite(md.v) && std::isfinite(md.d);
   }
   if (!finite) throw ComputationError("the model has a non-finite parameter; '" + path + "' was not written");

@@ -23,9 +23,9 @@
 namespace zwidth::io {
 
 struct ModelFile {
-  Plant plant;
+  model::Plant plant;
   // Standard errors, same shape as plant (fields may be +inf = unknown).
-  std::optional<Plant> std_errors;
+  std::optional<model::Plant> std_errors;
   std::optional<double> sample_period_s;
   // (2 + 4 N)^2 row-major covariance of the log parameters; empty = none.
   std::vector<double> log_covariance;

@@ -5,7 +5,7 @@
 
 #include "model/error.h"
 
-namespace zwidth {
+namespace zwidth::model {
 namespace {
 
 bool CheckPositive(const char* name, double value, std::string* why) {
@@ -67,4 +67,4 @@ std::complex<double> ContinuousResponse(const Plant& plant, double omega_rad_s) 
   return g;
 }
 
-}  // namespace zwidth
+}  // namespace zwidth::model

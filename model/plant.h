@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace zwidth {
+namespace zwidth::model {
 
 // One resonance/antiresonance section of eq. (1). SI units, rad/s.
 struct Mode {
@@ -44,4 +44,4 @@ Plant PhantomTable1();
 // (the integrator).
 std::complex<double> ContinuousResponse(const Plant& plant, double omega_rad_s);
 
-}  // namespace zwidth
+}  // namespace zwidth::model

@@ -7,7 +7,7 @@
 #include "model/error.h"
 #include "model/state_space.h"
 
-namespace zwidth {
+namespace zwidth::model {
 
 bool SimulateOptions::IsValid(std::string* why) const {
   auto bad = [&](const std::string& m) { if (why) *why = m; return false; };
@@ -77,4 +77,4 @@ SimulatedLog SimulateLog(const Plant& plant_in, const SimulateOptions& o) {
   return log;
 }
 
-}  // namespace zwidth
+}  // namespace zwidth::model

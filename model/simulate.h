@@ -9,7 +9,7 @@
 
 #include "model/plant.h"
 
-namespace zwidth {
+namespace zwidth::model {
 
 struct SimulateOptions {
   double seconds = 30.0;             // log length [s], > 0
@@ -39,4 +39,4 @@ SimulatedLog SimulateLog(const Plant& plant, const SimulateOptions& options);
 std::vector<double> BandLimitedNoise(size_t n, double sample_rate_hz, double bandwidth_hz,
                                      double rms, uint64_t seed);
 
-}  // namespace zwidth
+}  // namespace zwidth::model

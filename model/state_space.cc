@@ -8,7 +8,7 @@
 
 #include "model/error.h"
 
-namespace zwidth {
+namespace zwidth::model {
 
 namespace internal {
 
@@ -193,4 +193,4 @@ std::vector<double> SimulateDiscrete(const StateSpace& s,
   return y;
 }
 
-}  // namespace zwidth
+}  // namespace zwidth::model

@@ -19,7 +19,7 @@
 
 #include "model/plant.h"
 
-namespace zwidth {
+namespace zwidth::model {
 
 struct StateSpace {
   Eigen::MatrixXd A;
@@ -76,4 +76,4 @@ namespace internal {
 Eigen::VectorXd BalancingScales(const Eigen::MatrixXd& M);
 }  // namespace internal
 
-}  // namespace zwidth
+}  // namespace zwidth::model

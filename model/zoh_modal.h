@@ -19,7 +19,7 @@
 #include <cmath>
 #include <vector>
 
-namespace zwidth {
+namespace zwidth::model {
 
 // Minimal complex arithmetic over any scalar with +,-,*,/ (std::complex is
 // unspecified for user types such as ceres::Jet).
@@ -116,4 +116,4 @@ struct ZohModalForm {
   }
 };
 
-}  // namespace zwidth
+}  // namespace zwidth::model

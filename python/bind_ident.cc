@@ -296,7 +296,7 @@ void BindSimulate(py::module_& m) {
   m.def("simulate",
         [](const io::ModelFile& model, double seconds, double sample_rate_hz, double torque_rms,
            double bandwidth_hz, double encoder_step_rad, double noise_std_rad, int delay_samples, uint64_t seed) {
-          SimulateOptions o;
+          model::SimulateOptions o;
           o.seconds = seconds;
           o.sample_rate_hz = sample_rate_hz;
           o.torque_rms = torque_rms;
@@ -308,7 +308,7 @@ void BindSimulate(py::module_& m) {
           PyLog l;
           {
             py::gil_scoped_release release;
-            SimulatedLog s = SimulateLog(model.plant, o);
+            model::SimulatedLog s = model::SimulateLog(model.plant, o);
             l.sample_rate_hz = s.sample_rate_hz;
             l.u = std::move(s.torque);
             l.y = std::move(s.position);
@@ -317,7 +317,7 @@ void BindSimulate(py::module_& m) {
         },
         py::arg("model"), py::arg("seconds") = 30.0, py::arg("sample_rate_hz") = 1000.0,
         py::arg("torque_rms") = 0.03, py::arg("bandwidth_hz") = 300.0,
-        py::arg("encoder_step_rad") = SimulateOptions{}.encoder_step_rad, py::arg("noise_std_rad") = 0.0,
+        py::arg("encoder_step_rad") = model::SimulateOptions{}.encoder_step_rad, py::arg("noise_std_rad") = 0.0,
         py::arg("delay_samples") = 0, py::arg("seed") = 1,
         R"doc(A simulated log as `zwidth simulate` makes it: band-limited white-noise
 torque through the exact sampled plant, encoder quantisation (rad per count,

@@ -18,14 +18,14 @@ namespace {
 
 using ModeTuple = std::tuple<double, double, double, double>;
 
-std::vector<ModeTuple> ModesOf(const Plant& p) {
+std::vector<ModeTuple> ModesOf(const model::Plant& p) {
   std::vector<ModeTuple> out;
-  for (const Mode& md : p.modes) out.emplace_back(md.omega, md.c, md.v, md.d);
+  for (const model::Mode& md : p.modes) out.emplace_back(md.omega, md.c, md.v, md.d);
   return out;
 }
 
-std::vector<Mode> ModesFrom(const std::vector<ModeTuple>& t) {
-  std::vector<Mode> out;
+std::vector<model::Mode> ModesFrom(const std::vector<ModeTuple>& t) {
+  std::vector<model::Mode> out;
   for (const auto& [w, c, v, d] : t) out.push_back({w, c, v, d});
   return out;
 }
@@ -49,20 +49,20 @@ py::array_t<std::complex<double>> Response(const io::ModelFile& mf, const Double
   constexpr double kTwoPi = 2.0 * std::numbers::pi;
   if (!period_s) {
     py::gil_scoped_release release;
-    for (py::ssize_t k = 0; k < n; ++k) h[k] = ContinuousResponse(mf.plant, kTwoPi * f[k]);
+    for (py::ssize_t k = 0; k < n; ++k) h[k] = model::ContinuousResponse(mf.plant, kTwoPi * f[k]);
     return out;
   }
   const double T = ResolvePeriod(period_s, mf);
   py::gil_scoped_release release;
-  const DiscreteResponse resp(DiscretizeZoh(mf.plant, T));
+  const model::DiscreteResponse resp(model::DiscretizeZoh(mf.plant, T));
   for (py::ssize_t k = 0; k < n; ++k) h[k] = resp.AtTheta(kTwoPi * f[k] * T);
   return out;
 }
 
 py::tuple StateSpaceOf(const io::ModelFile& mf, std::optional<double> period_s) {
   mf.plant.Validate();
-  const StateSpace s = period_s ? WithDelayStates(DiscretizeZoh(mf.plant, ResolvePeriod(period_s, mf)))
-                                : ContinuousStateSpace(mf.plant);
+  const model::StateSpace s = period_s ? model::WithDelayStates(model::DiscretizeZoh(mf.plant, ResolvePeriod(period_s, mf)))
+                                : model::ContinuousStateSpace(mf.plant);
   Eigen::MatrixXd B = s.B, C = s.C, D = Eigen::MatrixXd::Constant(1, 1, s.D);
   return py::make_tuple(s.A, B, C, D);
 }

@@ -112,8 +112,8 @@ Hand ParseHand(const std::string& text) {
   return h;
 }
 
-StateSpace ContinuousStateSpaceWithHand(const Plant& plant, const Hand& hand) {
-  StateSpace s = ContinuousStateSpace(plant);
+model::StateSpace ContinuousStateSpaceWithHand(const model::Plant& plant, const Hand& hand) {
+  model::StateSpace s = model::ContinuousStateSpace(plant);
   const Eigen::RowVectorXd CA = s.C * s.A;
   const Eigen::RowVectorXd CA2 = CA * s.A;
   const double g = CA.dot(s.B);  // y'' = C A^2 x + g u (C B = 0)
@@ -124,7 +124,7 @@ StateSpace ContinuousStateSpaceWithHand(const Plant& plant, const Hand& hand) {
   return s;
 }
 
-StateSpace DiscretizeZohStateSpace(const StateSpace& c, double period_s) {
+model::StateSpace DiscretizeZohStateSpace(const model::StateSpace& c, double period_s) {
   if (!std::isfinite(period_s) || period_s <= 0.0) {
     throw InputError("sample period = " + std::to_string(period_s) + " s: must be finite and > 0");
   }
@@ -132,10 +132,10 @@ StateSpace DiscretizeZohStateSpace(const StateSpace& c, double period_s) {
   Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n + 1, n + 1);
   M.topLeftCorner(n, n) = c.A * period_s;
   M.topRightCorner(n, 1) = c.B * period_s;
-  const Eigen::VectorXd s = zwidth::internal::BalancingScales(M);
+  const Eigen::VectorXd s = model::internal::BalancingScales(M);
   const Eigen::MatrixXd Mb = s.cwiseInverse().asDiagonal() * M * s.asDiagonal();
   const Eigen::MatrixXd E = s.asDiagonal() * Mb.exp() * s.cwiseInverse().asDiagonal();
-  StateSpace d;
+  model::StateSpace d;
   d.A = E.topLeftCorner(n, n);
   d.B = E.topRightCorner(n, 1);
   d.C = c.C;
@@ -416,7 +416,7 @@ double StableArea(const ZWidth& z, double B_max, double K_clip, int points) {
   return area;
 }
 
-CutoffSweepResult SweepCutoff(const Plant& plant, double T, int delay, const LoopOptions& loop,
+CutoffSweepResult SweepCutoff(const model::Plant& plant, double T, int delay, const LoopOptions& loop,
                               const CutoffSweepOptions& o) {
   std::string why;
   if (!o.IsValid(T, &why)) throw InputError("cut-off sweep: " + why);

@@ -50,10 +50,10 @@ Hand ParseHand(const std::string& text);
 //   A_h = A - B (M C A^2 + B_h C A + K_h C) / (1 + M g),  B_h = B / (1 + M g).
 // (g = 1/m times the product of the sections' high-frequency gains, > 0, so
 // 1 + M g > 0 for M >= 0.) No polynomial is formed. Precondition: plant valid.
-StateSpace ContinuousStateSpaceWithHand(const Plant& plant, const Hand& hand);
+model::StateSpace ContinuousStateSpaceWithHand(const model::Plant& plant, const Hand& hand);
 
 // Exact ZOH of a continuous state space (Van Loan, balanced as DiscretizeZoh).
-StateSpace DiscretizeZohStateSpace(const StateSpace& continuous, double period_s);
+model::StateSpace DiscretizeZohStateSpace(const model::StateSpace& continuous, double period_s);
 
 // The stable set at one B for several loops (e.g. a range of hands): the
 // intersection of their interval sets. Ends keep the frequency of the loop that sets them.
@@ -147,7 +147,7 @@ struct CutoffSweepResult {
 };
 
 // The hand in `loop` is kept; its filter is replaced by each low-pass.
-CutoffSweepResult SweepCutoff(const Plant& plant, double period_s, int delay_samples,
+CutoffSweepResult SweepCutoff(const model::Plant& plant, double period_s, int delay_samples,
                               const LoopOptions& loop, const CutoffSweepOptions& options);
 
 // Area of the stable set of z for 0 <= B <= B_max (trapezoid on `points` values of B).

@@ -198,7 +198,7 @@ double RelayOutput(double s_prev, double s, double amplitude) {
 // (which can lock the cycle onto a vibration mode) out of the switching. The
 // damping force is -B F(z)(1 - z^-1)/T y; relay plus damping reach the plant d
 // samples later.
-void SimulateLoop(const StateSpace& ss, int d, const RelayOptions& o, double centre, RelayResult* r) {
+void SimulateLoop(const model::StateSpace& ss, int d, const RelayOptions& o, double centre, RelayResult* r) {
   const size_t n = static_cast<size_t>(std::llround(o.seconds / o.period_s));
   r->relay_force.resize(n);
   r->damping_force.resize(n);
@@ -316,7 +316,7 @@ struct Run {
   double unsettled = 0.0;        // |L(first half) - L(second half)| / |L| of the steady part
 };
 
-Run RunOnce(const StateSpace& ss, int d, const RelayOptions& o, double centre, WindowCache& windows) {
+Run RunOnce(const model::StateSpace& ss, int d, const RelayOptions& o, double centre, WindowCache& windows) {
   Run run;
   RelayResult& r = run.r;
   r.status = RelayStatus::kNoOscillation;
@@ -378,7 +378,7 @@ struct Point {
 // scan's lowest frequency is reported (kBelowBand), not guessed.
 class SteeredSearch {
  public:
-  SteeredSearch(const StateSpace& ss, int d, const RelayOptions& o, WindowCache& windows)
+  SteeredSearch(const model::StateSpace& ss, int d, const RelayOptions& o, WindowCache& windows)
       : ss_(ss), d_(d), o_(o), windows_(windows) {}
   int runs() const { return runs_; }
 
@@ -401,7 +401,7 @@ class SteeredSearch {
   }
   static bool ByTheta(const Point& a, const Point& b) { return a.theta < b.theta; }
 
-  const StateSpace& ss_;
+  const model::StateSpace& ss_;
   int d_;
   const RelayOptions& o_;
   WindowCache& windows_;
@@ -547,9 +547,9 @@ bool SteeredSearch::RefineCrossings(const std::vector<Point>& scan, double to_hz
 
 // The sampled plant of the relay's loop: the model (with the hand when one is
 // given, as ZWidth samples it) by exact ZOH, its input delay moved into d.
-StateSpace RelayPlant(const Plant& plant, const RelayOptions& o) {
-  StateSpace ss = o.loop.hand.IsNone()
-                      ? DiscretizeZoh(plant, o.period_s)
+model::StateSpace RelayPlant(const model::Plant& plant, const RelayOptions& o) {
+  model::StateSpace ss = o.loop.hand.IsNone()
+                      ? model::DiscretizeZoh(plant, o.period_s)
                       : DiscretizeZohStateSpace(ContinuousStateSpaceWithHand(plant, o.loop.hand), o.period_s);
   ss.delay_samples = 0;
   return ss;
@@ -557,11 +557,11 @@ StateSpace RelayPlant(const Plant& plant, const RelayOptions& o) {
 
 }  // namespace
 
-RelayResult SimulateRelay(const Plant& plant, const RelayOptions& o) {
+RelayResult SimulateRelay(const model::Plant& plant, const RelayOptions& o) {
   std::string why;
   if (!o.IsValid(&why)) throw InputError(why);
   plant.Validate();
-  const StateSpace ss = RelayPlant(plant, o);
+  const model::StateSpace ss = RelayPlant(plant, o);
   const int d = o.delay_samples + plant.delay_samples;
   WindowCache windows;
   Run base = RunOnce(ss, d, o, 0.0, windows);  // the plain relay

@@ -89,6 +89,6 @@ struct RelayResult {
 
 // Throws InputError for invalid options or model (never ComputationError: a
 // loop that does not oscillate gives kNoOscillation).
-RelayResult SimulateRelay(const Plant& plant, const RelayOptions& options);
+RelayResult SimulateRelay(const model::Plant& plant, const RelayOptions& options);
 
 }  // namespace zwidth::stability

@@ -19,13 +19,13 @@ std::vector<double> PolyMul(const std::vector<double>& a, const std::vector<doub
   return r;
 }
 
-StateSpace Sampled(const Plant& plant, double period_s, const Hand& hand) {
+model::StateSpace Sampled(const model::Plant& plant, double period_s, const Hand& hand) {
   plant.Validate();
   LoopOptions l;
   l.hand = hand;
   std::string why;
   if (!l.IsValid(&why)) throw InputError("loop options: " + why);
-  StateSpace d = hand.IsNone() ? DiscretizeZoh(plant, period_s)
+  model::StateSpace d = hand.IsNone() ? model::DiscretizeZoh(plant, period_s)
                                : DiscretizeZohStateSpace(ContinuousStateSpaceWithHand(plant, hand), period_s);
   d.delay_samples = 0;  // delays are handled by the caller
   return d;
@@ -34,13 +34,13 @@ StateSpace Sampled(const Plant& plant, double period_s, const Hand& hand) {
 // D(z) / (z - 1) (without the integrator's pole when has_integrator) from the
 // exactly known discrete poles e^{pT}; *hand_poles gets the continuous poles
 // with Im > 0 of the plant with the hand (none without a hand).
-std::vector<double> DiscreteDenominator(const Plant& plant, double T, const Hand& hand_in, bool has_integrator,
+std::vector<double> DiscreteDenominator(const model::Plant& plant, double T, const Hand& hand_in, bool has_integrator,
                                         std::vector<std::complex<double>>* hand_poles) {
   const bool hand = !hand_in.IsNone();
   std::vector<double> den1 = {1.0};
   if (!hand) {
     den1 = PolyMul(den1, {-std::exp(-plant.b / plant.m * T), 1.0});
-    for (const Mode& md : plant.modes) {
+    for (const model::Mode& md : plant.modes) {
       const double disc = md.c * md.c / 4.0 - md.omega * md.omega;
       if (disc < 0.0) {
         const double r = std::exp(-md.c * T / 2.0), wd = std::sqrt(-disc);
@@ -77,7 +77,7 @@ std::vector<double> DiscreteDenominator(const Plant& plant, double T, const Hand
 
 }  // namespace
 
-SampledPlant::SampledPlant(const Plant& plant, double period_s, const Hand& hand_in) {
+SampledPlant::SampledPlant(const model::Plant& plant, double period_s, const Hand& hand_in) {
   auto d = std::make_shared<Data>(Sampled(plant, period_s, hand_in));
   d->plant = plant;
   d->period_s = period_s;
@@ -87,13 +87,13 @@ SampledPlant::SampledPlant(const Plant& plant, double period_s, const Hand& hand
   d->has_integrator = !(hand_in.K > 0.0);
   if (!hand) {
     std::vector<double> sec;
-    for (const Mode& md : plant.modes) sec.insert(sec.end(), {md.omega, md.c, md.v, md.d});
+    for (const model::Mode& md : plant.modes) sec.insert(sec.end(), {md.omega, md.c, md.v, md.d});
     d->use_modal = d->modal.Build(plant.m, plant.b, sec.data(), static_cast<int>(plant.modes.size()), T);
     // Trust the faster form only where it agrees with the state-space response
     // (near-coincident poles make its residues cancel).
     for (int k = 1; d->use_modal && k <= 16; ++k) {
       const std::complex<double> z = std::polar(1.0, std::numbers::pi * (k - 0.5) / 16.0);
-      const Cx<double> a = d->modal.At(z.real(), z.imag());
+      const model::Cx<double> a = d->modal.At(z.real(), z.imag());
       const std::complex<double> b = d->response.AtZ(z);
       if (!(std::abs(std::complex<double>(a.re, a.im) - b) <= 1e-10 * std::abs(b))) d->use_modal = false;
     }
@@ -131,7 +131,7 @@ SampledPlant::SampledPlant(const Plant& plant, double period_s, const Hand& hand
       if (t > first && t < last) d->patch_theta.push_back(t);
     }
   };
-  for (const Mode& md : plant.modes) {
+  for (const model::Mode& md : plant.modes) {
     if (!hand) patch(md.omega, md.c);
     patch(md.v, md.d);  // the hand leaves G's zeros where they are
   }
@@ -142,7 +142,7 @@ SampledPlant::SampledPlant(const Plant& plant, double period_s, const Hand& hand
 
 std::complex<double> SampledPlant::Gd(std::complex<double> z) const {
   if (!d_->use_modal) return d_->response.AtZ(z);
-  const Cx<double> g = d_->modal.At(z.real(), z.imag());
+  const model::Cx<double> g = d_->modal.At(z.real(), z.imag());
   return {g.re, g.im};
 }
 

@@ -33,9 +33,9 @@ constexpr int kModePatchHalfWidth = 320;
 class SampledPlant {
  public:
   // Throws InputError for an invalid plant, period or hand.
-  SampledPlant(const Plant& plant, double period_s, const Hand& hand = {});
+  SampledPlant(const model::Plant& plant, double period_s, const Hand& hand = {});
 
-  const Plant& plant() const { return d_->plant; }
+  const model::Plant& plant() const { return d_->plant; }
   double period_s() const { return d_->period_s; }
   const Hand& hand() const { return d_->hand; }
   // Without a hand stiffness G has its integrator pole at z = 1.
@@ -62,17 +62,17 @@ class SampledPlant {
 
  private:
   struct Data {
-    Plant plant;
+    model::Plant plant;
     double period_s = 0.0;
     Hand hand;
     bool has_integrator = true;
-    DiscreteResponse response;
-    ZohModalForm<double> modal;
+    model::DiscreteResponse response;
+    model::ZohModalForm<double> modal;
     bool use_modal = false;
     std::vector<double> num, den, den1;
     std::vector<double> patch_theta;
     std::complex<double> g_minus_one;
-    explicit Data(const StateSpace& s) : response(s) {}
+    explicit Data(const model::StateSpace& s) : response(s) {}
   };
   std::shared_ptr<const Data> d_;
 };

@@ -18,7 +18,7 @@ namespace {
 
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-Eigen::MatrixXd CovMatrix(const Plant& plant, const std::vector<double>& cov) {
+Eigen::MatrixXd CovMatrix(const model::Plant& plant, const std::vector<double>& cov) {
   CheckLogCovariance(plant, cov);
   const int p = NumLogParameters(plant);
   return Eigen::Map<const Eigen::MatrixXd>(cov.data(), p, p);  // symmetric: order irrelevant
@@ -31,9 +31,9 @@ double Quad(const Eigen::VectorXd& g, const Eigen::MatrixXd& S) {
 
 }  // namespace
 
-int NumLogParameters(const Plant& plant) { return 2 + 4 * static_cast<int>(plant.modes.size()); }
+int NumLogParameters(const model::Plant& plant) { return 2 + 4 * static_cast<int>(plant.modes.size()); }
 
-std::vector<std::string> LogParameterNames(const Plant& plant) {
+std::vector<std::string> LogParameterNames(const model::Plant& plant) {
   std::vector<std::string> n = {"m", "b"};
   for (size_t i = 0; i < plant.modes.size(); ++i) {
     for (const char* k : {"omega", "c", "v", "d"}) n.push_back("modes[" + std::to_string(i) + "]." + k);
@@ -41,8 +41,8 @@ std::vector<std::string> LogParameterNames(const Plant& plant) {
   return n;
 }
 
-Plant PerturbLog(const Plant& plant, const std::vector<double>& dx) {
-  Plant p = plant;
+model::Plant PerturbLog(const model::Plant& plant, const std::vector<double>& dx) {
+  model::Plant p = plant;
   p.m *= std::exp(dx[0]);
   p.b *= std::exp(dx[1]);
   for (size_t i = 0; i < p.modes.size(); ++i) {
@@ -62,7 +62,7 @@ bool UncertaintyOptions::IsValid(std::string* why) const {
   return true;
 }
 
-void CheckLogCovariance(const Plant& plant, const std::vector<double>& cov) {
+void CheckLogCovariance(const model::Plant& plant, const std::vector<double>& cov) {
   const size_t p = static_cast<size_t>(NumLogParameters(plant));
   if (cov.size() != p * p) {
     throw InputError("the parameter covariance has " + std::to_string(cov.size()) + " entries; a model with " +
@@ -90,7 +90,7 @@ void CheckLogCovariance(const Plant& plant, const std::vector<double>& cov) {
   }
 }
 
-PerturbedPlants SamplePerturbedPlants(const Plant& plant, double T, const Hand& hand, const UncertaintyOptions& o) {
+PerturbedPlants SamplePerturbedPlants(const model::Plant& plant, double T, const Hand& hand, const UncertaintyOptions& o) {
   std::string why;
   if (!o.IsValid(&why)) throw InputError("uncertainty options: " + why);
   PerturbedPlants r{SampledPlant(plant, T, hand), {}, {}, o.log_step};
@@ -105,7 +105,7 @@ PerturbedPlants SamplePerturbedPlants(const Plant& plant, double T, const Hand& 
   return r;
 }
 
-std::vector<double> KcrStd(const Plant& plant, const std::vector<double>& cov, double T, int delay,
+std::vector<double> KcrStd(const model::Plant& plant, const std::vector<double>& cov, double T, int delay,
                            const std::vector<CriticalPoint>& points, const UncertaintyOptions& o,
                            const LoopOptions& loop) {
   std::string why;
@@ -116,7 +116,7 @@ std::vector<double> KcrStd(const Plant& plant, const std::vector<double>& cov, d
 
 std::vector<double> KcrStd(const PerturbedPlants& pl, const std::vector<double>& cov, int delay,
                            const std::vector<CriticalPoint>& points, const LoopOptions& loop) {
-  const Plant& plant = pl.nominal.plant();
+  const model::Plant& plant = pl.nominal.plant();
   const double T = pl.nominal.period_s();
   const Eigen::MatrixXd S = CovMatrix(plant, cov);
   const int p = NumLogParameters(plant);
@@ -168,7 +168,7 @@ std::vector<double> KcrStd(const PerturbedPlants& pl, const std::vector<double>&
   return out;
 }
 
-SummaryStd SummaryStdDelta(const Plant& plant, const std::vector<double>& cov, double T, int delay,
+SummaryStd SummaryStdDelta(const model::Plant& plant, const std::vector<double>& cov, double T, int delay,
                            const DelaySummary& nominal, const UncertaintyOptions& o, const LoopOptions& loop) {
   std::string why;
   if (!o.IsValid(&why)) throw InputError("uncertainty options: " + why);
@@ -178,7 +178,7 @@ SummaryStd SummaryStdDelta(const Plant& plant, const std::vector<double>& cov, d
 
 SummaryStd SummaryStdDelta(const PerturbedPlants& pl, const std::vector<double>& cov, int delay,
                            const DelaySummary& nominal, const LoopOptions& loop) {
-  const Plant& plant = pl.nominal.plant();
+  const model::Plant& plant = pl.nominal.plant();
   const Eigen::MatrixXd S = CovMatrix(plant, cov);
   const int p = NumLogParameters(plant);
   const UncertaintyOptions o{pl.log_step};
@@ -199,7 +199,7 @@ SummaryStd SummaryStdDelta(const PerturbedPlants& pl, const std::vector<double>&
   return r;
 }
 
-MonteCarloResult SummaryMonteCarlo(const Plant& plant, const std::vector<double>& cov, double T, int delay,
+MonteCarloResult SummaryMonteCarlo(const model::Plant& plant, const std::vector<double>& cov, double T, int delay,
                                    int samples, std::uint64_t seed, const LoopOptions& loop) {
   if (samples < 2) throw InputError("SummaryMonteCarlo::samples must be >= 2");
   const Eigen::MatrixXd S = CovMatrix(plant, cov);

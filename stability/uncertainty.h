@@ -39,11 +39,11 @@
 namespace zwidth::stability {
 
 // 2 + 4 * number of sections.
-int NumLogParameters(const Plant& plant);
+int NumLogParameters(const model::Plant& plant);
 // Names in the order above: "m", "b", "modes[0].omega", ...
-std::vector<std::string> LogParameterNames(const Plant& plant);
+std::vector<std::string> LogParameterNames(const model::Plant& plant);
 // The plant with every parameter multiplied by exp(dx_i).
-Plant PerturbLog(const Plant& plant, const std::vector<double>& dx);
+model::Plant PerturbLog(const model::Plant& plant, const std::vector<double>& dx);
 
 struct UncertaintyOptions {
   double log_step = 1e-4;  // central-difference step in log parameters, in (0, 0.1)
@@ -52,7 +52,7 @@ struct UncertaintyOptions {
 
 // Throws InputError when the covariance is not (2 + 4 N)^2 finite numbers, or
 // not symmetric positive semi-definite (to 1e-9 relative).
-void CheckLogCovariance(const Plant& plant, const std::vector<double>& log_covariance);
+void CheckLogCovariance(const model::Plant& plant, const std::vector<double>& log_covariance);
 
 // The sampled plant at x0 and at x0 +- log_step e_i for every log parameter,
 // built once per (plant, period, hand) and shared by every delay.
@@ -62,7 +62,7 @@ struct PerturbedPlants {
   double log_step = 1e-4;
 };
 // Throws InputError for invalid options, plant, period or hand.
-PerturbedPlants SamplePerturbedPlants(const Plant& plant, double period_s, const Hand& hand = {},
+PerturbedPlants SamplePerturbedPlants(const model::Plant& plant, double period_s, const Hand& hand = {},
                                       const UncertaintyOptions& options = {});
 
 // The two estimates below on shared perturbed plants (loop.hand must be
@@ -74,13 +74,13 @@ SummaryStd SummaryStdDelta(const PerturbedPlants& plants, const std::vector<doub
                            int delay_samples, const DelaySummary& nominal, const LoopOptions& loop = {});
 
 // Std of K_CR at each point (points from ZWidth::At on the same plant, T, delay).
-std::vector<double> KcrStd(const Plant& plant, const std::vector<double>& log_covariance,
+std::vector<double> KcrStd(const model::Plant& plant, const std::vector<double>& log_covariance,
                            double period_s, int delay_samples,
                            const std::vector<CriticalPoint>& points,
                            const UncertaintyOptions& options = {}, const LoopOptions& loop = {});
 
 // Std of K_CR(0), B_t, K_CR^max, B_max by the delta method (see above).
-SummaryStd SummaryStdDelta(const Plant& plant, const std::vector<double>& log_covariance,
+SummaryStd SummaryStdDelta(const model::Plant& plant, const std::vector<double>& log_covariance,
                            double period_s, int delay_samples, const DelaySummary& nominal,
                            const UncertaintyOptions& options = {}, const LoopOptions& loop = {});
 
@@ -91,7 +91,7 @@ struct MonteCarloResult {
   int used_K_cr_at_zero_B = 0, used_B_t = 0, used_K_cr_max = 0, used_B_max = 0;  // finite samples
 };
 // Throws InputError for samples < 2.
-MonteCarloResult SummaryMonteCarlo(const Plant& plant, const std::vector<double>& log_covariance,
+MonteCarloResult SummaryMonteCarlo(const model::Plant& plant, const std::vector<double>& log_covariance,
                                    double period_s, int delay_samples, int samples, std::uint64_t seed,
                                    const LoopOptions& loop = {});
 

@@ -92,7 +92,7 @@ namespace {
 
 // The checks of the one-loop constructors, in their historical order (plant,
 // delay, loop, then the period in the discretisation).
-SampledPlant SampleForOneLoop(const Plant& plant, double period_s, int delay_samples, const LoopOptions& loop) {
+SampledPlant SampleForOneLoop(const model::Plant& plant, double period_s, int delay_samples, const LoopOptions& loop) {
   plant.Validate();
   if (delay_samples < 0) {
     throw InputError("delay = " + std::to_string(delay_samples) + " samples: must be >= 0");
@@ -107,11 +107,11 @@ bool SameHand(const Hand& a, const Hand& b) { return a.M == b.M && a.B == b.B &&
 
 }  // namespace
 
-ZWidth::ZWidth(const Plant& plant, double period_s, int delay_samples,
+ZWidth::ZWidth(const model::Plant& plant, double period_s, int delay_samples,
                const BoundaryOptions& options)
     : ZWidth(plant, period_s, delay_samples, LoopOptions{}, options) {}
 
-ZWidth::ZWidth(const Plant& plant, double period_s, int delay_samples, const LoopOptions& loop,
+ZWidth::ZWidth(const model::Plant& plant, double period_s, int delay_samples, const LoopOptions& loop,
                const BoundaryOptions& options)
     : ZWidth(SampleForOneLoop(plant, period_s, delay_samples, loop), delay_samples, loop, options) {}
 

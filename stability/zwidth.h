@@ -145,7 +145,7 @@ class ZWidth {
          const BoundaryOptions& options = {});
   // Convenience: samples the plant for this one loop. Throws InputError for an
   // invalid plant, period or delay.
-  ZWidth(const Plant& plant, double period_s, int delay_samples,
+  ZWidth(const model::Plant& plant, double period_s, int delay_samples,
          const BoundaryOptions& options = {});
   // The generalised loop of stability/haptic_loop.h: velocity filter F(z) and
   // the user's hand. With W = -z^D / G_h and V = F(z)(1 - z^-1)/T the crossing
@@ -154,7 +154,7 @@ class ZWidth {
   // characteristic polynomial, multiplied through by F's denominator, is
   //   z^{D+1} D(z) F_d(z) + (K z F_d(z) + (B/T)(z - 1) F_n(z)) N(z).
   // Throws InputError for invalid loop options.
-  ZWidth(const Plant& plant, double period_s, int delay_samples, const LoopOptions& loop,
+  ZWidth(const model::Plant& plant, double period_s, int delay_samples, const LoopOptions& loop,
          const BoundaryOptions& options = {});
 
   CriticalPoint At(double B) const;

@@ -36,8 +36,8 @@ struct BruteForce {
     }
     return c.real();
   }
-  BruteForce(const Plant& p, double T_, int d_) : d(d_ + p.delay_samples), T(T_) {
-    const StateSpace s = DiscretizeZoh(p, T);
+  BruteForce(const model::Plant& p, double T_, int d_) : d(d_ + p.delay_samples), T(T_) {
+    const model::StateSpace s = model::DiscretizeZoh(p, T);
     den = CharPoly(s.A);
     num = CharPoly(s.A - s.B * s.C) - den;
   }
@@ -154,7 +154,7 @@ struct ClassifyGrid {
   int points_inside = 0;
 };
 
-inline Tally Classify(const ZWidth& z, const std::function<double(double, double)>& max_root, const Plant& p,
+inline Tally Classify(const ZWidth& z, const std::function<double(double, double)>& max_root, const model::Plant& p,
                       double T, int delay, const ClassifyGrid& g) {
   Tally t;
   auto stable_bf = [&](double K, double B) { return max_root(K, B) < 1.0; };

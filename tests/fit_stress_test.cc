@@ -23,19 +23,19 @@ namespace {
 
 // The rigid body of both suites (m log-uniform in [3e-4, 1e-2], b / m in [2, 22]
 // rad/s) and a number of sections 1-3, drawn in that order.
-Plant RigidBody(std::mt19937_64& rng, int* sections) {
+model::Plant RigidBody(std::mt19937_64& rng, int* sections) {
   std::uniform_real_distribution<double> U(0, 1);
-  Plant p;
+  model::Plant p;
   p.m = std::pow(10.0, -3.5 + 1.5 * U(rng));
   p.b = p.m * (2 + 20 * U(rng));
   *sections = 1 + static_cast<int>(3 * U(rng));
   return p;
 }
 
-Plant RandomDevice(std::mt19937_64& rng) {
+model::Plant RandomDevice(std::mt19937_64& rng) {
   std::uniform_real_distribution<double> U(0, 1);
   int n = 0;
-  Plant p = RigidBody(rng, &n);
+  model::Plant p = RigidBody(rng, &n);
   double f = 30 + 40 * U(rng);
   for (int i = 0; i < n; ++i) {
     const double fp = f * (1.0 + 0.3 * U(rng)), fz = fp * (0.6 + 0.3 * U(rng));
@@ -48,16 +48,16 @@ Plant RandomDevice(std::mt19937_64& rng) {
   return p;
 }
 
-ident::FrequencyResponse Frf(const Plant& p, uint64_t seed) {
-  SimulateOptions so;
+ident::FrequencyResponse Frf(const model::Plant& p, uint64_t seed) {
+  model::SimulateOptions so;
   so.seed = seed;
   so.torque_rms = 0.03 * p.m / 1.168e-3;
-  const SimulatedLog log = SimulateLog(p, so);
+  const model::SimulatedLog log = model::SimulateLog(p, so);
   return ident::EstimateFrequencyResponse(log.torque, log.position, 1000, ident::WelchOptions{});
 }
 
 // Largest relative error of (m, b, frequencies) and of the dampings.
-std::pair<double, double> Errors(const Plant& fit, Plant truth) {
+std::pair<double, double> Errors(const model::Plant& fit, model::Plant truth) {
   CanonicalOrder(&truth, nullptr);
   double ef = std::max(std::abs(fit.m / truth.m - 1), std::abs(fit.b / truth.b - 1)), ed = 0;
   for (size_t i = 0; i < truth.modes.size(); ++i) {
@@ -73,7 +73,7 @@ TEST(FitStress, RandomDevicesFromTheAutomaticStart) {
   int ok = 0;
   const int total = 40;
   for (int t = 0; t < total; ++t) {
-    const Plant p = RandomDevice(rng);
+    const model::Plant p = RandomDevice(rng);
     FitOptions o;
     o.num_modes = static_cast<int>(p.modes.size());
     const FitResult r = FitModel(Frf(p, t + 1), o);
@@ -86,7 +86,7 @@ TEST(FitStress, RandomDevicesFromTheAutomaticStart) {
 }
 
 TEST(FitStress, RandomStartingPointsReachTheSameMinimum) {
-  const Plant truth = PhantomTable1();
+  const model::Plant truth = model::PhantomTable1();
   const ident::FrequencyResponse frf = Frf(truth, 3);
   FitOptions o;
   const FitResult ref = FitModel(frf, o);
@@ -95,10 +95,10 @@ TEST(FitStress, RandomStartingPointsReachTheSameMinimum) {
   std::uniform_real_distribution<double> U(-1, 1);
   int same = 0;
   for (int t = 0; t < 20; ++t) {
-    Plant init = truth;  // every parameter scaled by up to +-30%
+    model::Plant init = truth;  // every parameter scaled by up to +-30%
     init.m *= 1 + 0.3 * U(rng);
     init.b *= 1 + 0.3 * U(rng);
-    for (Mode& m : init.modes) {
+    for (model::Mode& m : init.modes) {
       m.omega *= 1 + 0.3 * U(rng); m.c *= 1 + 0.3 * U(rng);
       m.v *= 1 + 0.3 * U(rng); m.d *= 1 + 0.3 * U(rng);
     }
@@ -123,10 +123,10 @@ namespace {
 // b/m in [2, 22] rad/s; torque band-limited to 450 Hz so that every pole is
 // excited. A wrong minimum: the fit's cost above the cost reached from the
 // true parameters (by more than 0.1 %).
-Plant SuiteDevice(std::mt19937_64& rng) {
+model::Plant SuiteDevice(std::mt19937_64& rng) {
   std::uniform_real_distribution<double> U(0, 1);
   int n = 0;
-  Plant p = RigidBody(rng, &n);
+  model::Plant p = RigidBody(rng, &n);
   for (int i = 0; i < n; ++i) {
     const double w = 2 * std::numbers::pi * (40 + 310 * U(rng));
     const double v = w * (1 - (0.10 + 0.15 * U(rng)));
@@ -142,12 +142,12 @@ TEST(FitStress, HundredRandomDevicesNoWrongMinimumAndKcrWithinFivePercent) {
   int wrong = 0, kcr_ok = 0, good = 0;
   const int total = 100;
   for (int t = 0; t < total; ++t) {
-    const Plant p = SuiteDevice(rng);
-    SimulateOptions so;
+    const model::Plant p = SuiteDevice(rng);
+    model::SimulateOptions so;
     so.seed = 1000 + t;
     so.bandwidth_hz = 450;
     so.torque_rms = 0.03 * p.m / 1.168e-3;
-    const SimulatedLog log = SimulateLog(p, so);
+    const model::SimulatedLog log = model::SimulateLog(p, so);
     const auto frf = ident::EstimateFrequencyResponse(log.torque, log.position, 1000, ident::WelchOptions{});
     FitOptions o;
     o.num_modes = static_cast<int>(p.modes.size());

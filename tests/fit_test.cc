@@ -13,25 +13,25 @@ namespace {
 
 // Logs are simulated by SimulateLog (default settings: 30 s, band-limited
 // white torque 0.03 N m RMS to 300 Hz, encoder 2 pi / 40960 rad per count).
-ident::FrequencyResponse Frf(const Plant& p, uint64_t seed, double rate = 1000, int delay = 0) {
-  SimulateOptions so;
+ident::FrequencyResponse Frf(const model::Plant& p, uint64_t seed, double rate = 1000, int delay = 0) {
+  model::SimulateOptions so;
   so.seed = seed;
   so.sample_rate_hz = rate;
   so.delay_samples = delay;
-  const SimulatedLog log = SimulateLog(p, so);
+  const model::SimulatedLog log = model::SimulateLog(p, so);
   return ident::EstimateFrequencyResponse(log.torque, log.position, rate, ident::WelchOptions{});
 }
 
 struct Score { int ok = 0; std::vector<std::vector<double>> values, stds; };
 
-std::vector<double> Flat(const Plant& p) {
+std::vector<double> Flat(const model::Plant& p) {
   std::vector<double> v = {p.m, p.b};
-  for (const Mode& m : p.modes) v.insert(v.end(), {m.omega, m.c, m.v, m.d});
+  for (const model::Mode& m : p.modes) v.insert(v.end(), {m.omega, m.c, m.v, m.d});
   return v;
 }
 
 // m, b and the frequencies within 2%, the dampings within 10%.
-bool WithinTolerance(const Plant& fit, const Plant& truth) {
+bool WithinTolerance(const model::Plant& fit, const model::Plant& truth) {
   const auto a = Flat(fit), b = Flat(truth);
   for (size_t i = 0; i < a.size(); ++i) {
     const bool damping = i >= 2 && ((i - 2) % 2 == 1);
@@ -40,7 +40,7 @@ bool WithinTolerance(const Plant& fit, const Plant& truth) {
   return true;
 }
 
-Score FitSeeds(const Plant& truth, int seeds, double rate = 1000, int delay = 0, bool auto_delay = false) {
+Score FitSeeds(const model::Plant& truth, int seeds, double rate = 1000, int delay = 0, bool auto_delay = false) {
   Score s;
   for (int seed = 1; seed <= seeds; ++seed) {
     FitOptions o;
@@ -58,7 +58,7 @@ Score FitSeeds(const Plant& truth, int seeds, double rate = 1000, int delay = 0,
 }
 
 TEST(Fit, TableOneFromTheAutomaticStartOnTwentySeeds) {
-  const Plant truth = PhantomTable1();
+  const model::Plant truth = model::PhantomTable1();
   const Score s = FitSeeds(truth, 20);
   EXPECT_GE(s.ok, 18);
   // Reported standard errors against the scatter over seeds (factor 1.5).
@@ -77,8 +77,8 @@ TEST(Fit, TableOneFromTheAutomaticStartOnTwentySeeds) {
   }
 }
 
-Plant OtherDevice() {
-  Plant p;
+model::Plant OtherDevice() {
+  model::Plant p;
   p.m = 4e-3;
   p.b = 0.04;  // b/m = 10 rad/s: the rigid pole inside the 0.7-300 Hz band
   p.modes = {{2 * std::numbers::pi * 40, 30, 2 * std::numbers::pi * 33, 20},
@@ -91,32 +91,32 @@ TEST(Fit, AnotherDeviceOnATwoKilohertzLog) {
 }
 
 TEST(Fit, FindsAOneSampleDelayAutomatically) {
-  EXPECT_GE(FitSeeds(PhantomTable1(), 5, 1000, 1, true).ok, 4);
+  EXPECT_GE(FitSeeds(model::PhantomTable1(), 5, 1000, 1, true).ok, 4);
 }
 
 TEST(Fit, RigidBodyAlone) {
-  Plant p = PhantomTable1();
+  model::Plant p = model::PhantomTable1();
   p.modes.clear();
   EXPECT_GE(FitSeeds(p, 5).ok, 4);  // b scatters by ~1.5%: 2% is 1.4 sigma
 }
 
 TEST(Fit, CanonicalOrderKeepsTheResponse) {
-  Plant p = PhantomTable1();
+  model::Plant p = model::PhantomTable1();
   std::swap(p.modes[0].omega, p.modes[1].omega);
   std::swap(p.modes[0].c, p.modes[1].c);
-  Plant q = p;
+  model::Plant q = p;
   CanonicalOrder(&q, nullptr);
   EXPECT_LT(q.modes[0].omega, q.modes[1].omega);
   EXPECT_LT(q.modes[0].v, q.modes[1].v);
   for (double w : {10.0, 300.0, 800.0, 1500.0}) {
-    EXPECT_LT(std::abs(ContinuousResponse(p, w) - ContinuousResponse(q, w)) / std::abs(ContinuousResponse(p, w)), 1e-12);
+    EXPECT_LT(std::abs(model::ContinuousResponse(p, w) - model::ContinuousResponse(q, w)) / std::abs(model::ContinuousResponse(p, w)), 1e-12);
   }
 }
 
 TEST(Fit, OneIterationIsReportedAsNoConvergence) {
   FitOptions o;
   o.max_iterations = 1;
-  const FitResult r = FitModel(Frf(PhantomTable1(), 1), o);
+  const FitResult r = FitModel(Frf(model::PhantomTable1(), 1), o);
   EXPECT_EQ(r.status, FitStatus::kNoConvergence);
   EXPECT_NE(r.message.find("did not converge"), std::string::npos) << r.message;
 }

@@ -31,7 +31,7 @@ namespace {
 // Hands scaled to the device (a hand on a small device is heavy for it):
 // 0 none; 1 light grasp (M = 0.3 m, B = b, hand-arm resonance 2 Hz with the
 // device's mass); 2 firm (M = 2 m, B = 5 b, 6 Hz).
-Hand HandOf(int level, const Plant& p) {
+Hand HandOf(int level, const model::Plant& p) {
   if (level == 0) return {};
   const double M = level == 1 ? 0.3 * p.m : 2.0 * p.m;
   const double f = level == 1 ? 2.0 : 6.0;
@@ -41,8 +41,8 @@ Hand HandOf(int level, const Plant& p) {
 
 // The sampled plant (with hand) for the brute force: its own ZOH, e^{[[A, B], [0, 0]] T}
 // without balancing.
-LoopBruteForce MakeBrute(const Plant& p, const LoopOptions& loop, int delay, double T) {
-  const StateSpace c = ContinuousStateSpaceWithHand(p, loop.hand);
+LoopBruteForce MakeBrute(const model::Plant& p, const LoopOptions& loop, int delay, double T) {
+  const model::StateSpace c = ContinuousStateSpaceWithHand(p, loop.hand);
   const int n = static_cast<int>(c.A.rows());
   Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n + 1, n + 1);
   M.topLeftCorner(n, n) = c.A * T;
@@ -55,13 +55,13 @@ LoopBruteForce MakeBrute(const Plant& p, const LoopOptions& loop, int delay, dou
 TEST(HapticLoop, HandStateSpaceIsGOverOnePlusGZ) {
   std::mt19937_64 rng(16);
   for (int k = 0; k < 8; ++k) {
-    const Plant p = test::RandomPlausibleDevice(rng, k % 4);
+    const model::Plant p = test::RandomPlausibleDevice(rng, k % 4);
     const Hand h = HandOf(1 + k % 2, p);
-    const StateSpace s = ContinuousStateSpaceWithHand(p, h);
+    const model::StateSpace s = ContinuousStateSpaceWithHand(p, h);
     const int n = static_cast<int>(s.A.rows());
     for (double w : {0.3, 7.0, 60.0, 500.0, 2500.0}) {
       const std::complex<double> jw(0.0, w);
-      const std::complex<double> g = ContinuousResponse(p, w);
+      const std::complex<double> g = model::ContinuousResponse(p, w);
       const std::complex<double> want = g / (1.0 + g * (h.M * jw * jw + h.B * jw + h.K));
       const Eigen::MatrixXcd R = jw * Eigen::MatrixXcd::Identity(n, n) - s.A.cast<std::complex<double>>();
       const std::complex<double> got =
@@ -100,7 +100,7 @@ TEST(HapticLoop, DefaultOptionsAreValidAndBadOnesNameTheirField) {
 TEST(HapticLoop, WithoutFilterOrHandItIsThePapersLoop) {
   std::mt19937_64 rng(3);
   for (int k = 0; k < 4; ++k) {
-    const Plant p = test::RandomPlausibleDevice(rng, k);
+    const model::Plant p = test::RandomPlausibleDevice(rng, k);
     const ZWidth a(p, 1e-3, 3), b(p, 1e-3, 3, LoopOptions{});
     // F = b0/(a0) = 1 written as a filter goes through the filtered code path.
     LoopOptions one;
@@ -117,7 +117,7 @@ TEST(HapticLoop, WithoutFilterOrHandItIsThePapersLoop) {
 
 // tests/brute_force.h's Classify with the filter and hand: 60 values of B up
 // to 1.3 B_max, 10 points inside each interval.
-Tally Classify(const Plant& p, int delay, const LoopOptions& loop, int min_points) {
+Tally Classify(const model::Plant& p, int delay, const LoopOptions& loop, int min_points) {
   const double T = 1e-3;
   const ZWidth z(p, T, delay, loop);
   const LoopBruteForce bf = MakeBrute(p, loop, delay, T);
@@ -132,7 +132,7 @@ TEST(HapticLoop, StableIntervalsAgreeWithClosedLoopEigenvaluesWithFilterAndHand)
   std::uniform_real_distribution<double> u(0.0, 1.0);
   long total = 0, stable = 0, near = 0;
   for (int k = 0; k < 16; ++k) {
-    const Plant p = test::RandomPlausibleDevice(rng, k % 4);
+    const model::Plant p = test::RandomPlausibleDevice(rng, k % 4);
     const int d = k == 0 ? 0 : k == 1 ? 20 : delay(rng);
     LoopOptions loop;
     const double T = 1e-3;
@@ -164,7 +164,7 @@ TEST(HapticLoop, StableIntervalsAgreeWithClosedLoopEigenvaluesWithFilterAndHand)
 
 TEST(HapticLoop, IntersectionOfHandsIsStableForEveryHand) {
   std::mt19937_64 rng(8);
-  const Plant p = test::RandomPlausibleDevice(rng, 2);
+  const model::Plant p = test::RandomPlausibleDevice(rng, 2);
   std::vector<ZWidth> zs;
   for (int h = 0; h < 3; ++h) {
     LoopOptions l;
@@ -197,7 +197,7 @@ TEST(HapticLoop, KcrStdWithFilterAndHandMatchesFiniteDifferencesOfKcr) {
   std::mt19937_64 rng(21);
   int compared = 0;
   for (int k = 0; k < 3; ++k) {
-    const Plant p = test::RandomPlausibleDevice(rng, 1 + k);
+    const model::Plant p = test::RandomPlausibleDevice(rng, 1 + k);
     LoopOptions l;
     SetLowPassFilter(40.0 + 30.0 * k, 1e-3, &l);
     if (k > 0) l.hand = HandOf(k, p);
@@ -443,7 +443,7 @@ class PassivityDelays : public ::testing::TestWithParam<int> {};
 TEST_P(PassivityDelays, RigidBodyPassiveWallIsStable) {
   // Passivity of the sampled rigid body with its wall implies a stable loop:
   // K_P(B) <= K_CR(B) at every B where both exist.
-  Plant p;
+  model::Plant p;
   p.m = 1e-3;
   p.b = 4e-3;
   const int d = GetParam();
@@ -462,7 +462,7 @@ INSTANTIATE_TEST_SUITE_P(RigidBody, PassivityDelays, ::testing::Values(0, 2, 8),
 
 TEST(CutoffSweep, BestCutoffHasTheLargestMeasure) {
   std::mt19937_64 rng(4);
-  const Plant p = test::RandomPlausibleDevice(rng, 1);
+  const model::Plant p = test::RandomPlausibleDevice(rng, 1);
   CutoffSweepOptions o;
   for (int i = 0; i < 8; ++i) o.cutoffs_hz.push_back(5.0 * std::pow(40.0, i / 7.0));
   const CutoffSweepResult r = SweepCutoff(p, 1e-3, 2, LoopOptions{}, o);

@@ -25,10 +25,10 @@ struct ClosedLoopLog {
   std::vector<double> r, u, ym;
 };
 
-ClosedLoopLog SimulateClosedLoop(const Plant& p, double seconds, double r_rms, double noise_std,
+ClosedLoopLog SimulateClosedLoop(const model::Plant& p, double seconds, double r_rms, double noise_std,
                                  double drift_step, uint64_t seed) {
   const double T = 1e-3, kp = 5.0, kd = 0.02;
-  const StateSpace d = DiscretizeZoh(p, T);
+  const model::StateSpace d = model::DiscretizeZoh(p, T);
   EXPECT_EQ(d.D, 0.0);  // no feedthrough: no algebraic loop
   const size_t n = static_cast<size_t>(seconds / T);
   std::mt19937_64 rng(seed);
@@ -61,8 +61,8 @@ constexpr double kRrms = 0.05, kNoise = 5e-4, kDrift = 2e-4;
 // about the exact sampled plant over independent seeds: the normalised errors
 // (Re and Im parts) must have unit variance.
 TEST(Joint, StdMatchesMonteCarloScatter) {
-  const Plant p = io::Table1Model().plant;
-  const DiscreteResponse exact(DiscretizeZoh(p, 1e-3));
+  const model::Plant p = io::Table1Model().plant;
+  const model::DiscreteResponse exact(model::DiscretizeZoh(p, 1e-3));
   ident::WelchOptions o;
   o.window_length = 4096;
   o.fmin_hz = 2.0;
@@ -117,7 +117,7 @@ TEST(Joint, ReducesToH1WhenTheExcitationIsTheInput) {
 // The case: H1 from the logged torque is biased by the fed-back noise
 // (b off by more than 3 of its std), the joint estimate is not (within 3).
 TEST(Joint, ClosedLoopFitOfDampingIsUnbiased) {
-  const Plant p = io::Table1Model().plant;
+  const model::Plant p = io::Table1Model().plant;
   ident::WelchOptions o;  // defaults: 4096 samples, Hann, 0.7..300 Hz
   fit::FitOptions fo;
   fo.num_modes = 2;

@@ -39,8 +39,8 @@ TEST(ModelStress, ZohAndResponseAgreeWithLongDouble) {
   const double fs = 1000, T = 1 / fs;
   double worst = 0;
   for (int trial = 0; trial < 200; ++trial) {
-    const Plant p = test::RandomPlant(rng, StressRanges(fs), trial % 5);
-    const StateSpace c = ContinuousStateSpace(p);
+    const model::Plant p = test::RandomPlant(rng, StressRanges(fs), trial % 5);
+    const model::StateSpace c = model::ContinuousStateSpace(p);
     const int n = static_cast<int>(c.A.rows());
     Eigen::Matrix<ld, Eigen::Dynamic, Eigen::Dynamic> M =
         Eigen::Matrix<ld, Eigen::Dynamic, Eigen::Dynamic>::Zero(n + 1, n + 1);
@@ -50,7 +50,7 @@ TEST(ModelStress, ZohAndResponseAgreeWithLongDouble) {
     const Eigen::Matrix<cld, Eigen::Dynamic, Eigen::Dynamic> Ad = E.topLeftCorner(n, n).cast<cld>();
     const Eigen::Matrix<cld, Eigen::Dynamic, 1> Bd = E.topRightCorner(n, 1).cast<cld>();
     const Eigen::Matrix<cld, 1, Eigen::Dynamic> C = c.C.cast<ld>().cast<cld>();
-    const DiscreteResponse r(DiscretizeZoh(p, T));
+    const model::DiscreteResponse r(model::DiscretizeZoh(p, T));
     for (double th : {0.003, 0.05, 0.4, 1.3, 2.2, 3.1}) {
       const cld z = std::polar<ld>(1.0L, th);
       Eigen::Matrix<cld, Eigen::Dynamic, Eigen::Dynamic> Z = -Ad;

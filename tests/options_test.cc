@@ -63,7 +63,7 @@ INSTANTIATE_TEST_SUITE_P(
         // A FitOptions refuses its band's bad field by the band's name.
         Case<fit::FitOptions>("FitOptionsBand", [](auto* o) { o->band.min_input_power_ratio = 2.0; },
                               "BandOptions::min_input_power_ratio"),
-        Case<SimulateOptions>("SimulateOptions", [](auto* o) { o->seconds = -1.0; }, "SimulateOptions::seconds"),
+        Case<model::SimulateOptions>("SimulateOptions", [](auto* o) { o->seconds = -1.0; }, "SimulateOptions::seconds"),
         Case<stability::BoundaryOptions>("BoundaryOptions", [](auto* o) { o->grid_points_per_delay = 4; },
                                          "BoundaryOptions::grid_points_per_delay"),
         Case<stability::BGridOptions>("BGridOptions", [](auto* o) { o->b_points = 1; }, "BGridOptions::b_points"),

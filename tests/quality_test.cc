@@ -38,7 +38,7 @@ TEST(FitQuality, OneModeTooManyIsFlagged) {
 }
 
 TEST(FitQuality, OneSegmentLogIsRefusedUnlessAllowed) {
-  const ident::FrequencyResponse frf = Frf(PhantomTable1(), 23, 5.0);  // 5 s < two 4096-sample windows
+  const ident::FrequencyResponse frf = Frf(model::PhantomTable1(), 23, 5.0);  // 5 s < two 4096-sample windows
   ASSERT_EQ(frf.num_averages, 1);
   FitOptions o;
   try {
@@ -71,7 +71,7 @@ TEST(FitQuality, InputStoppingAtTenHertzIsFittedOnlyBelowIt) {
   for (size_t k = 0; k < frf.f_hz.size(); ++k) {
     if (frf.f_hz[k] > 12.0) EXPECT_EQ(r.band.used[k], 0) << frf.f_hz[k];
   }
-  EXPECT_NEAR(r.plant.m / PhantomTable1().m, 1.0, 0.05);
+  EXPECT_NEAR(r.plant.m / model::PhantomTable1().m, 1.0, 0.05);
 }
 
 TEST(FitQuality, BandLimitsApplyToAGivenResponse) {
@@ -87,10 +87,10 @@ TEST(FitQuality, BandLimitsApplyToAGivenResponse) {
 }
 
 TEST(FitQuality, SixSampleDelayIsFoundAutomatically) {
-  SimulateOptions so;
+  model::SimulateOptions so;
   so.seed = 26;
   so.delay_samples = 6;
-  const SimulatedLog log = SimulateLog(PhantomTable1(), so);
+  const model::SimulatedLog log = model::SimulateLog(model::PhantomTable1(), so);
   const auto frf = ident::EstimateFrequencyResponse(log.torque, log.position, 1000, ident::WelchOptions{});
   FitOptions o;
   o.auto_delay = true;
@@ -106,7 +106,7 @@ TEST(FitQuality, SectionsAreNamedFromOneInCanonicalOrder) {
   r.plant.modes[1].v = r.plant.modes[1].omega;  // section 2's pole cancelled by its zero
   r.plant.modes[1].d = r.plant.modes[1].c;
   r.std_errors = r.plant;
-  for (Mode& m : r.std_errors.modes) m = {1, 1, 1, 1};
+  for (model::Mode& m : r.std_errors.modes) m = {1, 1, 1, 1};
   const auto s = SpuriousSections(r, FitOptions{});
   ASSERT_EQ(s.size(), 1u);
   EXPECT_EQ(s[0].rfind("section 2:", 0), 0u) << s[0];

@@ -16,7 +16,7 @@ namespace zwidth::stability {
 namespace {
 
 // Random models: test::WideRandomModels().
-Plant RandomModel(std::mt19937_64& rng, int nm, double T) { return test::RandomPlant(rng, test::WideRandomModels(), nm, T); }
+model::Plant RandomModel(std::mt19937_64& rng, int nm, double T) { return test::RandomPlant(rng, test::WideRandomModels(), nm, T); }
 
 // Right (refined, K_cr and f_cr within 1e-3 of the exact values) or flagged
 // (the crossing below the record's band, or an uncertainty over 1e-3).
@@ -40,7 +40,7 @@ TEST(Relay, StressRandomModelsFindTheCriticalCrossing) {
   const double T = 1e-3;
   int checked = 0, flagged = 0;
   for (int trial = 0; trial < 30; ++trial) {
-    const Plant p = RandomModel(rng, trial % 5, T);
+    const model::Plant p = RandomModel(rng, trial % 5, T);
     const int d = static_cast<int>(U(rng) * 12);
     const ZWidth z(p, T, d);
     const DelaySummary s = z.Summarize();
@@ -74,7 +74,7 @@ TEST(Relay, StressShortRecordsAreFlaggedNotWrong) {
   const double T = 1e-3;
   int flagged = 0, checked = 0;
   for (int trial = 0; trial < 30; ++trial) {
-    const Plant p = RandomModel(rng, trial % 5, T);
+    const model::Plant p = RandomModel(rng, trial % 5, T);
     const int d = static_cast<int>(U(rng) * 12);
     const CriticalPoint c = ZWidth(p, T, d).At(0.0);
     if (!(c.K_cr > 0) || !std::isfinite(c.K_cr)) continue;

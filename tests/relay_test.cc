@@ -26,7 +26,7 @@ namespace {
 // the rigid body settles within a few tens of seconds), 0-3 modes between 20
 // and 400 Hz with damping ratios 1e-3..0.3.
 // Antiresonances 0.5..1.5 of their resonance, capped below Nyquist.
-Plant RandomDevice(std::mt19937_64& rng, int nm, double T) {
+model::Plant RandomDevice(std::mt19937_64& rng, int nm, double T) {
   test::RandomPlantRanges r;
   r.log10_m_kg_m2 = {-4, 2};
   r.log10_b_over_m_rad_s = {std::log10(0.5), 1};
@@ -39,7 +39,7 @@ Plant RandomDevice(std::mt19937_64& rng, int nm, double T) {
 
 // A hand from none to firm, scaled to the device: inertia 0..2 m, damping
 // 0..5 b, stiffness putting the hand-device resonance at 0..8 Hz.
-Hand RandomHand(std::mt19937_64& rng, const Plant& p, int level) {
+Hand RandomHand(std::mt19937_64& rng, const model::Plant& p, int level) {
   std::uniform_real_distribution<double> U(0, 1);
   if (level == 0) return {};
   const double s = level / 2.0;  // 0.5 light, 1 firm
@@ -81,7 +81,7 @@ TEST(Relay, InvalidOptionsNameTheField) {
   o.loop.filter_b = {1.0};
   o.loop.filter_a = {1.0, -1.5};  // pole at 1.5: unstable filter
   EXPECT_NE(why_of(o).find("RelayOptions::loop.filter_a"), std::string::npos);
-  EXPECT_THROW(SimulateRelay(PhantomTable1(), o), InputError);
+  EXPECT_THROW(SimulateRelay(model::PhantomTable1(), o), InputError);
 }
 
 TEST(Relay, StatusNamesRoundTrip) {
@@ -95,7 +95,7 @@ TEST(Relay, StatusNamesRoundTrip) {
 TEST(Relay, UnitFilterGivesThePapersLoopExactly) {
   // F = 1 written as coefficients (b = {1}, a = {1}) is the paper's loop: the
   // traces and the estimate must be equal to the last bit.
-  const Plant p = PhantomTable1();
+  const model::Plant p = model::PhantomTable1();
   RelayOptions o;
   o.delay_samples = 2;
   o.damping = 0.01;
@@ -113,7 +113,7 @@ TEST(Relay, UnitFilterGivesThePapersLoopExactly) {
 TEST(Relay, FilterChangesTheDampingForceAsTheDifferenceEquationSays) {
   // The damping force of the trace is -B F(z)(1 - z^-1)/T y: check it against
   // the first-order low-pass recursion w_k = a w_{k-1} + (1 - a) v_k written here.
-  const Plant p = PhantomTable1();
+  const model::Plant p = model::PhantomTable1();
   RelayOptions o;
   o.delay_samples = 2;
   o.damping = 0.01;
@@ -150,7 +150,7 @@ TEST(Relay, WithFilterAndHandAgreesWithTheExactZWidthOfTheSameLoop) {
   int checked = 0, flagged = 0, filtered = 0, with_hand = 0;
   double worst_k = 0.0, worst_f = 0.0;
   for (int trial = 0; trial < 16; ++trial) {
-    const Plant p = RandomDevice(rng, trial % 4, T);
+    const model::Plant p = RandomDevice(rng, trial % 4, T);
     const int d = 1 + static_cast<int>(U(rng) * 8);
     LoopOptions loop;
     if (trial % 4 != 3) SetLowPassFilter(20.0 * std::pow(250.0 / 20.0, U(rng)), T, &loop);
@@ -197,7 +197,7 @@ TEST(Relay, WithFilterAndHandAgreesWithTheExactZWidthOfTheSameLoop) {
 TEST(Relay, PastBMaxOfTheFilteredLoopItDiverges) {
   // With a 50 Hz filter and a hand the largest B stable from K = 0+ moves; past it
   // (of the same loop) the relay alone diverges, below it the relay oscillates.
-  const Plant p = PhantomTable1();
+  const model::Plant p = model::PhantomTable1();
   LoopOptions loop;
   SetLowPassFilter(50.0, 1e-3, &loop);
   loop.hand = {0.5 * p.m, p.b, 0.0};
@@ -223,7 +223,7 @@ TEST(Relay, SteeredRunsFindTheExactCrossingBelowTheTransition) {
   // paper's reading (the plain relay) is biased low by the describing function
   // at B = 0, and near B_t for d = 1 and 2 it locks onto the vibration mode's
   // limit cycle (~190 Hz): neither reaches the refined estimate.
-  const Plant p = PhantomTable1();
+  const model::Plant p = model::PhantomTable1();
   for (int d = 1; d <= 10; ++d) {
     const ZWidth z(p, 1e-3, d);
     const double bt = z.Summarize().B_t;
@@ -257,7 +257,7 @@ class RelayDelays : public ::testing::TestWithParam<int> {};
 TEST_P(RelayDelays, PastTheTransitionTheModeCrossingIsTheCriticalOne) {
   // Between B_t and B_max the smallest K is at the vibration mode: the steered
   // runs must pick it over the low crossing that they also find.
-  const Plant p = PhantomTable1();
+  const model::Plant p = model::PhantomTable1();
   const int d = GetParam();
   const ZWidth z(p, 1e-3, d);
   const DelaySummary s = z.Summarize();
@@ -277,7 +277,7 @@ TEST(Relay, ATangentialCrossingIsProbed) {
   // No delay, B = 0.01: the phase only grazes -180 deg near 36 Hz (two
   // crossings 4 Hz apart, between scan runs whose phases are both short of
   // it); the plain relay sits on the mode near 218 Hz.
-  const Plant p = PhantomTable1();
+  const model::Plant p = model::PhantomTable1();
   RelayOptions o;
   o.delay_samples = 0;
   o.damping = 0.01;
@@ -289,7 +289,7 @@ TEST(Relay, ATangentialCrossingIsProbed) {
 }
 
 TEST(Relay, PastBMaxTheLoopDivergesAndKcrIsZero) {
-  const Plant p = PhantomTable1();
+  const model::Plant p = model::PhantomTable1();
   const ZWidth z(p, 1e-3, 2);
   const double b_max = z.Summarize().B_max_from_zero;  // K -> 0+ turns unstable
   RelayOptions o;
@@ -312,7 +312,7 @@ TEST(Relay, PastBMaxTheLoopDivergesAndKcrIsZero) {
 TEST(Relay, ACrossingBelowTheRecordsBandIsFlaggedNotGuessed) {
   // d = 10 at B = 0 crosses near 3.4 Hz; 2 s of relay keep 1 s of steady
   // state, so the band starts at 20 Hz and the crossing lies below it.
-  const Plant p = PhantomTable1();
+  const model::Plant p = model::PhantomTable1();
   RelayOptions o;
   o.delay_samples = 10;
   o.seconds = 2.0;

@@ -36,7 +36,7 @@ TEST(RunAnalysis, BodeIsTheExactZohResponseWithUnwrappedPhases) {
   const analysis::RunAnalysis a = analysis::Analyse(TestInput(offset), {});
   ASSERT_TRUE(a.figures.has_value());
   const analysis::BodeData& b = a.figures->bode;
-  const DiscreteResponse g(DiscretizeZoh(TestPlant(), kT));
+  const model::DiscreteResponse g(model::DiscretizeZoh(TestPlant(), kT));
   const auto& f = a.input.response.frf.f_hz;
   ASSERT_EQ(b.G_abs.size(), f.size());
   for (size_t k = 0; k < f.size(); ++k) {

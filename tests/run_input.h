@@ -13,8 +13,8 @@ namespace zwidth {
 
 inline constexpr double kT = 1e-3;
 
-inline Plant TestPlant() {  // a PHANToM-like device: inertia, damping, one mode, three samples of delay
-  Plant p;
+inline model::Plant TestPlant() {  // a PHANToM-like device: inertia, damping, one mode, three samples of delay
+  model::Plant p;
   p.m = 2e-3;
   p.b = 5e-3;
   const double w = 2 * std::numbers::pi * 60, v = 2 * std::numbers::pi * 40;
@@ -33,7 +33,7 @@ inline analysis::RunInput TestInput(double phase_offset) {
   in.fit.plant = in.model.plant;
   ident::FrequencyResponse& frf = in.response.frf;
   frf.sample_rate_hz = 1 / kT;
-  const DiscreteResponse g(DiscretizeZoh(in.model.plant, kT));
+  const model::DiscreteResponse g(model::DiscretizeZoh(in.model.plant, kT));
   for (int k = 1; k <= 450; ++k) {
     frf.f_hz.push_back(k);
     frf.H.push_back(g.AtTheta(2 * std::numbers::pi * k * kT) * std::polar(1.0, phase_offset));

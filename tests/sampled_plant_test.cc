@@ -21,7 +21,7 @@ namespace {
 // a velocity filter and a hand; and G_d of the sampled plant is the ZOH
 // response of model/state_space.h.
 TEST(SampledPlant, SharedByDelaysGivesTheOneLoopConstructorsNumbers) {
-  const Plant p = PhantomTable1();
+  const model::Plant p = model::PhantomTable1();
   LoopOptions filt;
   filt.filter_b = {0.2};
   filt.filter_a = {1.0, -0.8};
@@ -46,7 +46,7 @@ TEST(SampledPlant, SharedByDelaysGivesTheOneLoopConstructorsNumbers) {
     }
   }
   const SampledPlant sp(p, 1e-3);
-  const DiscreteResponse g(DiscretizeZoh(p, 1e-3));
+  const model::DiscreteResponse g(model::DiscretizeZoh(p, 1e-3));
   for (double th : {0.01, 0.5, 2.0}) {
     const std::complex<double> a = sp.AtTheta(th), b = g.AtTheta(th);
     EXPECT_EQ(a, b);
@@ -58,7 +58,7 @@ TEST(SampledPlant, SharedByDelaysGivesTheOneLoopConstructorsNumbers) {
 // around the damped frequency of each resonance and antiresonance (before the
 // fix only one point per patch survived).
 TEST(SampledPlant, ModePatchesAreDenseAroundEveryMode) {
-  Plant p;
+  model::Plant p;
   p.m = 1e-3;
   p.b = 5e-3;
   p.modes = {{2 * std::numbers::pi * 200, 2.0, 2 * std::numbers::pi * 150, 1.5},
@@ -67,7 +67,7 @@ TEST(SampledPlant, ModePatchesAreDenseAroundEveryMode) {
   const SampledPlant sp(p, T);  // the grid is the plant's: a reference into a temporary would dangle
   const std::vector<double>& th = sp.mode_patch_theta();
   ASSERT_EQ(th.size(), 4u * (2 * kModePatchHalfWidth + 1));
-  for (const Mode& md : p.modes) {
+  for (const model::Mode& md : p.modes) {
     for (auto [w, c] : {std::pair{md.omega, md.c}, std::pair{md.v, md.d}}) {
       const double center = std::sqrt(w * w - c * c / 4) * T, h = c * T / 16;
       int near = 0;
@@ -82,12 +82,12 @@ TEST(SampledPlant, ModePatchesAreDenseAroundEveryMode) {
 }
 
 TEST(SampledPlant, AHandOtherThanTheSampledOnesIsABrokenContract) {
-  const SampledPlant sp(PhantomTable1(), 1e-3);
+  const SampledPlant sp(model::PhantomTable1(), 1e-3);
   LoopOptions l;
   l.hand = {1e-4, 0.0, 0.0};
   EXPECT_THROW(ZWidth(sp, 2, l), std::invalid_argument);
   EXPECT_THROW(ZWidth(sp, -1), InputError);
-  EXPECT_THROW(SampledPlant(PhantomTable1(), 0.0), InputError);
+  EXPECT_THROW(SampledPlant(model::PhantomTable1(), 0.0), InputError);
 }
 
 }  // namespace

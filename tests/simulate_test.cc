@@ -17,19 +17,19 @@ namespace zwidth {
 namespace {
 
 TEST(Simulate, NoiseFreeOutputIsTheConvolutionWithTheImpulseResponse) {
-  const Plant p = PhantomTable1();
-  SimulateOptions o;
+  const model::Plant p = model::PhantomTable1();
+  model::SimulateOptions o;
   o.seconds = 0.5;
   o.encoder_step_rad = 0.0;
   o.delay_samples = 3;
-  const SimulatedLog log = SimulateLog(p, o);
+  const model::SimulatedLog log = model::SimulateLog(p, o);
   // Impulse response h of G_d z^-3 from the state space.
-  Plant pd = p;
+  model::Plant pd = p;
   pd.delay_samples = 3;
-  const StateSpace d = DiscretizeZoh(pd, 1e-3);
+  const model::StateSpace d = model::DiscretizeZoh(pd, 1e-3);
   std::vector<double> imp(log.torque.size(), 0.0);
   imp[0] = 1.0;
-  const std::vector<double> h = SimulateDiscrete(d, imp);
+  const std::vector<double> h = model::SimulateDiscrete(d, imp);
   EXPECT_EQ(h[0], 0.0);
   EXPECT_EQ(h[3], 0.0);  // strictly proper after the delay
   for (size_t k = 0; k < log.torque.size(); k += 37) {
@@ -40,7 +40,7 @@ TEST(Simulate, NoiseFreeOutputIsTheConvolutionWithTheImpulseResponse) {
 }
 
 TEST(Simulate, TorqueHasTheRequestedRms) {
-  const std::vector<double> u = BandLimitedNoise(30000, 1000, 300, 0.03, 5);
+  const std::vector<double> u = model::BandLimitedNoise(30000, 1000, 300, 0.03, 5);
   double ss = 0;
   for (double v : u) ss += v * v;
   EXPECT_NEAR(std::sqrt(ss / u.size()), 0.03, 1e-12);

@@ -11,9 +11,9 @@
 
 namespace zwidth::test {
 
-Plant RandomPlant(std::mt19937_64& rng, const RandomPlantRanges& r, int modes, double T) {
+model::Plant RandomPlant(std::mt19937_64& rng, const RandomPlantRanges& r, int modes, double T) {
   std::uniform_real_distribution<double> U(0, 1);
-  Plant p;
+  model::Plant p;
   p.m = std::pow(10.0, r.log10_m_kg_m2.At(U(rng)));
   p.b = p.m * std::pow(10.0, r.log10_b_over_m_rad_s.At(U(rng)));
   const auto frequency_rad_s = [&] { return 2 * std::numbers::pi * r.hz_unit * r.pole_hz.At(U(rng)); };
@@ -59,7 +59,7 @@ RandomPlantRanges WideRandomModels() {
   return r;
 }
 
-Plant RandomPlausibleDevice(std::mt19937_64& rng, int modes) { return RandomPlant(rng, PlausibleDevice(), modes); }
+model::Plant RandomPlausibleDevice(std::mt19937_64& rng, int modes) { return RandomPlant(rng, PlausibleDevice(), modes); }
 
 TempDir::TempDir(const std::string& prefix) {
   std::string t = (std::filesystem::temp_directory_path() / (prefix + "XXXXXX")).string();

@@ -43,14 +43,14 @@ struct RandomPlantRanges {
 
 // A seeded random plant with `modes` resonance/antiresonance pairs; T [s] is
 // used only by cap_zero_below_nyquist.
-Plant RandomPlant(std::mt19937_64& rng, const RandomPlantRanges& r, int modes, double T = 1e-3);
+model::Plant RandomPlant(std::mt19937_64& rng, const RandomPlantRanges& r, int modes, double T = 1e-3);
 
 // A plausible device (haptic_loop_test, zwidth_test): m 10^-3.5..10^-1,
 // b / m 10^0.3..10^1.5 rad/s, modes 30-400 Hz with damping ratios 0.002-0.3,
 // antiresonances 0.7-1.3 of their resonance.
 RandomPlantRanges PlausibleDevice();
 // RandomPlant(rng, PlausibleDevice(), modes).
-Plant RandomPlausibleDevice(std::mt19937_64& rng, int modes);
+model::Plant RandomPlausibleDevice(std::mt19937_64& rng, int modes);
 
 // Wide random models (the stress tests of the Z-width and the relay): m over 5
 // decades from 1e-5, b / m 0.1..10 rad/s, modes 5-450 Hz with damping ratios

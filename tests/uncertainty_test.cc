@@ -17,7 +17,7 @@ namespace zwidth::stability {
 namespace {
 
 // A covariance with 1-2% relative std and some correlation, seeded.
-std::vector<double> TestCovariance(const Plant& p, double rel_std, unsigned seed) {
+std::vector<double> TestCovariance(const model::Plant& p, double rel_std, unsigned seed) {
   const int n = NumLogParameters(p);
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> g;
@@ -33,7 +33,7 @@ class UncertaintyDelays : public ::testing::TestWithParam<int> {};
 TEST_P(UncertaintyDelays, DeltaMethodAgreesWithMonteCarlo) {
   // Table I at d = 2 (a transition and an interior-free K_CR^max at B_t) and
   // d = 8, 1% relative std; 300 seeded samples (std of a sample std ~ 4%).
-  const Plant p = PhantomTable1();
+  const model::Plant p = model::PhantomTable1();
   const std::vector<double> cov = TestCovariance(p, 0.01, 3);
   const int d = GetParam();
   const ZWidth z(p, 1e-3, d);
@@ -83,7 +83,7 @@ TEST_P(UncertaintyDelays, DeltaMethodAgreesWithMonteCarlo) {
 INSTANTIATE_TEST_SUITE_P(TableOne, UncertaintyDelays, ::testing::Values(2, 8), test::DelayName());
 
 TEST(Uncertainty, RejectsABadCovariance) {
-  const Plant p = PhantomTable1();
+  const model::Plant p = model::PhantomTable1();
   EXPECT_THROW(CheckLogCovariance(p, {1.0, 0.0}), InputError);
   std::vector<double> c = TestCovariance(p, 0.01, 1);
   c[1] += 1.0;  // not symmetric

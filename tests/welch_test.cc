@@ -161,12 +161,12 @@ TEST(Welch, StreamingInChunksEqualsOneShot) {
 }
 
 TEST(Welch, RigidBodyPhaseIsAboutMinus180AtLowFrequency) {
-  Plant p;
+  model::Plant p;
   p.m = 1e-3;
   p.b = 1e-4;
-  SimulateOptions so;
+  model::SimulateOptions so;
   so.encoder_step_rad = 0;
-  const SimulatedLog log = SimulateLog(p, so);
+  const model::SimulatedLog log = model::SimulateLog(p, so);
   WelchOptions o;
   o.fmin_hz = 2;
   o.fmax_hz = 20;
@@ -176,12 +176,12 @@ TEST(Welch, RigidBodyPhaseIsAboutMinus180AtLowFrequency) {
 }
 
 TEST(Welch, SimulatedLogGivesTheExactSampledResponse) {
-  const Plant p = PhantomTable1();
-  SimulateOptions so;
+  const model::Plant p = model::PhantomTable1();
+  model::SimulateOptions so;
   so.encoder_step_rad = 0;
-  const SimulatedLog log = SimulateLog(p, so);
+  const model::SimulatedLog log = model::SimulateLog(p, so);
   const FrequencyResponse r = EstimateFrequencyResponse(log.torque, log.position, 1000, WelchOptions{});
-  const DiscreteResponse exact(DiscretizeZoh(p, 1e-3));
+  const model::DiscreteResponse exact(model::DiscretizeZoh(p, 1e-3));
   std::vector<double> err;
   for (size_t k = 0; k < r.f_hz.size(); ++k) {
     if (r.f_hz[k] < 1 || r.coherence[k] < 0.99) continue;

@@ -17,7 +17,7 @@ namespace zwidth::stability {
 namespace {
 
 // Random models: test::WideRandomModels().
-Plant RandomModel(std::mt19937_64& rng, int nm, double T) { return test::RandomPlant(rng, test::WideRandomModels(), nm, T); }
+model::Plant RandomModel(std::mt19937_64& rng, int nm, double T) { return test::RandomPlant(rng, test::WideRandomModels(), nm, T); }
 
 TEST(ZWidth, StressRandomModelsAgreeWithBruteForce) {
   std::mt19937_64 rng(11);
@@ -25,7 +25,7 @@ TEST(ZWidth, StressRandomModelsAgreeWithBruteForce) {
   int checked = 0;
   for (int trial = 0; trial < 60; ++trial) {
     const double T = 1e-3;
-    const Plant p = RandomModel(rng, trial % 5, T);
+    const model::Plant p = RandomModel(rng, trial % 5, T);
     const int d = static_cast<int>(U(rng) * 12);
     const ZWidth z(p, T, d);
     const BruteForce bf(p, T, d);
@@ -50,7 +50,7 @@ TEST(ZWidth, StressRandomModelsAgreeWithBruteForce) {
 class ZWidthLongDelays : public ::testing::TestWithParam<int> {};
 
 TEST_P(ZWidthLongDelays, LongDelaysAgreeWithBruteForce) {
-  const Plant p = PhantomTable1();
+  const model::Plant p = model::PhantomTable1();
   const int d = GetParam();
   const ZWidth z(p, 1e-3, d);
   const BruteForce bf(p, 1e-3, d);

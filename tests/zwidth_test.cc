@@ -22,7 +22,7 @@ namespace zwidth::stability {
 namespace {
 
 TEST(ZWidth, AppendixModelFactsAtTwoAndFourSamples) {
-  const Plant p = PhantomTable1();
+  const model::Plant p = model::PhantomTable1();
   const DelaySummary s2 = ZWidth(p, 1e-3, 2).Summarize();
   EXPECT_NEAR(s2.B_t, 0.0855, 0.0005);
   EXPECT_NEAR(s2.K_cr_max, 36.74, 0.01);
@@ -39,7 +39,7 @@ TEST(ZWidth, AppendixModelFactsAtTwoAndFourSamples) {
 }
 
 TEST(ZWidth, RigidBodyAtTwoSamples) {
-  Plant p = PhantomTable1();
+  model::Plant p = model::PhantomTable1();
   p.modes.clear();
   const CriticalPoint c = ZWidth(p, 1e-3, 2).At(0.0);
   const BruteForce bf(p, 1e-3, 2);
@@ -59,7 +59,7 @@ TEST(ZWidth, RigidBodyAtTwoSamples) {
 class ZWidthDelays : public ::testing::TestWithParam<int> {};
 
 TEST_P(ZWidthDelays, AgreesWithBruteForceOverDelaysAndDampings) {
-  const Plant p = PhantomTable1();
+  const model::Plant p = model::PhantomTable1();
   const int d = GetParam();
   const ZWidth z(p, 1e-3, d);
   const BruteForce bf(p, 1e-3, d);
@@ -85,7 +85,7 @@ TEST_P(ZWidthDelays, AgreesWithBruteForceOverDelaysAndDampings) {
 INSTANTIATE_TEST_SUITE_P(OneToTen, ZWidthDelays, ::testing::Range(1, 11), test::DelayName());
 
 TEST(ZWidth, MarginReadingStaysPositivePastBMax) {
-  const ZWidth z(PhantomTable1(), 1e-3, 2);
+  const ZWidth z(model::PhantomTable1(), 1e-3, 2);
   const CriticalPoint c = z.At(0.15);
   EXPECT_EQ(c.K_cr, 0.0);
   EXPECT_TRUE(c.unstable_at_zero_k);
@@ -96,10 +96,10 @@ TEST(ZWidth, MarginReadingStaysPositivePastBMax) {
 }
 
 TEST(ZWidth, DegenerateCases) {
-  EXPECT_THROW(ZWidth(PhantomTable1(), 0.0, 2), InputError);
-  EXPECT_THROW(ZWidth(PhantomTable1(), 1e-3, -1), InputError);
+  EXPECT_THROW(ZWidth(model::PhantomTable1(), 0.0, 2), InputError);
+  EXPECT_THROW(ZWidth(model::PhantomTable1(), 1e-3, -1), InputError);
   // The pole at z = 1: K < 0 is never stable; K = 0+ at B = 0 is.
-  const ZWidth z(PhantomTable1(), 1e-3, 2);
+  const ZWidth z(model::PhantomTable1(), 1e-3, 2);
   EXPECT_FALSE(z.IsStable(-1e-6, 0.0));
   EXPECT_TRUE(z.IsStable(0.0, 0.0));
 }
@@ -109,8 +109,8 @@ TEST(ZWidth, DegenerateCases) {
 // eigenvalues, tests/brute_force.h), B_max, the B grid, and the delta-method
 // std against Monte Carlo.
 // The issue's first example device (m 2e-3, three modes, own delay 1).
-Plant IssueDeviceOne() {
-  Plant p;
+model::Plant IssueDeviceOne() {
+  model::Plant p;
   p.m = 2e-3;
   p.b = 0.008;
   p.delay_samples = 1;
@@ -118,8 +118,8 @@ Plant IssueDeviceOne() {
   return p;
 }
 // The second (two lightly damped modes).
-Plant IssueDeviceTwo() {
-  Plant p;
+model::Plant IssueDeviceTwo() {
+  model::Plant p;
   p.m = 1.53e-3;
   p.b = 6.609e-3;
   p.modes = {{745.28, 0.15689, 626.46, 0.36921}, {1026.0, 1.8126, 827.44, 0.45092}};
@@ -128,7 +128,7 @@ Plant IssueDeviceTwo() {
 
 // 120 values of B up to 1.3 B_max, 20 points inside each interval
 // (tests/brute_force.h's Classify).
-Tally Classify(const Plant& p, int delay, int min_points) {
+Tally Classify(const model::Plant& p, int delay, int min_points) {
   const double T = 1e-3;
   const ZWidth z(p, T, delay);
   const BruteForce bf(p, T, delay);
@@ -139,8 +139,8 @@ Tally Classify(const Plant& p, int delay, int min_points) {
 
 TEST(StableIntervals, AgreeWithEigenvaluesOnRandomDevicesAndTheIssuesExamples) {
   std::mt19937_64 rng(20261127);
-  struct Case { Plant p; int d; };
-  std::vector<Case> cases = {{IssueDeviceOne(), 4}, {IssueDeviceTwo(), 5}, {PhantomTable1(), 2}};
+  struct Case { model::Plant p; int d; };
+  std::vector<Case> cases = {{IssueDeviceOne(), 4}, {IssueDeviceTwo(), 5}, {model::PhantomTable1(), 2}};
   std::uniform_int_distribution<int> delay(0, 20);
   for (int k = 0; k < 8; ++k) cases.push_back({test::RandomPlausibleDevice(rng, k % 4), k == 0 ? 0 : k == 1 ? 20 : delay(rng)});
   long total = 0, reopened = 0, near = 0;
@@ -192,7 +192,7 @@ TEST(StableIntervals, NothingIsStableJustPastBMax) {
   // B_max against the brute force: past it a dense K scan finds no stable K,
   // just before it the intervals' midpoint is stable by eigenvalues.
   std::mt19937_64 rng(7);
-  std::vector<std::pair<Plant, int>> cases = {{IssueDeviceOne(), 4}, {IssueDeviceTwo(), 5}, {PhantomTable1(), 2}};
+  std::vector<std::pair<model::Plant, int>> cases = {{IssueDeviceOne(), 4}, {IssueDeviceTwo(), 5}, {model::PhantomTable1(), 2}};
   for (int k = 0; k < 4; ++k) cases.push_back({test::RandomPlausibleDevice(rng, 1 + k % 3), 1 + 3 * k});
   for (const auto& [p, d] : cases) {
     const ZWidth z(p, 1e-3, d);
@@ -217,7 +217,7 @@ TEST(StableIntervals, NothingIsStableJustPastBMax) {
 }
 
 TEST(StableIntervals, KcrIsTheUpperEndOfTheIntervalFromZero) {
-  const ZWidth z(PhantomTable1(), 1e-3, 2);
+  const ZWidth z(model::PhantomTable1(), 1e-3, 2);
   for (double B : {0.0, 0.02, 0.05, 0.09, 0.099, 0.12}) {
     const CriticalPoint c = z.At(B);
     const std::vector<KInterval> iv = z.StableIntervals(B);
