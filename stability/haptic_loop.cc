@@ -272,103 +272,13 @@ double SignedReach(double left, double mid, double right) {
 
 PassiveInterval Passivity::At(double B) const {
   PassiveInterval out;
-  const double inf = std::numeric_limits<double>::infinity();
-  // Ratio (b + B R)/P where P > 0 (an upper bound on K), where P < 0 a lower bound.
-  auto upper = [&](double t) {
-    double P, R;
-    PR(t, &P, &R);
-    return P > 0.0 ? (b_ + B * R) / P : inf;
-  };
-  auto lower = [&](double t) {
-    double P, R;
-    PR(t, &P, &R);
-    return P < 0.0 ? (b_ + B * R) / P : -inf;
-  };
-  const size_t n = th_.size();
-  // On the grid: u, the upper bounds (inf where P <= 0), and l, the lower ones
-  // (-inf where P >= 0), as (b + B R) times 1/P (a division per point cost
-  // more than the rest); the values that reach the result are recomputed as
-  // (b + B R)/P, the products only choose the candidates: every grid local
-  // minimum of u (endpoints 0 and pi included: they are exact grid points) and
-  // every interior local maximum of l. A candidate is refined (golden section
-  // on its two neighbouring cells) unless its grid value less its reach cannot
-  // beat the best value so far: it could not change the result. Blocks of the
-  // grid are visited best bound first, and a block whose bound (its smallest
-  // u less the largest reach it allows; see Block) cannot beat the best value
-  // is not scanned at all.
-  auto g = [&](size_t i) { return (b_ + B * R_[i]) * inv_P_[i]; };
-  auto u = [&](size_t i) { return g(i) + upper_penalty_[i]; };
-  auto l = [&](size_t i) { return g(i) + lower_penalty_[i]; };
-  auto exact = [&](size_t i) { return (b_ + B * R_[i]) / P_[i]; };
-  bool zero_fail = false;
+  bool zero_fail = false;  // P = 0 exactly at a grid point: the condition reads b + B R > 0
   for (size_t i : zero_P_) zero_fail = zero_fail || !(b_ + B * R_[i] > 0.0);
-  const double absB = std::abs(B);
-  std::vector<std::pair<double, size_t>> order;  // (bound, block)
-  order.reserve(blocks_.size());
-
-  // K_hi: the smallest upper bound.
-  for (size_t k = 0; k < blocks_.size(); ++k) {
-    const Block& bk = blocks_[k];
-    if (!bk.up.any) continue;
-    const double lb = bk.up.a_min + (B >= 0.0 ? B * bk.up.s_min : B * bk.up.s_max);
-    order.push_back({lb - bk.up.da_max - absB * bk.up.ds_max - 1e-12 * (bk.up.a_abs + absB * bk.up.s_abs), k});
-  }
-  std::sort(order.begin(), order.end());
-  double hi = inf, th_hi = std::numeric_limits<double>::quiet_NaN();
-  std::vector<Candidate> cands;
-  for (const auto& [bound, k] : order) {
-    if (bound >= hi) break;
-    cands.clear();
-    for (size_t i = blocks_[k].first; i < blocks_[k].last; ++i) {
-      const double uc = u(i);
-      if (!(uc < inf)) continue;
-      const double ul = i > 0 ? u(i - 1) : inf, ur = i + 1 < n ? u(i + 1) : inf;
-      if ((i == 0 || uc <= ul) && (i + 1 == n || uc <= ur))
-        cands.push_back({i, uc, i > 0 && i + 1 < n ? SignedReach(ul, uc, ur) : 0.0});
-    }
-    std::sort(cands.begin(), cands.end(), [](const Candidate& x, const Candidate& y) { return x.value < y.value; });
-    for (const Candidate& c : cands) {
-      if (c.value - c.reach >= hi) continue;
-      double t = th_[c.i], v = exact(c.i);
-      if (c.i > 0 && c.i + 1 < n) {
-        const double tt = internal::GoldenExtremum(upper, th_[c.i - 1], th_[c.i + 1], -1.0, options_.theta_tolerance);
-        const double vv = upper(tt);
-        if (vv < v) { v = vv; t = tt; }
-      }
-      if (v < hi) { hi = v; th_hi = t; }
-    }
-  }
-
-  // K_lo = max(0, the largest lower bound): only a lower bound above 0 counts.
-  order.clear();
-  for (size_t k = 0; k < blocks_.size(); ++k) {
-    const Block& bk = blocks_[k];
-    if (!bk.down.any) continue;
-    const double ub = bk.down.a_max + (B >= 0.0 ? B * bk.down.s_max : B * bk.down.s_min);
-    order.push_back({-(ub + bk.down.da_max + absB * bk.down.ds_max + 1e-12 * (bk.down.a_abs + absB * bk.down.s_abs)), k});
-  }
-  std::sort(order.begin(), order.end());
-  double lo = 0.0;
-  for (const auto& [neg_bound, k] : order) {
-    if (-neg_bound <= lo) break;
-    cands.clear();
-    for (size_t i = blocks_[k].first; i < blocks_[k].last; ++i) {
-      const double lc = l(i);
-      if (!(lc > -inf)) continue;
-      lo = std::max(lo, exact(i));
-      if (i == 0 || i + 1 == n) continue;
-      const double ll = l(i - 1), lr = l(i + 1);
-      if (lc >= ll && lc >= lr) cands.push_back({i, -lc, SignedReach(-ll, -lc, -lr)});
-    }
-    std::sort(cands.begin(), cands.end(), [](const Candidate& x, const Candidate& y) { return x.value < y.value; });
-    for (const Candidate& c : cands) {
-      if (-(c.value - c.reach) <= lo) continue;
-      lo = std::max(lo, exact(c.i));
-      const double tt = internal::GoldenExtremum(lower, th_[c.i - 1], th_[c.i + 1], 1.0, options_.theta_tolerance);
-      lo = std::max(lo, lower(tt));
-    }
-  }
-  out.K_lo = lo;
+  // K_hi: the smallest upper bound; K_lo = max(0, the largest lower bound),
+  // found as the smallest of minus the lower bounds below 0.
+  double th_hi = std::numeric_limits<double>::quiet_NaN();
+  const double hi = Smallest(B, 1.0, std::numeric_limits<double>::infinity(), &th_hi);
+  out.K_lo = std::max(0.0, -Smallest(B, -1.0, 0.0, nullptr));
   out.theta_hi = th_hi;
   if (zero_fail || !(hi > out.K_lo)) {
     out.passive_set_empty = true;
@@ -378,6 +288,76 @@ PassiveInterval Passivity::At(double B) const {
   }
   out.K_hi = hi;
   return out;
+}
+
+// The bounds are v(theta) = sign (b + B R)/P where sign P > 0 (+inf elsewhere):
+// sign +1 the upper bounds on K, sign -1 minus the lower ones.
+//
+// On the grid v is computed as sign (b + B R) times 1/P plus 0 or an infinite
+// penalty (a division per point cost more than the rest of At); the values
+// that reach the result are recomputed as sign (b + B R)/P, the products only
+// choose the candidates: every grid local minimum of v (endpoints 0 and pi are
+// exact grid points, taken as they are). A candidate is refined (golden
+// section on its two neighbouring cells) unless its grid value less its reach
+// cannot beat the best value so far: it could not change the result. Blocks
+// of the grid are visited best bound first, and a block whose bound (its
+// smallest v less the largest reach it allows; see Block) cannot beat the
+// best value is not scanned. For the lower bounds (sign -1) every scanned
+// point's value counts, not only the candidates' (the grid's largest lower
+// bound, as before the pruning).
+double Passivity::Smallest(double B, double sign, double best, double* theta) const {
+  const double inf = std::numeric_limits<double>::infinity();
+  auto v = [&](double t) {
+    double P, R;
+    PR(t, &P, &R);
+    return sign * P > 0.0 ? sign * (b_ + B * R) / P : inf;
+  };
+  const size_t n = th_.size();
+  auto approx = [&](size_t i) {
+    const double pen = sign > 0 ? upper_penalty_[i] : -lower_penalty_[i];
+    return sign * (b_ + B * R_[i]) * inv_P_[i] + pen;
+  };
+  auto exact = [&](size_t i) { return sign * (b_ + B * R_[i]) / P_[i]; };
+  const bool every_point = sign < 0;
+  const double absB = std::abs(B);
+  std::vector<std::pair<double, size_t>> order;  // (bound, block)
+  order.reserve(blocks_.size());
+  for (size_t k = 0; k < blocks_.size(); ++k) {
+    const LineBounds& lb = sign > 0 ? blocks_[k].up : blocks_[k].down;
+    if (!lb.any) continue;
+    const double low = sign > 0 ? lb.a_min + (B >= 0.0 ? B * lb.s_min : B * lb.s_max)
+                                : -(lb.a_max + (B >= 0.0 ? B * lb.s_max : B * lb.s_min));
+    order.push_back({low - lb.da_max - absB * lb.ds_max - 1e-12 * (lb.a_abs + absB * lb.s_abs), k});
+  }
+  std::sort(order.begin(), order.end());
+  std::vector<Candidate> cands;
+  for (const auto& [bound, k] : order) {
+    if (bound >= best) break;
+    cands.clear();
+    for (size_t i = blocks_[k].first; i < blocks_[k].last; ++i) {
+      const double vc = approx(i);
+      if (!(vc < inf)) continue;
+      if (every_point) best = std::min(best, exact(i));
+      const double vl = i > 0 ? approx(i - 1) : inf, vr = i + 1 < n ? approx(i + 1) : inf;
+      if ((i == 0 || vc <= vl) && (i + 1 == n || vc <= vr) && !(every_point && (i == 0 || i + 1 == n)))
+        cands.push_back({i, vc, i > 0 && i + 1 < n ? SignedReach(vl, vc, vr) : 0.0});
+    }
+    std::sort(cands.begin(), cands.end(), [](const Candidate& x, const Candidate& y) { return x.value < y.value; });
+    for (const Candidate& c : cands) {
+      if (c.value - c.reach >= best) continue;
+      double t = th_[c.i], val = exact(c.i);
+      if (c.i > 0 && c.i + 1 < n) {
+        const double tt = internal::GoldenExtremum(v, th_[c.i - 1], th_[c.i + 1], -1.0, options_.theta_tolerance);
+        const double vv = v(tt);
+        if (every_point || vv < val) { val = std::min(val, vv); t = tt; }
+      }
+      if (val < best) {
+        best = val;
+        if (theta) *theta = t;
+      }
+    }
+  }
+  return best;
 }
 
 // ---- Cut-off sweep

@@ -97,6 +97,9 @@ class Passivity {
 
  private:
   void PR(double theta, double* P, double* R) const;
+  // min over theta of sign (b + B R)/P where sign P > 0, if below `best`
+  // (else `best`); *theta (may be null): where it is set.
+  double Smallest(double B, double sign, double best, double* theta) const;
   double b_, T_;
   int D_;
   LoopOptions loop_;
