@@ -457,6 +457,17 @@ DelaySummary ZWidth::Summarize() const {
   const CriticalPoint c0 = At(0.0);
   s.K_cr_at_zero_B = c0.K_cr;
   s.f_at_zero_B_hz = c0.f_cr_hz;
+  const std::vector<double> cand = ZeroKBoundary(c0, &s);
+  ScanStableB(cand, &s);
+  if (c0.unstable_at_zero_k) return s;
+  ScanKcrMax(c0, cand, &s);
+  return s;
+}
+
+// B_max_from_zero and the B > 0 where the K = 0 boundary is crossed (sorted):
+// where bands can start or end.
+std::vector<double> ZWidth::ZeroKBoundary(const CriticalPoint& c0, DelaySummary* out) const {
+  DelaySummary& s = *out;
   // B_max_from_zero: the first B > 0 on the K = 0 boundary where K -> 0+ turns unstable.
   std::vector<double> cand;
   auto Kof = [this](double t) { double b, k; Point(t, &b, &k); return k; };
@@ -478,6 +489,12 @@ DelaySummary ZWidth::Summarize() const {
       if (IsStable(0.0, b * (1.0 - 1e-9)) && !IsStable(0.0, b * (1.0 + 1e-9))) { s.B_max_from_zero = b; break; }
     }
   }
+  return cand;
+}
+
+// B_max and the reopened bands past B_max_from_zero.
+void ZWidth::ScanStableB(const std::vector<double>& cand, DelaySummary* out) const {
+  DelaySummary& s = *out;
   // B_max and the reopened bands: scan B up to the bound past which no crossing
   // with K > 0 exists, uniformly, geometrically, and at both sides of every
   // fold of the curve and every K = 0 point (where bands start or end).
@@ -533,7 +550,11 @@ DelaySummary ZWidth::Summarize() const {
   } else {
     s.B_max = std::isfinite(s.B_max_from_zero) ? s.B_max_from_zero : s.B_max;
   }
-  if (c0.unstable_at_zero_k) return s;
+}
+
+// K_CR^max (and where), and the transition B_t where f_CR jumps, on [0, B_max_from_zero).
+void ZWidth::ScanKcrMax(const CriticalPoint& c0, const std::vector<double>& cand, DelaySummary* out) const {
+  DelaySummary& s = *out;
   // Scan [0, B_max_from_zero) for the jump of f_CR and the maximum of K_CR.
   const double b_hi = std::isfinite(s.B_max_from_zero) ? s.B_max_from_zero : (cand.empty() ? 1.0 : 2.0 * cand.back());
   const int n = 200;
@@ -567,7 +588,6 @@ DelaySummary ZWidth::Summarize() const {
     const double km = At(bm).K_cr;
     if (km > s.K_cr_max) { s.K_cr_max = km; s.B_at_K_cr_max = bm; }
   }
-  return s;
 }
 
 SummaryStd ZWidth::SummarizeNear(const DelaySummary& nom) const {

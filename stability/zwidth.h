@@ -188,6 +188,10 @@ class ZWidth {
   double HzOf(double theta) const;
   // Largest B of the D-decomposition curve (and of the theta = pi line) with K > 0.
   double StableBBound() const;
+  // The three parts of Summarize.
+  std::vector<double> ZeroKBoundary(const CriticalPoint& c0, DelaySummary* s) const;
+  void ScanStableB(const std::vector<double>& cand, DelaySummary* s) const;
+  void ScanKcrMax(const CriticalPoint& c0, const std::vector<double>& cand, DelaySummary* s) const;
   // V(theta) = F(e^{j theta})(1 - e^{-j theta})/T.
   std::complex<double> V(double c, double s) const;
 
