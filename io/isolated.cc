@@ -70,86 +70,61 @@ bool WriteFrame(int fd, char type, const void* data, uint64_t n) {
   return WriteAll(fd, &type, 1) && WriteAll(fd, &n, sizeof n) && WriteAll(fd, data, n);
 }
 
-}  // namespace
-
-void RunIsolated(const std::string& path, const std::function<void(const FrameSender&)>& produce,
-                 const std::function<void(std::string_view frame)>& consume) {
-  auto in_process = [&] {
-    produce([&](const void* data, size_t n) { consume(std::string_view(static_cast<const char*>(data), n)); });
-  };
-  int fds[2];
-  if (::pipe(fds) != 0) return in_process();
-  std::fflush(nullptr);
-  const pid_t parent = ::getpid();
-  const pid_t pid = ::fork();
-  if (pid < 0) {
-    ::close(fds[0]);
-    ::close(fds[1]);
-    return in_process();
+// The child: limits, produce onto the pipe `out`, and leave without running
+// destructors (exit 2 after an error frame, 3 when the parent is gone).
+[[noreturn]] void RunChild(const std::string& path, const std::function<void(const FrameSender&)>& produce, int out,
+                           pid_t parent) {
+  BecomeChild(parent, SIGKILL);
+  const rlimit cpu = {kChildCpuSeconds, kChildCpuSeconds + 5};
+  ::setrlimit(RLIMIT_CPU, &cpu);
+  if (!ZWIDTH_SANITIZED) {  // ASan reserves terabytes of address space for its shadow
+    const rlimit as = {kChildAddressSpaceBytes, kChildAddressSpaceBytes};
+    ::setrlimit(RLIMIT_AS, &as);
   }
-  if (pid == 0) {  // child: produce, and leave without running destructors
-    BecomeChild(parent, SIGKILL);
-    const rlimit cpu = {kChildCpuSeconds, kChildCpuSeconds + 5};
-    ::setrlimit(RLIMIT_CPU, &cpu);
-    if (!ZWIDTH_SANITIZED) {  // ASan reserves terabytes of address space for its shadow
-      const rlimit as = {kChildAddressSpaceBytes, kChildAddressSpaceBytes};
-      ::setrlimit(RLIMIT_AS, &as);
-    }
-    ::close(fds[0]);
-    const int out = fds[1];
-    int code = 0;
-    try {
-      produce([&](const void* data, size_t n) {
-        if (!WriteFrame(out, kData, data, n)) ::_exit(3);  // the parent is gone
-      });
-      WriteFrame(out, kEnd, nullptr, 0);
-    } catch (const std::bad_alloc&) {
-      const std::string msg = path + ": reading it needs more memory than a valid file would "
-                                     "(corrupt sizes in the file?)";
-      WriteFrame(out, kError, msg.data(), msg.size());
-      code = 2;
-    } catch (const std::exception& e) {
-      const std::string msg = e.what();
-      WriteFrame(out, kError, msg.data(), msg.size());
-      code = 2;
-    }
-    ::close(out);
-    ::_exit(code);
-  }
-  ::close(fds[1]);
-  const int in = fds[0];
-  auto reap = [&](bool kill_child) {
-    if (kill_child) ::kill(pid, SIGKILL);
-    int status = 0;
-    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-    }
-    ::close(in);
-    return status;
-  };
-  std::string frame, error;
-  bool done = false;
+  int code = 0;
   try {
-    char type = 0;
-    uint64_t n = 0;
-    while (!done && ReadAll(in, &type, 1) && ReadAll(in, &n, sizeof n) && n <= kMaxFrame) {
-      frame.resize(n);
-      if (!ReadAll(in, frame.data(), n)) break;
-      if (type == kData) {
-        consume(frame);
-      } else if (type == kError) {
-        error = frame.empty() ? path + ": unreadable file" : frame;
-        break;
-      } else if (type == kEnd) {
-        done = true;
-      } else {
-        break;
-      }
-    }
-  } catch (...) {
-    reap(true);
-    throw;
+    produce([&](const void* data, size_t n) {
+      if (!WriteFrame(out, kData, data, n)) ::_exit(3);  // the parent is gone
+    });
+    WriteFrame(out, kEnd, nullptr, 0);
+  } catch (const std::bad_alloc&) {
+    const std::string msg = path + ": reading it needs more memory than a valid file would "
+                                   "(corrupt sizes in the file?)";
+    WriteFrame(out, kError, msg.data(), msg.size());
+    code = 2;
+  } catch (const std::exception& e) {
+    const std::string msg = e.what();
+    WriteFrame(out, kError, msg.data(), msg.size());
+    code = 2;
   }
-  const int status = reap(false);
+  ::close(out);
+  ::_exit(code);
+}
+
+// The parent: hands every data frame to consume until the end frame (returns
+// true) or an error frame (*error) or a broken pipe (false).
+bool ReadFrames(int in, const std::string& path, const std::function<void(std::string_view frame)>& consume,
+                std::string* error) {
+  std::string frame;
+  char type = 0;
+  uint64_t n = 0;
+  while (ReadAll(in, &type, 1) && ReadAll(in, &n, sizeof n) && n <= kMaxFrame) {
+    frame.resize(n);
+    if (!ReadAll(in, frame.data(), n)) return false;
+    if (type == kData) {
+      consume(frame);
+    } else if (type == kError) {
+      *error = frame.empty() ? path + ": unreadable file" : frame;
+      return false;
+    } else {
+      return type == kEnd;
+    }
+  }
+  return false;
+}
+
+// How the child ended, as the user's error (InputError) or a sanitizer's abort.
+void CheckChild(const std::string& path, int status, const std::string& error, bool done) {
   // A sanitizer ends a process it reports on with its exitcode (1 by default),
   // or with SIGABRT under abort_on_error=1 (scripts/sanitize).
   if (ZWIDTH_SANITIZED && ((WIFEXITED(status) && WEXITSTATUS(status) != 0 && WEXITSTATUS(status) != 2 &&
@@ -169,6 +144,48 @@ void RunIsolated(const std::string& path, const std::function<void(const FrameSe
                      std::to_string(WTERMSIG(status)) + "): the file is corrupt or truncated");
   }
   if (!done) throw InputError(path + ": could not read the file (corrupt or truncated?)");
+}
+
+}  // namespace
+
+void RunIsolated(const std::string& path, const std::function<void(const FrameSender&)>& produce,
+                 const std::function<void(std::string_view frame)>& consume) {
+  auto in_process = [&] {
+    produce([&](const void* data, size_t n) { consume(std::string_view(static_cast<const char*>(data), n)); });
+  };
+  int fds[2];
+  if (::pipe(fds) != 0) return in_process();
+  std::fflush(nullptr);
+  const pid_t parent = ::getpid();
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(fds[0]);
+    ::close(fds[1]);
+    return in_process();
+  }
+  if (pid == 0) {
+    ::close(fds[0]);
+    RunChild(path, produce, fds[1], parent);
+  }
+  ::close(fds[1]);
+  const int in = fds[0];
+  auto reap = [&](bool kill_child) {
+    if (kill_child) ::kill(pid, SIGKILL);
+    int status = 0;
+    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    ::close(in);
+    return status;
+  };
+  std::string error;
+  bool done = false;
+  try {
+    done = ReadFrames(in, path, consume, &error);
+  } catch (...) {
+    reap(true);
+    throw;
+  }
+  CheckChild(path, reap(false), error, done);
 }
 
 bool SanitizedBuild() { return ZWIDTH_SANITIZED != 0; }
