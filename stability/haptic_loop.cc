@@ -193,7 +193,7 @@ Passivity::Passivity(double b_phys, double period_s, int total_delay, const Loop
     PR(th_[i], &P_[i], &R_[i]);
     inv_P_[i] = P_[i] != 0.0 ? 1.0 / P_[i] : 0.0;
     upper_penalty_[i] = P_[i] > 0.0 ? 0.0 : inf;
-    lower_penalty_[i] = P_[i] < 0.0 ? 0.0 : -inf;
+    lower_penalty_[i] = P_[i] < 0.0 ? 0.0 : inf;
     if (P_[i] == 0.0) zero_P_.push_back(i);
   }
   // Blocks of the grid with the bounds of their lines u_i(B) = a_i + s_i B,
@@ -313,10 +313,8 @@ double Passivity::Smallest(double B, double sign, double best, double* theta) co
     return sign * P > 0.0 ? sign * (b_ + B * R) / P : inf;
   };
   const size_t n = th_.size();
-  auto approx = [&](size_t i) {
-    const double pen = sign > 0 ? upper_penalty_[i] : -lower_penalty_[i];
-    return sign * (b_ + B * R_[i]) * inv_P_[i] + pen;
-  };
+  const double* pen = sign > 0 ? upper_penalty_.data() : lower_penalty_.data();
+  auto approx = [&](size_t i) { return sign * (b_ + B * R_[i]) * inv_P_[i] + pen[i]; };
   auto exact = [&](size_t i) { return sign * (b_ + B * R_[i]) / P_[i]; };
   const bool every_point = sign < 0;
   const double absB = std::abs(B);

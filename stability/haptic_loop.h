@@ -104,8 +104,9 @@ class Passivity {
   int D_;
   LoopOptions loop_;
   PassivityOptions options_;
-  // The theta grid, P, R and 1/P (0 where P = 0) on it; 0 or +inf (-inf) where
-  // P > 0 (P < 0) does not hold; the grid points where P = 0.
+  // The theta grid, P, R and 1/P (0 where P = 0) on it; penalties added to the
+  // upper bounds (0 where P > 0, +inf elsewhere) and to minus the lower ones
+  // (0 where P < 0, +inf elsewhere); the grid points where P = 0.
   std::vector<double> th_, P_, R_, inv_P_, upper_penalty_, lower_penalty_;
   std::vector<size_t> zero_P_;
   // Bounds of the lines a_i + s_i B over a block's points of one sign of P,
