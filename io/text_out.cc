@@ -1,4 +1,6 @@
+#include <cassert>
 #include <charconv>
+#include <string>
 #include <cstdio>
 
 #include "io/io_internal.h"
@@ -7,8 +9,10 @@
 namespace zwidth::io::internal {
 
 void AppendG(std::string* out, double v, int digits) {
+  assert(digits >= 1 && digits <= 17);  // a double has 17 significant digits; the buffer fits them
   char buf[64];
   const std::to_chars_result r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, digits);
+  if (r.ec != std::errc()) throw ComputationError("cannot format a number with " + std::to_string(digits) + " digits");
   out->append(buf, r.ptr);
 }
 

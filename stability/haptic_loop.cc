@@ -217,6 +217,14 @@ Passivity::Passivity(double b_phys, double period_s, int total_delay, const Loop
       lb.a_abs = std::max(lb.a_abs, std::abs(a));
       lb.s_abs = std::max(lb.s_abs, std::abs(sl));
     }
+    // A point of one sign next to one of another sign (or P = 0): its block
+    // holds a candidate of infinite reach, and is always scanned.
+    for (size_t i = bk.first; i < bk.last; ++i) {
+      if (P_[i] == 0.0) continue;
+      const bool pos = P_[i] > 0.0;
+      auto other = [&](size_t j) { return P_[j] == 0.0 || (P_[j] > 0.0) != pos; };
+      if ((i > 0 && other(i - 1)) || (i + 1 < m && other(i + 1))) (pos ? bk.up : bk.down).edge = true;
+    }
     for (size_t i = bk.first > 0 ? bk.first - 1 : 0; i + 1 < m && i < bk.last; ++i) {
       if (P_[i] == 0.0 || (P_[i] > 0.0) != (P_[i + 1] > 0.0) || P_[i + 1] == 0.0) continue;
       LineBounds& lb = P_[i] > 0.0 ? bk.up : bk.down;
@@ -257,15 +265,21 @@ namespace {
 // grid points the parabola's vertex lies (q - p)^2 / (8 (p + q)) <= (p + q)/8
 // below the middle value (p, q >= 0 its rises to the neighbours); reach is four
 // times that, (p + q)/2, so a candidate is refined unless even a much sharper
-// dip than the grid shows could not beat the best refined value.
+// dip than the grid shows could not beat the best refined value. Next to a
+// grid point where the bound does not apply (the other sign of P, or P = 0)
+// the function is not smooth across the cell, and reach is infinite: such a
+// candidate is always refined. This is a bound on what the grid can resolve,
+// not a proof: a dip more than four times deeper than the parabola (a feature
+// narrower than the grid's cells) is skipped, as the refinement on two cells
+// would miss a minimum that the grid does not show at all.
 struct Candidate {
   size_t i;
   double value, reach;
 };
 
 double SignedReach(double left, double mid, double right) {
-  const double p = std::isfinite(left) ? left - mid : 0.0, q = std::isfinite(right) ? right - mid : 0.0;
-  return 0.5 * (std::max(p, 0.0) + std::max(q, 0.0));
+  if (!std::isfinite(left) || !std::isfinite(right)) return std::numeric_limits<double>::infinity();
+  return 0.5 * (std::max(left - mid, 0.0) + std::max(right - mid, 0.0));
 }
 
 }  // namespace
@@ -325,7 +339,8 @@ double Passivity::Smallest(double B, double sign, double best, double* theta) co
     if (!lb.any) continue;
     const double low = sign > 0 ? lb.a_min + (B >= 0.0 ? B * lb.s_min : B * lb.s_max)
                                 : -(lb.a_max + (B >= 0.0 ? B * lb.s_max : B * lb.s_min));
-    order.push_back({low - lb.da_max - absB * lb.ds_max - 1e-12 * (lb.a_abs + absB * lb.s_abs), k});
+    const double bound = lb.edge ? -inf : low - lb.da_max - absB * lb.ds_max - 1e-12 * (lb.a_abs + absB * lb.s_abs);
+    order.push_back({std::isnan(bound) ? -inf : bound, k});  // NaN (an overflowed 1/P): scan it
   }
   std::sort(order.begin(), order.end());
   std::vector<Candidate> cands;

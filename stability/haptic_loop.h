@@ -113,6 +113,7 @@ class Passivity {
   // and of the steps between neighbours (see the constructor).
   struct LineBounds {
     bool any = false;
+    bool edge = false;  // a point here has a neighbour of the other sign (or P = 0)
     double a_min = std::numeric_limits<double>::infinity(), a_max = -std::numeric_limits<double>::infinity();
     double s_min = std::numeric_limits<double>::infinity(), s_max = -std::numeric_limits<double>::infinity();
     double a_abs = 0.0, s_abs = 0.0, da_max = 0.0, ds_max = 0.0;

@@ -1,6 +1,7 @@
 // Passivity::At (Colgate and Schenkel's passive K at one B) against a
 // reference written here: the condition b > K P(theta) - B R(theta) evaluated
-// from its definition (Dirichlet kernel P, R = Re{e^{-j(D+1)theta} F}) on a
+// from its definition (the Dirichlet kernel P as its cosine sum, R =
+// Re{e^{-j(D+1)theta} F}) on a
 // 50 001-point theta grid, with every local extremum of (b + B R)/P refined by
 // golden section. The reference skips nothing and shares no code with At (not
 // its grid, not its pruning of candidates). Both signs of B are visited, and
@@ -24,8 +25,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // P and R at theta, from their definitions.
 void DirectPR(double T, int D, const LoopOptions& l, double th, double* P, double* R) {
-  const double h = 0.5 * th;
-  *P = std::abs(std::sin(h)) < 1e-300 ? 0.5 * T * (2 * D + 1) : 0.5 * T * std::sin((2 * D + 1) * h) / std::sin(h);
+  *P = 0.5 * T;  // P = (T/2) sum_{k=-D..D} cos(k theta), the Dirichlet kernel as its sum
+  for (int k = 1; k <= D; ++k) *P += T * std::cos(k * th);
   std::complex<double> F = 1.0;
   if (!l.filter_b.empty()) {
     std::complex<double> nb = 0.0, na = 0.0;
