@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <utility>
 
@@ -56,10 +57,14 @@ std::vector<LoopFigureDelay> LoopFigure(const RunAnalysis& a) {
   stability::SetLowPassFilter(a.options.report_filter_hz, T, &lf);
   std::vector<LoopFigureDelay> out(st.delays.size());
   ParallelFor(st.delays.size(), [&](size_t i) {
-    const stability::ZWidth zf(st.sampled, st.delays[i], lf), zr(st.sampled, st.delays[i], lr);
+    // Without a filter the run's own loop is the raw one: its ZWidth is reused.
+    std::optional<stability::ZWidth> raw_own;
+    if (loop.HasFilter()) raw_own.emplace(st.sampled, st.delays[i], lr);
+    const stability::ZWidth& zr = raw_own ? *raw_own : st.zwidths[i];
+    const stability::ZWidth zf(st.sampled, st.delays[i], lf);
     const stability::Passivity pf(a.input.model.plant.b, T, zf.total_delay(), lf);
     const stability::Passivity pr(a.input.model.plant.b, T, zr.total_delay(), lr);
-    // zr is the run's own loop when that has no filter: its summary is known.
+    // Likewise its summary.
     const double bm = std::max(loop.HasFilter() ? zr.Summarize().B_max : st.summaries[i].B_max, zf.Summarize().B_max);
     const double top = std::isfinite(bm) && bm > 0 ? 1.05 * bm : st.b_grid.back();
     LoopFigureDelay f;

@@ -77,7 +77,8 @@ void Run(RunFlags& f) {
   if (f.loop.hands.size() > 1) throw InputError("run takes one --hand (boundary takes several)");
   o.loop = ResolveLoops(f.loop, 1.0 / in.response.frf.sample_rate_hz)[0];
   const analysis::RunAnalysis a = analysis::Analyse(std::move(in), o);
-  const report::RunReport rep = report::WriteRunReport(a, folder, {.draw_figures = true, .png = f.png, .fit_report = FitReport(a.input.fit)});
+  const std::string fit_report = FitReport(a.input.fit);  // the CLI's wording, for the terminal and report.html
+  const report::RunReport rep = report::WriteRunReport(a, folder, {.draw_figures = true, .png = f.png, .fit_report = fit_report});
   for (const analysis::RunStage& s : a.stages) {
     if (s.name.rfind("figure", 0) == 0) continue;
     PrintStage(s.name, s.ms);
@@ -91,7 +92,7 @@ void Run(RunFlags& f) {
   const std::string params = analysis::ParameterTable(a.input.model, o.linear);
   const std::string cmp = a.comparison ? a.comparison->text : "";
   std::printf("fit quality: %s\n%s\n%s", fit::ToString(a.input.fit.quality).c_str(), params.c_str(), cmp.c_str());
-  std::fprintf(stderr, "%s", FitReport(a.input.fit).c_str());
+  std::fprintf(stderr, "%s", fit_report.c_str());
   const std::filesystem::path final_out(folder.path());
   std::printf("\nboundary: %s (%d of %zu rows where margin() and the exact K_CR disagree)\nreport: %s\n",
               (final_out / "boundary.csv").c_str(), a.stability.margin_disagreements, a.stability.rows.size(),

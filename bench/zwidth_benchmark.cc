@@ -15,6 +15,7 @@
 #include "stability/haptic_loop.h"
 #include "stability/relay.h"
 #include "tests/brute_force.h"
+#include "tests/devices.h"
 #include <unsupported/Eigen/MatrixFunctions>
 #include "stability/uncertainty.h"
 #include "stability/zwidth.h"
@@ -172,16 +173,8 @@ BENCHMARK(BM_BoundaryMap)->Unit(benchmark::kMillisecond);
 // included): Table I at d = 2 (arg 0) and the issue's reopened-band device at
 // d = 4 (arg 1), B from 0 to 1.05 B_max. Error: the largest relative
 // difference of any interval end from a reference with a 16x finer theta grid.
-model::Plant BandDevice() {
-  model::Plant p;
-  p.m = 2e-3;
-  p.b = 0.008;
-  p.delay_samples = 1;
-  p.modes = {{439.82, 70.4, 389.56, 46.7}, {942.48, 150.8, 848.23, 101.8}, {1633.63, 261.4, 1507.96, 181.0}};
-  return p;
-}
 void BM_StableIntervals(benchmark::State& state) {
-  const model::Plant p = state.range(0) == 0 ? model::PhantomTable1() : BandDevice();
+  const model::Plant p = state.range(0) == 0 ? model::PhantomTable1() : test::IssueDeviceOne();
   const int d = state.range(0) == 0 ? 2 : 4;
   const double b_max = stability::ZWidth(p, 1e-3, d).Summarize().B_max;
   std::vector<double> grid(1000);

@@ -6,6 +6,7 @@
 #include <H5Cpp.h>
 
 #include "io/hdf5_api.h"
+#include "io/io_internal.h"
 #include "model/error.h"
 #include "model/state_space.h"
 
@@ -50,16 +51,12 @@ void WriteModelHdf5(const std::string& tmp, const ModelFile& mf, double T) {
     H5::Group gc = f.createGroup("/continuous");
     mat(gc, "A", c.A); mat(gc, "B", c.B); mat(gc, "C", c.C); mat(gc, "D", Eigen::MatrixXd::Constant(1, 1, c.D));
     H5::Group root = f.openGroup("/");
-    auto attr = [&](H5::Group& g, const char* name, double v) {
-      H5::Attribute a = g.createAttribute(name, H5::PredType::IEEE_F64LE, H5::DataSpace(H5S_SCALAR));
-      a.write(H5::PredType::NATIVE_DOUBLE, &v);
-    };
     int_attr(root, "delay_samples", mf.plant.delay_samples);
     if (T > 0) {
       const model::StateSpace d = model::WithDelayStates(model::DiscretizeZoh(mf.plant, T));
       H5::Group gd = f.createGroup("/discrete");
       mat(gd, "A", d.A); mat(gd, "B", d.B); mat(gd, "C", d.C); mat(gd, "D", Eigen::MatrixXd::Constant(1, 1, d.D));
-      attr(gd, "period_s", T);
+      internal::WriteDoubleAttr(gd, "period_s", T);
       int_attr(gd, "delay_samples_realised_as_states", mf.plant.delay_samples);
     }
   } catch (const H5::Exception& e) {

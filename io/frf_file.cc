@@ -19,12 +19,11 @@ namespace zwidth::io {
 namespace {
 
 void WriteCsv(const std::string& tmp, const ident::FrequencyResponse& r) {
-  std::string text =
-      "f_hz,H_re,H_im,coherence,H_std,H_mag,H_phase_deg,S_uu,S_yy,sample_rate_hz,"
-      "num_averages,effective_averages,bin_correlation";
+  internal::CsvFile line(tmp);
+  line.Text("f_hz,H_re,H_im,coherence,H_std,H_mag,H_phase_deg,S_uu,S_yy,sample_rate_hz,"
+            "num_averages,effective_averages,bin_correlation");
   const bool used = r.used_by_fit.size() == r.f_hz.size();  // the fit's bins, when known
-  text += used ? ",used_by_fit\n" : "\n";
-  internal::CsvLine line(&text);
+  line.Text(used ? ",used_by_fit\n" : "\n");
   for (size_t k = 0; k < r.f_hz.size(); ++k) {
     line.G(r.f_hz[k], 17).G(r.H[k].real(), 17).G(r.H[k].imag(), 17).G(r.coherence[k], 17).G(r.H_std[k], 17);
     line.G(std::abs(r.H[k]), 17).G(std::arg(r.H[k]) * 180.0 / std::numbers::pi, 17).G(r.S_uu[k], 17);
@@ -33,7 +32,7 @@ void WriteCsv(const std::string& tmp, const ident::FrequencyResponse& r) {
     if (used) line.Int(r.used_by_fit[k] ? 1 : 0);
     line.End();
   }
-  internal::WriteWholeFile(tmp, text, tmp);
+  line.Close(tmp);
 }
 
 std::string Num(double v) {

@@ -2,6 +2,7 @@
 // include only from io/*.cc).
 #pragma once
 
+#include <cstdio>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -22,27 +23,32 @@ void WriteDoubleAttr(H5::H5Object& obj, const std::string& name, double v);
 
 // Text output of numbers without printf: appends v to *out exactly as
 // printf("%.<digits>g") would (std::to_chars in the general format with that
-// precision is specified so, nan and inf included), and ints as "%d". About
-// five times faster than fprintf for the boundary and response CSVs.
+// precision is specified so, nan and inf included), and ints as "%d".
 void AppendG(std::string* out, double v, int digits);
 void AppendInt(std::string* out, long long v);
 
-// Lines of a CSV: fields separated by ',', each line ended by '\n'.
-class CsvLine {
+// A CSV file written line by line: fields separated by ',', lines ended by
+// '\n', kept in a buffer written out every MiB (a response of 2^20 bins would
+// otherwise sit whole in memory). InputError "cannot create '<path>'" when it
+// cannot be opened, "failed writing '<shown>'" from Close when a write failed.
+class CsvFile {
  public:
-  explicit CsvLine(std::string* out) : out_(out) {}
-  CsvLine& G(double v, int digits) { Sep(); AppendG(out_, v, digits); return *this; }
-  CsvLine& Int(long long v) { Sep(); AppendInt(out_, v); return *this; }
-  void End() { out_->push_back('\n'); first_ = true; }
+  explicit CsvFile(const std::string& path);
+  ~CsvFile();
+  CsvFile(const CsvFile&) = delete;
+  CsvFile& operator=(const CsvFile&) = delete;
+  void Text(const char* s) { buf_ += s; }
+  CsvFile& G(double v, int digits) { Sep(); AppendG(&buf_, v, digits); return *this; }
+  CsvFile& Int(long long v) { Sep(); AppendInt(&buf_, v); return *this; }
+  void End();
+  void Close(const std::string& shown);
 
  private:
-  void Sep() { if (!first_) out_->push_back(','); first_ = false; }
-  std::string* out_;
-  bool first_ = true;
+  void Sep() { if (!first_) buf_.push_back(','); first_ = false; }
+  void Flush();
+  std::FILE* f_;
+  std::string buf_;
+  bool first_ = true, ok_ = true;
 };
-
-// Writes `text` to a new file at `tmp` (binary); InputError "cannot create
-// '<tmp>'" or "failed writing '<shown>'".
-void WriteWholeFile(const std::string& tmp, const std::string& text, const std::string& shown);
 
 }  // namespace zwidth::io::internal

@@ -14,14 +14,9 @@
 
 #include <sys/stat.h>
 
-#include <H5Cpp.h>
-#include <matio.h>
-
 #include "io/atomic_file.h"
-#include "io/h5_safety.h"
 #include "io/io_internal.h"
 #include "io/log_internal.h"
-#include "io/isolated.h"
 #include "model/error.h"
 
 

@@ -20,10 +20,9 @@ nlohmann::json NumberOrNull(double v) {
 
 void WriteBoundaryCsv(const std::string& path, const std::vector<BoundaryRow>& rows) {
   WriteAtomically(path, [&](const std::string& tmp) {
-    std::string text =
-        "delay_samples,B,interval,num_intervals,K_lo,K_hi,f_lo_hz,f_hi_hz,interval_verified,"
-        "K_cr,K_cr_std,f_cr_hz,K_margin,f_margin_hz,unstable_at_zero_k,margin_agrees,verified,K_passive\n";
-    internal::CsvLine line(&text);
+    internal::CsvFile line(tmp);
+    line.Text("delay_samples,B,interval,num_intervals,K_lo,K_hi,f_lo_hz,f_hi_hz,interval_verified,"
+              "K_cr,K_cr_std,f_cr_hz,K_margin,f_margin_hz,unstable_at_zero_k,margin_agrees,verified,K_passive\n");
     const double nan = std::numeric_limits<double>::quiet_NaN();
     for (const BoundaryRow& r : rows) {
       const auto& p = r.point;
@@ -37,7 +36,7 @@ void WriteBoundaryCsv(const std::string& path, const std::vector<BoundaryRow>& r
         line.G(r.K_passive, 15).End();
       }
     }
-    internal::WriteWholeFile(tmp, text, path);
+    line.Close(path);
   });
 }
 

@@ -22,11 +22,31 @@ void AppendInt(std::string* out, long long v) {
   out->append(buf, r.ptr);
 }
 
-void WriteWholeFile(const std::string& tmp, const std::string& text, const std::string& shown) {
-  std::FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (!f) throw InputError("cannot create '" + tmp + "'");
-  const bool wrote = std::fwrite(text.data(), 1, text.size(), f) == text.size() && std::ferror(f) == 0;
-  if (std::fclose(f) != 0 || !wrote) throw InputError("failed writing '" + shown + "'");
+CsvFile::CsvFile(const std::string& path) : f_(std::fopen(path.c_str(), "wb")) {
+  if (!f_) throw InputError("cannot create '" + path + "'");
+}
+
+CsvFile::~CsvFile() {
+  if (f_) std::fclose(f_);
+}
+
+void CsvFile::End() {
+  buf_.push_back('\n');
+  first_ = true;
+  if (buf_.size() >= (std::size_t{1} << 20)) Flush();
+}
+
+void CsvFile::Flush() {
+  ok_ = ok_ && std::fwrite(buf_.data(), 1, buf_.size(), f_) == buf_.size();
+  buf_.clear();
+}
+
+void CsvFile::Close(const std::string& shown) {
+  Flush();
+  const bool ok = ok_ && std::ferror(f_) == 0;
+  const bool closed = std::fclose(f_) == 0;
+  f_ = nullptr;
+  if (!closed || !ok) throw InputError("failed writing '" + shown + "'");
 }
 
 }  // namespace zwidth::io::internal

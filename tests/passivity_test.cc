@@ -37,6 +37,13 @@ void DirectPR(double T, int D, const LoopOptions& l, double th, double* P, doubl
   *R = (std::polar(1.0, -(D + 1) * th) * F).real();
 }
 
+// A stable second-order low-pass with unit DC gain and poles rad e^{+-j phi}.
+void SetResonantLowPass(double rad, double phi, LoopOptions* l) {
+  l->filter_a = {1.0, -2 * rad * std::cos(phi), rad * rad};
+  const double dc = l->filter_a[0] + l->filter_a[1] + l->filter_a[2];
+  l->filter_b = {0.5 * dc, 0.5 * dc};
+}
+
 struct Loop {
   double b, T;
   int D;
@@ -96,11 +103,9 @@ TEST(Passivity, MatchesAnUnprunedDenseReferenceForRandomLoopsAndSignedDamping) {
   for (int k = 0; k < 40; ++k) {
     Loop c{std::pow(10.0, -4.0 + 3.0 * u(rng)), std::pow(10.0, -4.0 + 1.5 * u(rng)), static_cast<int>(13 * u(rng)), {}};
     if (k % 3 == 1) SetLowPassFilter((0.01 + 0.4 * u(rng)) / c.T, c.T, &c.l);
-    if (k % 3 == 2) {  // a stable second-order low-pass with unit DC gain, poles r e^{+-j phi}
+    if (k % 3 == 2) {
       const double rad = 0.3 + 0.65 * u(rng), phi = std::numbers::pi * u(rng);
-      c.l.filter_a = {1.0, -2 * rad * std::cos(phi), rad * rad};
-      const double dc = c.l.filter_a[0] + c.l.filter_a[1] + c.l.filter_a[2];
-      c.l.filter_b = {0.5 * dc, 0.5 * dc};
+      SetResonantLowPass(rad, phi, &c.l);
     }
     for (double frac : {-1.5, -0.6, 0.0, 0.3, 0.9}) {
       const double B = frac * c.b * (1.0 + u(rng));
@@ -126,9 +131,7 @@ TEST(Passivity, MatchesTheReferenceWhereThePassiveSetHasALowerEndAboveZero) {
   for (; draws < 20000 && found < 12; ++draws) {
     Loop c{std::pow(10.0, -3.0 + 2.0 * u(rng)), 1e-3, 2 + static_cast<int>(8 * u(rng)), {}};
     const double rad = 0.5 + 0.45 * u(rng), phi = 2.0 + 1.1 * u(rng);
-    c.l.filter_a = {1.0, -2 * rad * std::cos(phi), rad * rad};
-    const double dc = c.l.filter_a[0] + c.l.filter_a[1] + c.l.filter_a[2];
-    c.l.filter_b = {0.5 * dc, 0.5 * dc};
+    SetResonantLowPass(rad, phi, &c.l);
     const double B = c.b * (-0.8 + 1.4 * u(rng));
     const double hi = Extreme(c, B, 1.0, 2000, false), lo = -Extreme(c, B, -1.0, 2000, false);
     if (!(lo > 0 && hi > 1.01 * lo)) continue;

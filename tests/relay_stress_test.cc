@@ -18,10 +18,26 @@ namespace {
 // Random models: test::WideRandomModels().
 model::Plant RandomModel(std::mt19937_64& rng, int nm, double T) { return test::RandomPlant(rng, test::WideRandomModels(), nm, T); }
 
+// The relay's own warning: the crossing below the record's band, or an
+// uncertainty over 1e-3.
+bool Flagged(const RelayResult& r) { return r.status == RelayStatus::kBelowBand || !(r.uncertainty <= 1e-3); }
+
+// One trial of both stress tests (seed 23): a random model with trial % 5
+// modes and a loop delay of 0-11 samples.
+struct Trial {
+  model::Plant p;
+  int d;
+};
+Trial DrawTrial(std::mt19937_64& rng, int trial, double T) {
+  std::uniform_real_distribution<double> U(0, 1);
+  model::Plant p = RandomModel(rng, trial % 5, T);
+  return {std::move(p), static_cast<int>(U(rng) * 12)};
+}
+
 // Right (refined, K_cr and f_cr within 1e-3 of the exact values) or flagged
 // (the crossing below the record's band, or an uncertainty over 1e-3).
 ::testing::AssertionResult RightOrFlagged(const RelayResult& r, const CriticalPoint& c) {
-  if (r.status == RelayStatus::kBelowBand || !(r.uncertainty <= 1e-3)) return ::testing::AssertionSuccess();
+  if (Flagged(r)) return ::testing::AssertionSuccess();
   if (r.refined() && std::abs(r.K_cr / c.K_cr - 1.0) < 1e-3 && std::abs(r.f_cr_hz / c.f_cr_hz - 1.0) < 1e-3) {
     return ::testing::AssertionSuccess();
   }
@@ -36,12 +52,10 @@ TEST(Relay, StressRandomModelsFindTheCriticalCrossing) {
   // frequency. Then the steered runs must give the exact K_cr and f_cr.
   // Measured (seed 23): 90 points, 2 flagged, every other one within 1e-3.
   std::mt19937_64 rng(23);
-  std::uniform_real_distribution<double> U(0, 1);
   const double T = 1e-3;
   int checked = 0, flagged = 0;
   for (int trial = 0; trial < 30; ++trial) {
-    const model::Plant p = RandomModel(rng, trial % 5, T);
-    const int d = static_cast<int>(U(rng) * 12);
+    const auto [p, d] = DrawTrial(rng, trial, T);
     const ZWidth z(p, T, d);
     const DelaySummary s = z.Summarize();
     const double b_ref = std::isfinite(s.B_t) && s.B_t > 0 ? s.B_t : s.B_max_from_zero;
@@ -55,7 +69,7 @@ TEST(Relay, StressRandomModelsFindTheCriticalCrossing) {
       o.seconds = std::clamp(10.0 * p.m / p.b + 40.0 / c.f_cr_hz, 30.0, 300.0);
       const RelayResult r = SimulateRelay(p, o);
       EXPECT_TRUE(RightOrFlagged(r, c)) << "trial " << trial << " d " << d << " B " << o.damping;
-      flagged += r.status == RelayStatus::kBelowBand || !(r.uncertainty <= 1e-3);
+      flagged += Flagged(r);
       ++checked;
     }
   }
@@ -70,12 +84,10 @@ TEST(Relay, StressShortRecordsAreFlaggedNotWrong) {
   // band the record resolves, or an oscillation still settling). Measured:
   // 16 of 30 flagged, every unflagged one within 1e-3.
   std::mt19937_64 rng(23);
-  std::uniform_real_distribution<double> U(0, 1);
   const double T = 1e-3;
   int flagged = 0, checked = 0;
   for (int trial = 0; trial < 30; ++trial) {
-    const model::Plant p = RandomModel(rng, trial % 5, T);
-    const int d = static_cast<int>(U(rng) * 12);
+    const auto [p, d] = DrawTrial(rng, trial, T);
     const CriticalPoint c = ZWidth(p, T, d).At(0.0);
     if (!(c.K_cr > 0) || !std::isfinite(c.K_cr)) continue;
     RelayOptions o;
@@ -84,7 +96,7 @@ TEST(Relay, StressShortRecordsAreFlaggedNotWrong) {
     const RelayResult r = SimulateRelay(p, o);
     EXPECT_TRUE(RightOrFlagged(r, c)) << "trial " << trial << " d " << d;
     if (r.status == RelayStatus::kBelowBand) EXPECT_LT(c.f_cr_hz, r.band_low_hz) << trial;  // the flag's claim holds
-    flagged += r.status == RelayStatus::kBelowBand || !(r.uncertainty <= 1e-3);
+    flagged += Flagged(r);
     ++checked;
   }
   EXPECT_GT(checked, 20);

@@ -16,6 +16,7 @@
 #include "model/state_space.h"
 #include "stability/zwidth.h"
 #include "tests/brute_force.h"
+#include "tests/devices.h"
 #include "tests/test_util.h"
 
 namespace zwidth::stability {
@@ -108,15 +109,8 @@ TEST(ZWidth, DegenerateCases) {
 // B against an independent brute force (closed-loop roots as companion-matrix
 // eigenvalues, tests/brute_force.h), B_max, the B grid, and the delta-method
 // std against Monte Carlo.
-// The issue's first example device (m 2e-3, three modes, own delay 1).
-model::Plant IssueDeviceOne() {
-  model::Plant p;
-  p.m = 2e-3;
-  p.b = 0.008;
-  p.delay_samples = 1;
-  p.modes = {{439.82, 70.4, 389.56, 46.7}, {942.48, 150.8, 848.23, 101.8}, {1633.63, 261.4, 1507.96, 181.0}};
-  return p;
-}
+// The issue's first example device (m 2e-3, three modes, own delay 1): tests/devices.h.
+using test::IssueDeviceOne;
 // The second (two lightly damped modes).
 model::Plant IssueDeviceTwo() {
   model::Plant p;
