@@ -7,6 +7,13 @@
 #include <memory>
 
 namespace zwidth::analysis {
+namespace {
+
+// Boundary rows per task: small enough that two threads finish together,
+// large enough that a task is worth starting.
+constexpr size_t kRowsPerTask = 50;
+
+}  // namespace
 
 PlantStability AnalysePlantStability(const io::ModelFile& model, double T, const std::vector<int>& delays,
                                      const stability::LoopOptions& loop, const stability::BGridOptions& grid) {
@@ -22,13 +29,15 @@ PlantStability AnalysePlantStability(const io::ModelFile& model, double T, const
     stability::CheckLogCovariance(model.plant, model.log_covariance);
     perturbed = std::make_unique<stability::PerturbedPlants>(stability::SamplePerturbedPlants(model.plant, T, loop.hand));
   }
-  // The delays are independent: each one's summary, std and rows are
-  // computed on its own thread and written to its own slots.
+  // Every task below writes only its own slots, so the results do not depend
+  // on which thread ran what. First the summaries (the B grid's range comes
+  // from them) and each delay's passivity condition.
   for (int d : delays) r.zwidths.emplace_back(sampled, d, loop);
   r.summaries.resize(delays.size());
+  std::vector<std::unique_ptr<stability::Passivity>> passivity(delays.size());
   ParallelFor(delays.size(), [&](size_t i) {
     r.summaries[i] = r.zwidths[i].Summarize();
-    if (r.has_std) r.stds[i] = stability::SummaryStdDelta(*perturbed, model.log_covariance, delays[i], r.summaries[i], loop);
+    passivity[i] = std::make_unique<stability::Passivity>(model.plant.b, T, r.zwidths[i].total_delay(), loop);  // Colgate-Schenkel
   });
   double b_max = 0.0;
   for (const stability::DelaySummary& s : r.summaries) {
@@ -37,21 +46,33 @@ PlantStability AnalysePlantStability(const io::ModelFile& model, double T, const
   r.b_grid = stability::MakeBGrid(grid, b_max, model.plant.m / T, static_cast<int>(delays.size()));
   const size_t nB = r.b_grid.size();
   r.rows.resize(delays.size() * nB);
-  std::vector<int> disagreements(delays.size(), 0);
-  ParallelFor(delays.size(), [&](size_t i) {
-    const stability::Passivity passivity(model.plant.b, T, r.zwidths[i].total_delay(), loop);  // Colgate-Schenkel
+  // Then, as tasks for two threads: each delay's summary std (the largest
+  // tasks, first), and the rows in chunks of kRowsPerTask (intervals, K_CR,
+  // passivity, std of K_CR: each row depends on its own B only).
+  const size_t num_std = r.has_std ? delays.size() : 0;
+  const size_t chunks = (nB + kRowsPerTask - 1) / kRowsPerTask;
+  std::vector<int> disagreements(delays.size() * chunks, 0);
+  ParallelFor(num_std + delays.size() * chunks, [&](size_t task) {
+    if (task < num_std) {
+      const size_t i = num_std - 1 - task;  // the longest delay first
+      r.stds[i] = stability::SummaryStdDelta(*perturbed, model.log_covariance, delays[i], r.summaries[i], loop);
+      return;
+    }
+    const size_t i = (task - num_std) / chunks, c = (task - num_std) % chunks;
+    const size_t k0 = c * kRowsPerTask, k1 = std::min(nB, k0 + kRowsPerTask);
     std::vector<stability::CriticalPoint> pts;
-    for (size_t k = 0; k < nB; ++k) {
+    for (size_t k = k0; k < k1; ++k) {
       const double B = r.b_grid[k];
+      stability::ZWidth::Row zr = r.zwidths[i].RowAt(B);
       io::BoundaryRow& row = r.rows[i * nB + k];
-      row = {delays[i], r.zwidths[i].At(B), r.zwidths[i].StableIntervals(B)};
-      row.K_passive = passivity.At(B).K_hi;
+      row = {delays[i], zr.point, std::move(zr.intervals)};
+      row.K_passive = passivity[i]->KHi(B);
       pts.push_back(row.point);
-      if (!row.point.AgreesWithMargin()) ++disagreements[i];
+      if (!row.point.AgreesWithMargin()) ++disagreements[i * chunks + c];
     }
     if (r.has_std) {
       const std::vector<double> sd = stability::KcrStd(*perturbed, model.log_covariance, delays[i], pts, loop);
-      for (size_t k = 0; k < nB; ++k) r.rows[i * nB + k].K_cr_std = sd[k];
+      for (size_t k = k0; k < k1; ++k) r.rows[i * nB + k].K_cr_std = sd[k - k0];
     }
   });
   for (int n : disagreements) r.margin_disagreements += n;

@@ -73,8 +73,8 @@ std::vector<LoopFigureDelay> LoopFigure(const RunAnalysis& a) {
       f.B.push_back(B);
       f.raw.push_back(zr.StableIntervals(B));
       f.filtered.push_back(zf.StableIntervals(B));
-      f.K_passive_raw.push_back(pr.At(B).K_hi);
-      f.K_passive_filtered.push_back(pf.At(B).K_hi);
+      f.K_passive_raw.push_back(pr.KHi(B));
+      f.K_passive_filtered.push_back(pf.KHi(B));
     }
     out[i] = std::move(f);
   });

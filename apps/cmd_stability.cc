@@ -88,13 +88,14 @@ BoundaryTable ComputeBoundaryTable(const io::ModelFile& mf, double T, const std:
   for (size_t i = 0; i < zs.size(); ++i) {
     std::vector<stability::CriticalPoint> pts;
     for (double B : grid) {
-      io::BoundaryRow r{delays[i], zs[i].At(B), zs[i].StableIntervals(B)};
+      stability::ZWidth::Row zr = zs[i].RowAt(B);
+      io::BoundaryRow r{delays[i], zr.point, std::move(zr.intervals)};
       for (size_t h = 1; h < zh[i].size(); ++h) {  // the region stable for every hand
         r.intervals = stability::IntersectIntervals(r.intervals, zh[i][h].StableIntervals(B));
         const stability::CriticalPoint c = zh[i][h].At(B);
         if (c.K_cr < r.point.K_cr) r.point = c;
       }
-      r.K_passive = pas[i].At(B).K_hi;
+      r.K_passive = pas[i].KHi(B);
       if (!r.point.AgreesWithMargin()) ++disagree;
       pts.push_back(r.point);
       rows.push_back(std::move(r));

@@ -7,6 +7,8 @@
 
 #include <benchmark/benchmark.h>
 
+#include <optional>
+#include "analysis/plant_stability.h"
 #include "fit/fit.h"
 #include "ident/welch.h"
 #include "model/plant.h"
@@ -278,7 +280,8 @@ void BM_CutoffSweep(benchmark::State& state) {
 }
 BENCHMARK(BM_CutoffSweep)->Unit(benchmark::kMillisecond);
 
-// The passive K (Colgate-Schenkel) of the boundary rows: 1000 B values at
+// The passive K (Colgate-Schenkel) of the boundary rows (arg 0: At, which
+// also finds K_lo; arg 1: KHi, what the rows use): 1000 B values at
 // d = 4 with a 50 Hz first-order velocity filter, Table I's b. Error: largest
 // difference of K_hi from a brute-force minimum of (b + B R)/P over 2e5 + 1
 // uniform theta, relative to K_hi(0) (the brute force's own grid error is of
@@ -293,7 +296,7 @@ void BM_PassivityRows(benchmark::State& state) {
   for (int i = 0; i < 1000; ++i) Bs.push_back(0.06 * i / 999.0);
   std::vector<double> K(Bs.size());
   for (auto _ : state) {
-    for (size_t i = 0; i < Bs.size(); ++i) K[i] = pa.At(Bs[i]).K_hi;
+    for (size_t i = 0; i < Bs.size(); ++i) K[i] = state.range(0) == 0 ? pa.At(Bs[i]).K_hi : pa.KHi(Bs[i]);
     benchmark::DoNotOptimize(K.data());
   }
   std::vector<double> best(Bs.size(), INFINITY);
@@ -309,7 +312,41 @@ void BM_PassivityRows(benchmark::State& state) {
     if (K[i] > 0) err = std::max(err, std::abs(K[i] - best[i]) / K[0]);
   state.counters["max_err_vs_dense_grid"] = err;
 }
-BENCHMARK(BM_PassivityRows)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PassivityRows)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);  // At(B).K_hi, KHi(B)
+
+// `zwidth run`'s boundary stage (analysis::AnalysePlantStability): Table I
+// with the seeded covariance of BM_DeltaMethodStd, delays 2, 4, 8, 1000 B
+// values each: summaries and their std, intervals, K_CR and its std, passive
+// K; on the threads of model/parallel.h. Error: largest relative difference
+// of K_CR from the brute force's (tests/brute_force.h) on every 50th row.
+void BM_RunBoundary(benchmark::State& state) {
+  io::ModelFile m;
+  m.plant = model::PhantomTable1();
+  const int n = stability::NumLogParameters(m.plant);
+  m.log_covariance.assign(n * n, 0.0);
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> g;
+  for (int i = 0; i < n; ++i) m.log_covariance[i * n + i] = 1e-4 * (1.0 + 0.5 * std::abs(g(rng)));
+  const std::vector<int> delays = {2, 4, 8};
+  std::optional<analysis::PlantStability> r;
+  for (auto _ : state) {
+    r.emplace(analysis::AnalysePlantStability(m, 1e-3, delays, {}, {}));
+    benchmark::DoNotOptimize(r->rows.data());
+  }
+  double err = 0;
+  const size_t nB = r->b_grid.size();
+  for (size_t i = 0; i < delays.size(); ++i) {
+    const stability::BruteForce bf(m.plant, 1e-3, delays[i]);
+    for (size_t k = 0; k < nB; k += 50) {
+      const double a = r->rows[i * nB + k].point.K_cr, b = bf.KCritical(r->b_grid[k]);
+      if (b > 0 && std::isfinite(b)) err = std::max(err, std::abs(a / b - 1));
+      else if (a != b) err = std::max(err, 1.0);
+    }
+  }
+  state.counters["max_rel_err_K_cr_vs_brute_force"] = err;
+  state.counters["rows"] = static_cast<double>(r->rows.size());
+}
+BENCHMARK(BM_RunBoundary)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // Delta-method std at d = 2 on Table I with a seeded covariance (1% relative
 // std): K_CR(B) on a 1000-point grid (implicit differentiation) plus the four

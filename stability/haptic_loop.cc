@@ -303,6 +303,18 @@ PassiveInterval Passivity::At(double B) const {
   return out;
 }
 
+double Passivity::KHi(double B) const {
+  for (size_t i : zero_P_) {
+    if (!(b_ + B * R_[i] > 0.0)) return 0.0;
+  }
+  const double hi = Smallest(B, 1.0, std::numeric_limits<double>::infinity(), nullptr);
+  if (!(hi > 0.0)) return 0.0;  // K_lo >= 0
+  // The set is empty when K_lo >= hi, i.e. when minus a lower bound is <= -hi:
+  // searched below a start just above -hi, so that -hi itself counts.
+  const double start = std::nextafter(-hi, 0.0);
+  return Smallest(B, -1.0, start, nullptr) < start ? 0.0 : hi;
+}
+
 // The bounds are v(theta) = sign (b + B R)/P where sign P > 0 (+inf elsewhere):
 // sign +1 the upper bounds on K, sign -1 minus the lower ones.
 //

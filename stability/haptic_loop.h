@@ -92,6 +92,9 @@ class Passivity {
   Passivity(double b_phys, double period_s, int total_delay, const LoopOptions& loop,
             const PassivityOptions& options = {});
   PassiveInterval At(double B) const;
+  // At(B).K_hi alone: the lower bounds are searched only for one at or above
+  // K_hi (which empties the set), not for the largest.
+  double KHi(double B) const;
   // The condition's right-hand side K P - B R at theta (for tests and plots).
   double Rhs(double K, double B, double theta) const;
 

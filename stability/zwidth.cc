@@ -332,10 +332,11 @@ std::vector<double> MakeBGrid(const BGridOptions& o, double largest, double fall
   return g;
 }
 
-CriticalPoint ZWidth::At(double B) const {
+template <typename Stable>
+CriticalPoint ZWidth::PointFrom(double B, const std::vector<Crossing>& xs, const Stable& stable, Check check) const {
+  const bool verify = check == Check::kVerify;
   CriticalPoint cp;
   cp.B = B;
-  const std::vector<Crossing> xs = Crossings(B);
   // The paper's reading: the phase crossover with margin nearest 0 dB.
   double best_db = std::numeric_limits<double>::infinity();
   for (const Crossing& x : xs) {
@@ -343,7 +344,7 @@ CriticalPoint ZWidth::At(double B) const {
     const double db = std::abs(std::log(x.K));
     if (db < best_db) { best_db = db; cp.K_margin = x.K; cp.f_margin_hz = HzOf(x.theta); }
   }
-  if (!IsStable(0.0, B)) {
+  if (!stable(0.0)) {
     cp.unstable_at_zero_k = true;
     cp.K_cr = 0.0;
     cp.verified = true;
@@ -354,26 +355,26 @@ CriticalPoint ZWidth::At(double B) const {
     if (x.K > 0.0 && x.K < cp.K_cr) { cp.K_cr = x.K; cp.f_cr_hz = HzOf(x.theta); }
   }
   if (std::isinf(cp.K_cr)) {
-    cp.verified = IsStable(1e6, B);  // no crossing: stable for every K we try
+    cp.verified = !verify || stable(1e6);  // no crossing: stable for every K we try
     return cp;
   }
-  cp.verified = !options_.verify ||
-                (IsStable(cp.K_cr * (1.0 - 1e-6), B) && !IsStable(cp.K_cr * (1.0 + 1e-6), B));
+  cp.verified = !verify || !options_.verify ||
+                (stable(cp.K_cr * (1.0 - 1e-6)) && !stable(cp.K_cr * (1.0 + 1e-6)));
   return cp;
 }
 
 double ZWidth::FindTransition(double lo, double hi, double f_lo, double f_hi) const {
   for (int it = 0; it < 60 && hi - lo > 1e-14 * std::max(1.0, hi); ++it) {
     const double mid = 0.5 * (lo + hi);
-    const double f = At(mid).f_cr_hz;
+    const double f = ValueAt(mid).f_cr_hz;
     if (std::abs(std::log(f / f_lo)) < std::abs(std::log(f / f_hi))) lo = mid;
     else hi = mid;
   }
   return 0.5 * (lo + hi);
 }
 
-std::vector<KInterval> ZWidth::StableIntervals(double B) const {
-  std::vector<Crossing> xs = Crossings(B);
+template <typename Stable>
+std::vector<KInterval> ZWidth::IntervalsFrom(const std::vector<Crossing>& xs, const Stable& stable, Check check) const {
   std::vector<Crossing> pos;
   for (const Crossing& x : xs) if (x.K > 0.0 && std::isfinite(x.K)) pos.push_back(x);
   std::sort(pos.begin(), pos.end(), [](const Crossing& a, const Crossing& b) { return a.K < b.K; });
@@ -395,7 +396,7 @@ std::vector<KInterval> ZWidth::StableIntervals(double B) const {
     if (i == 0) probe = n == 0 ? 0.0 : 0.5 * b;  // K -> 0+ when there is no crossing at all
     else if (i == n) probe = 2.0 * a;
     else probe = std::sqrt(a * b);
-    if (!IsStable(probe, B)) continue;
+    if (!stable(probe)) continue;
     if (!out.empty() && out.back().K_hi == a) {  // a tangential crossing: both sides stable
       out.back().K_hi = b;
       out.back().f_hi_hz = i == n ? std::numeric_limits<double>::quiet_NaN() : HzOf(ks[i].theta);
@@ -407,16 +408,50 @@ std::vector<KInterval> ZWidth::StableIntervals(double B) const {
     if (i > 0) iv.f_lo_hz = HzOf(ks[i - 1].theta);
     if (i < n) iv.f_hi_hz = HzOf(ks[i].theta);
     out.push_back(iv);
+    if (check == Check::kFirstOnly) return out;
   }
   for (KInterval& iv : out) {
     bool ok = true;
-    if (options_.verify) {
-      if (iv.K_lo > 0.0) ok = ok && IsStable(iv.K_lo * (1.0 + 1e-6), B) && !IsStable(iv.K_lo * (1.0 - 1e-6), B);
-      if (std::isfinite(iv.K_hi)) ok = ok && IsStable(iv.K_hi * (1.0 - 1e-6), B) && !IsStable(iv.K_hi * (1.0 + 1e-6), B);
+    if (check == Check::kVerify && options_.verify) {
+      if (iv.K_lo > 0.0) ok = ok && stable(iv.K_lo * (1.0 + 1e-6)) && !stable(iv.K_lo * (1.0 - 1e-6));
+      if (std::isfinite(iv.K_hi)) ok = ok && stable(iv.K_hi * (1.0 - 1e-6)) && !stable(iv.K_hi * (1.0 + 1e-6));
     }
     iv.verified = ok;
   }
   return out;
+}
+
+CriticalPoint ZWidth::At(double B) const {
+  return PointFrom(B, Crossings(B), [&](double K) { return IsStable(K, B); }, Check::kVerify);
+}
+
+std::vector<KInterval> ZWidth::StableIntervals(double B) const {
+  return IntervalsFrom(Crossings(B), [&](double K) { return IsStable(K, B); }, Check::kVerify);
+}
+
+CriticalPoint ZWidth::ValueAt(double B) const {
+  return PointFrom(B, Crossings(B), [&](double K) { return IsStable(K, B); }, Check::kValuesOnly);
+}
+
+bool ZWidth::AnyStable(double B) const {
+  return !IntervalsFrom(Crossings(B), [&](double K) { return IsStable(K, B); }, Check::kFirstOnly).empty();
+}
+
+ZWidth::Row ZWidth::RowAt(double B) const {
+  // The verification of K_CR and of the first interval's upper end test the
+  // same K values: each K is tested once (B is fixed, so K decides).
+  std::vector<std::pair<double, bool>> tested;
+  auto stable = [&](double K) {
+    for (const auto& [k, s] : tested) if (k == K) return s;
+    const bool s = IsStable(K, B);
+    tested.push_back({K, s});
+    return s;
+  };
+  const std::vector<Crossing> xs = Crossings(B);
+  Row r;
+  r.point = PointFrom(B, xs, stable, Check::kVerify);
+  r.intervals = IntervalsFrom(xs, stable, Check::kVerify);
+  return r;
 }
 
 double ZWidth::StableBBound() const {
@@ -454,7 +489,7 @@ double ZWidth::StableBBound() const {
 DelaySummary ZWidth::Summarize() const {
   DelaySummary s;
   s.delay_samples = total_delay_;
-  const CriticalPoint c0 = At(0.0);
+  const CriticalPoint c0 = ValueAt(0.0);
   s.K_cr_at_zero_B = c0.K_cr;
   s.f_at_zero_B_hz = c0.f_cr_hz;
   const std::vector<double> cand = ZeroKBoundary(c0, &s);
@@ -516,14 +551,15 @@ void ZWidth::ScanStableB(const std::vector<double>& cand, DelaySummary* out) con
     std::vector<char> st(bs.size());
     std::vector<double> kmax(bs.size(), 0.0);
     for (size_t i = 0; i < bs.size(); ++i) {
-      const std::vector<KInterval> iv = StableIntervals(bs[i]);
+      const std::vector<KInterval> iv = IntervalsFrom(Crossings(bs[i]), [&](double K) { return IsStable(K, bs[i]); },
+                                                      Check::kValuesOnly);
       st[i] = !iv.empty();
       for (const KInterval& v : iv) kmax[i] = std::max(kmax[i], std::isfinite(v.K_hi) ? v.K_hi : v.K_lo);
     }
     auto edge = [&](double lo, double hi, bool lo_stable) {  // bisection of "some K stable"
       for (int it = 0; it < 80 && hi - lo > 1e-14 * hi; ++it) {
         const double mid = 0.5 * (lo + hi);
-        (!StableIntervals(mid).empty() == lo_stable ? lo : hi) = mid;
+        (AnyStable(mid) == lo_stable ? lo : hi) = mid;
       }
       return 0.5 * (lo + hi);
     };
@@ -563,14 +599,14 @@ void ZWidth::ScanKcrMax(const CriticalPoint& c0, const std::vector<double>& cand
   s.B_at_K_cr_max = 0.0;
   for (int i = 1; i < n; ++i) {
     const double b = b_hi * i / n;
-    const CriticalPoint cp = At(b);
+    const CriticalPoint cp = ValueAt(b);
     if (!(cp.K_cr > 0.0) || std::isinf(cp.K_cr)) break;
     if (cp.K_cr > s.K_cr_max) { s.K_cr_max = cp.K_cr; s.B_at_K_cr_max = b; }
     if (!s.has_transition && std::abs(std::log(cp.f_cr_hz / prev_f)) > std::log(1.5)) {
       s.has_transition = true;
       s.B_t = FindTransition(prev_b, b, prev_f, cp.f_cr_hz);
       const double eps = 1e-9 * std::max(s.B_t, 1e-12);
-      const CriticalPoint before = At(s.B_t - eps), after = At(s.B_t + eps);
+      const CriticalPoint before = ValueAt(s.B_t - eps), after = ValueAt(s.B_t + eps);
       s.f_before_hz = before.f_cr_hz;
       s.f_after_hz = after.f_cr_hz;
       for (const CriticalPoint& p : {before, after}) {
@@ -583,20 +619,20 @@ void ZWidth::ScanKcrMax(const CriticalPoint& c0, const std::vector<double>& cand
   // Refine an interior maximum that is not at the transition.
   if (s.B_at_K_cr_max > 0.0 && (!s.has_transition || std::abs(s.B_at_K_cr_max - s.B_t) > b_hi / n)) {
     const double lo = std::max(0.0, s.B_at_K_cr_max - b_hi / n), hi = s.B_at_K_cr_max + b_hi / n;
-    const double bm = internal::GoldenExtremum([this](double b) { return At(b).K_cr; }, lo, hi, 1.0,
+    const double bm = internal::GoldenExtremum([this](double b) { return ValueAt(b).K_cr; }, lo, hi, 1.0,
                                                1e-12 * b_hi);
-    const double km = At(bm).K_cr;
+    const double km = ValueAt(bm).K_cr;
     if (km > s.K_cr_max) { s.K_cr_max = km; s.B_at_K_cr_max = bm; }
   }
 }
 
 SummaryStd ZWidth::SummarizeNear(const DelaySummary& nom) const {
   SummaryStd q;  // here: the values, not their std
-  q.K_cr_at_zero_B = At(0.0).K_cr;
+  q.K_cr_at_zero_B = ValueAt(0.0).K_cr;
   const double w = 0.02;
   if (nom.has_transition) {
     const double lo = nom.B_t * (1 - w), hi = nom.B_t * (1 + w);
-    const double flo = At(lo).f_cr_hz, fhi = At(hi).f_cr_hz;
+    const double flo = ValueAt(lo).f_cr_hz, fhi = ValueAt(hi).f_cr_hz;
     if (std::abs(std::log(flo / nom.f_before_hz)) < 0.3 && std::abs(std::log(fhi / nom.f_after_hz)) < 0.3) {
       q.B_t = FindTransition(lo, hi, nom.f_before_hz, nom.f_after_hz);
     }
@@ -605,22 +641,22 @@ SummaryStd ZWidth::SummarizeNear(const DelaySummary& nom) const {
   if (at_corner) {
     if (std::isfinite(q.B_t)) {
       const double eps = 1e-9 * q.B_t;
-      q.K_cr_max = std::max(At(q.B_t - eps).K_cr, At(q.B_t + eps).K_cr);
+      q.K_cr_max = std::max(ValueAt(q.B_t - eps).K_cr, ValueAt(q.B_t + eps).K_cr);
     }
   } else if (nom.B_at_K_cr_max > 0.0) {
     const double lo = nom.B_at_K_cr_max * (1 - w), hi = nom.B_at_K_cr_max * (1 + w);
-    const double bm = internal::GoldenExtremum([this](double b) { return At(b).K_cr; }, lo, hi, 1.0,
+    const double bm = internal::GoldenExtremum([this](double b) { return ValueAt(b).K_cr; }, lo, hi, 1.0,
                                                1e-12 * hi);
-    q.K_cr_max = At(bm).K_cr;
+    q.K_cr_max = ValueAt(bm).K_cr;
   } else {
     q.K_cr_max = q.K_cr_at_zero_B;
   }
   if (std::isfinite(nom.B_max) && nom.B_max > 0.0) {
     double lo = nom.B_max * (1 - w), hi = nom.B_max * (1 + w);
-    if (!StableIntervals(lo).empty() && StableIntervals(hi).empty()) {
+    if (AnyStable(lo) && !AnyStable(hi)) {
       for (int it = 0; it < 80 && hi - lo > 1e-14 * hi; ++it) {
         const double mid = 0.5 * (lo + hi);
-        (StableIntervals(mid).empty() ? hi : lo) = mid;
+        (AnyStable(mid) ? lo : hi) = mid;
       }
       q.B_max = 0.5 * (lo + hi);
     }

@@ -165,6 +165,14 @@ class ZWidth {
   DelaySummary Summarize() const;
   // All stable K intervals at this B, ascending. Empty when no K > 0 is stable.
   std::vector<KInterval> StableIntervals(double B) const;
+  // At(B) and StableIntervals(B) together (a boundary row): the same values
+  // as the two calls, with the crossings found once and no stability test run
+  // twice.
+  struct Row {
+    CriticalPoint point;
+    std::vector<KInterval> intervals;
+  };
+  Row RowAt(double B) const;
   // The four quantities of SummaryStd recomputed near a nominal summary of a
   // nearby plant (local brackets of +-2%; nan where the bracket fails). Used for
   // the finite-difference delta method.
@@ -194,6 +202,20 @@ class ZWidth {
   void ScanKcrMax(const CriticalPoint& c0, const std::vector<double>& cand, DelaySummary* s) const;
   // V(theta) = F(e^{j theta})(1 - e^{-j theta})/T.
   std::complex<double> V(double c, double s) const;
+  // At and StableIntervals from the crossings at B, with `stable(K)` deciding
+  // IsStable(K, B). kVerify runs the Schur-Cohn checks of options_.verify
+  // (they set only the `verified` flags, never a value); kValuesOnly does
+  // not; kFirstOnly (intervals) also stops at the first stable region.
+  enum class Check { kVerify, kValuesOnly, kFirstOnly };
+  template <typename Stable>
+  CriticalPoint PointFrom(double B, const std::vector<Crossing>& xs, const Stable& stable, Check check) const;
+  template <typename Stable>
+  std::vector<KInterval> IntervalsFrom(const std::vector<Crossing>& xs, const Stable& stable, Check check) const;
+  // For the summaries' scans, which read values only: At without the
+  // verification, and whether some K > 0 is stable at B (the first stable
+  // region found ends the search).
+  CriticalPoint ValueAt(double B) const;
+  bool AnyStable(double B) const;
 
   SampledPlant sp_;
   double period_s_;

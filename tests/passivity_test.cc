@@ -88,7 +88,10 @@ void ExpectMatches(const Loop& c, double B, const std::string& where, int* empty
     zero_fail = zero_fail || (P == 0.0 && !(c.b + B * R > 0));
   }
   const bool ref_empty = zero_fail || !(hi > lo);
-  const PassiveInterval got = Passivity(c.b, c.T, c.D, c.l).At(B);
+  const Passivity passivity(c.b, c.T, c.D, c.l);
+  const PassiveInterval got = passivity.At(B);
+  // KHi searches the lower bounds only down to K_hi: the same K_hi as At's full search.
+  EXPECT_EQ(passivity.KHi(B), got.K_hi) << where;
   ASSERT_EQ(got.passive_set_empty, ref_empty) << where << " K_hi " << hi << " K_lo " << lo;
   if (ref_empty) { ++*empty; return; }
   EXPECT_NEAR(got.K_hi, hi, 1e-9 * hi) << where;

@@ -14,6 +14,7 @@
 #include "model/error.h"
 #include "model/plant.h"
 #include "model/state_space.h"
+#include "stability/haptic_loop.h"
 #include "stability/zwidth.h"
 #include "tests/brute_force.h"
 #include "tests/devices.h"
@@ -152,6 +153,48 @@ TEST(StableIntervals, AgreeWithEigenvaluesOnRandomDevicesAndTheIssuesExamples) {
   EXPECT_GT(reopened, 2000);
   std::printf("%ld points, %ld in intervals starting above 0, %ld within 1e-6 of a boundary\n", total, reopened,
               near);
+}
+
+// RowAt computes the crossings once and each stability test once: it must give
+// exactly At(B) and StableIntervals(B) (bit for bit, the verification flags
+// included), on random devices and delays, with and without a velocity filter
+// and a hand, over B from 0 to past B_max.
+TEST(StableIntervals, RowAtIsAtAndStableIntervalsTogether) {
+  std::mt19937_64 rng(20261128);
+  std::uniform_int_distribution<int> delay(0, 12);
+  auto same = [](double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); };
+  long rows = 0, with_two = 0;
+  for (int k = 0; k < 12; ++k) {
+    const model::Plant p = k == 0 ? IssueDeviceOne() : test::RandomPlausibleDevice(rng, k % 4);
+    const double T = 1e-3;
+    LoopOptions loop;
+    if (k % 3 == 1) SetLowPassFilter(30.0 + 10.0 * k, T, &loop);
+    if (k % 3 == 2) loop.hand = {0.5 * p.m, p.b, 10.0 * p.m};
+    const ZWidth z(p, T, k == 0 ? 4 : delay(rng), loop);
+    const double top = 1.2 * std::max(z.Summarize().B_max, 1e-3 * p.m / T);
+    for (int i = 0; i <= 150; ++i) {
+      const double B = top * i / 150.0;
+      const ZWidth::Row r = z.RowAt(B);
+      const CriticalPoint c = z.At(B);
+      const std::vector<KInterval> iv = z.StableIntervals(B);
+      const std::string at = "device " + std::to_string(k) + " B = " + std::to_string(B);
+      EXPECT_TRUE(same(r.point.K_cr, c.K_cr) && same(r.point.f_cr_hz, c.f_cr_hz) &&
+                  same(r.point.K_margin, c.K_margin) && same(r.point.f_margin_hz, c.f_margin_hz) &&
+                  r.point.verified == c.verified && r.point.unstable_at_zero_k == c.unstable_at_zero_k && r.point.B == c.B)
+          << at;
+      ASSERT_EQ(r.intervals.size(), iv.size()) << at;
+      for (size_t j = 0; j < iv.size(); ++j) {
+        EXPECT_TRUE(same(r.intervals[j].K_lo, iv[j].K_lo) && same(r.intervals[j].K_hi, iv[j].K_hi) &&
+                    same(r.intervals[j].f_lo_hz, iv[j].f_lo_hz) && same(r.intervals[j].f_hi_hz, iv[j].f_hi_hz) &&
+                    r.intervals[j].verified == iv[j].verified)
+            << at << " interval " << j;
+      }
+      ++rows;
+      if (iv.size() > 1 || (!iv.empty() && iv[0].K_lo > 0)) ++with_two;
+    }
+  }
+  EXPECT_EQ(rows, 12 * 151);
+  EXPECT_GT(with_two, 0);  // rows with an interval starting above 0 were compared too
 }
 
 TEST(StableIntervals, TheIssuesReopenedBands) {
