@@ -102,6 +102,17 @@ FigureData MakeFigures(const RunAnalysis& a, const std::vector<stability::ZWidth
 
 }  // namespace
 
+ReferenceStability ReferenceStabilityOf(const io::ModelFile& reference, double T, const std::vector<int>& delays) {
+  ReferenceStability r;
+  r.period_s = T;
+  r.delays = delays;
+  const stability::SampledPlant sampled(reference.plant, T);
+  for (int d : delays) r.zwidths.emplace_back(sampled, d);
+  r.summaries.resize(delays.size());
+  ParallelFor(delays.size(), [&](size_t i) { r.summaries[i] = r.zwidths[i].Summarize(); });
+  return r;
+}
+
 bool RunOptions::IsValid(std::string* why) const {
   auto fail = [&](const std::string& m) {
     if (why) *why = m;
@@ -138,16 +149,18 @@ RunAnalysis Analyse(RunInput input, const RunOptions& o) {
   std::vector<stability::ZWidth> ref_zs;  // the reference on the paper's loop, per delay
   if (a.input.reference) {
     const io::ModelFile& ref = *a.input.reference;
-    const stability::SampledPlant ref_sampled(ref.plant, T);
-    for (int d : o.delays) ref_zs.emplace_back(ref_sampled, d);
-    std::vector<stability::DelaySummary> ref_sums(o.delays.size());
-    ParallelFor(o.delays.size(), [&](size_t i) { ref_sums[i] = ref_zs[i].Summarize(); });
+    std::optional<ReferenceStability>& given = a.input.reference_stability;
+    const bool computed_here = !given || given->period_s != T || given->delays != o.delays;
+    if (computed_here) given = ReferenceStabilityOf(ref, T, o.delays);
+    ref_zs = std::move(given->zwidths);
+    const std::vector<stability::DelaySummary> ref_sums = std::move(given->summaries);
+    given.reset();
     const PlantStability& st = a.stability;
     const bool plain = !o.loop.HasFilter() && o.loop.hand.IsNone();
     const DelayStability model_st =
         plain ? DelayStability{st.summaries, st.stds, st.has_std} : SummarizeDelays(a.input.model, T, o.delays);
     a.comparison = CompareModels(a.input.model, ref, o.delays, model_st, ref_sums, o.linear);
-    a.stages.push_back({"compare (reference Z-width)", laps.Lap()});
+    a.stages.push_back({computed_here ? "compare (reference Z-width)" : "compare", laps.Lap()});
   }
   if (o.figures) {
     a.figures = MakeFigures(a, ref_zs);

@@ -31,6 +31,17 @@ struct RunOptions {
   bool IsValid(std::string* why) const;
 };
 
+// The reference's Z-width on the paper's loop, per delay (for the comparison
+// and the K_CR figure). It needs only the reference and the log's period, so
+// a caller can compute it while the fit runs (ReferenceStabilityOf).
+struct ReferenceStability {
+  double period_s = 0.0;                      // [s]
+  std::vector<int> delays;                    // [samples], as RunOptions::delays
+  std::vector<stability::ZWidth> zwidths;     // one per delay
+  std::vector<stability::DelaySummary> summaries;
+};
+ReferenceStability ReferenceStabilityOf(const io::ModelFile& reference, double period_s, const std::vector<int>& delays);
+
 // The estimate and the fit that a run analyses (made by the caller: reading
 // logs and fitting are their own stages, shared with `estimate` and `fit`).
 struct RunInput {
@@ -44,6 +55,9 @@ struct RunInput {
   std::optional<io::ModelFile> reference;    // compared with, on the paper's loop; none: no comparison
   std::string reference_name;                // what the reference was read from: "table1" or its path
   bool reference_is_table1 = false;          // the reference is the paper's Table I (Table II drawn)
+  // The reference's Z-width when the caller computed it already (for the same
+  // period and delays; Analyse checks); else Analyse computes it.
+  std::optional<ReferenceStability> reference_stability;
 };
 
 // The Bode figure: measured and model (exact ZOH, without the loop's hand),

@@ -3,6 +3,9 @@
 // estimate and the fit (which print as they read and fit, shared with
 // `estimate` and `fit`), analysis::Analyse, report::WriteRunReport, printing.
 #include <cstdio>
+#include <exception>
+#include <optional>
+#include <thread>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -36,16 +39,36 @@ struct RunFlags {
 void PrintStage(const std::string& name, double ms) { std::fprintf(stderr, "  %-28s %9.3f ms\n", name.c_str(), ms); }
 
 // The estimate and the fit (timed into *t_total_ms), as analysis::RunInput.
-analysis::RunInput EstimateAndFit(const RunFlags& f, analysis::RunInput in, double* t_total_ms) {
+// With a reference, its Z-width (which needs only the log's period) is
+// computed on a thread of its own while the fit runs: the fit leaves a core
+// idle while it converges from one start.
+analysis::RunInput EstimateAndFit(const RunFlags& f, const analysis::RunOptions& o, analysis::RunInput in,
+                                  double* t_total_ms) {
   StageTimer timer;
   LogsEstimate est = EstimateFromLogs(f.logs, f.est, true);
   in.response = std::move(est.response);
   in.total_samples = est.total_samples;
   in.whole_record = f.est.whole_record;
   *t_total_ms = timer.Lap("estimate (read + Welch)");
-  in.model = FitToModelFile(in.response.frf, f.fit.o, in.source, &in.fit);
+  std::exception_ptr ref_error;
+  std::optional<analysis::ReferenceStability> ref;
+  {
+    std::jthread ref_thread;
+    if (in.reference) {
+      ref_thread = std::jthread([&] {
+        try {
+          ref = analysis::ReferenceStabilityOf(*in.reference, 1.0 / in.response.frf.sample_rate_hz, o.delays);
+        } catch (...) {
+          ref_error = std::current_exception();
+        }
+      });
+    }
+    in.model = FitToModelFile(in.response.frf, f.fit.o, in.source, &in.fit);
+  }  // joined
+  if (ref_error) std::rethrow_exception(ref_error);
+  in.reference_stability = std::move(ref);
   for (std::string& w : in.fit.warnings) w = WithFlags(w);  // the report shows the CLI's flags
-  *t_total_ms += timer.Lap("fit");
+  *t_total_ms += timer.Lap(in.reference ? "fit (+ reference Z-width)" : "fit");
   return in;
 }
 
@@ -73,7 +96,7 @@ void Run(RunFlags& f) {
   io::OutputFolder folder(f.outdir, f.force);
   std::fprintf(stderr, "zwidth run %s -> %s\n", in.source.c_str(), f.outdir.c_str());
   double t_total = 0.0;
-  in = EstimateAndFit(f, std::move(in), &t_total);
+  in = EstimateAndFit(f, o, std::move(in), &t_total);
   if (f.loop.hands.size() > 1) throw InputError("run takes one --hand (boundary takes several)");
   o.loop = ResolveLoops(f.loop, 1.0 / in.response.frf.sample_rate_hz)[0];
   const analysis::RunAnalysis a = analysis::Analyse(std::move(in), o);

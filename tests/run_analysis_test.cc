@@ -85,5 +85,40 @@ TEST(RunAnalysis, AModelComparedWithItselfHasTheModelsCurvesAndNoRigidModes) {
   EXPECT_EQ(names, (std::vector<std::string>{"boundary", "compare (reference Z-width)", "figure data (reference, rigid)"}));
 }
 
+// The reference's Z-width computed beforehand (as `run` does while the fit
+// runs) gives the comparison and the curves computed in Analyse, exactly; one
+// for another period or other delays is not used.
+TEST(RunAnalysis, AReferenceComputedBeforehandGivesTheSameComparison) {
+  analysis::RunOptions o;
+  o.delays = {1, 3};
+  auto input = [&] {
+    analysis::RunInput in = TestInput(0.0);
+    model::Plant other = in.model.plant;
+    other.m *= 1.3;
+    in.reference = io::ModelFile{};
+    in.reference->plant = other;
+    in.reference_name = "other";
+    return in;
+  };
+  const analysis::RunAnalysis plain = analysis::Analyse(input(), o);
+  analysis::RunInput in = input();
+  in.reference_stability = analysis::ReferenceStabilityOf(*in.reference, kT, o.delays);
+  const analysis::RunAnalysis given = analysis::Analyse(std::move(in), o);
+  analysis::RunInput stale = input();
+  stale.reference_stability = analysis::ReferenceStabilityOf(*stale.reference, kT, {1, 4});  // other delays
+  const analysis::RunAnalysis redone = analysis::Analyse(std::move(stale), o);
+  ASSERT_TRUE(plain.comparison && given.comparison && redone.comparison);
+  EXPECT_EQ(given.comparison->text, plain.comparison->text);
+  EXPECT_EQ(given.comparison->json, plain.comparison->json);
+  EXPECT_EQ(redone.comparison->text, plain.comparison->text);
+  EXPECT_EQ(given.stages[1].name, "compare");
+  EXPECT_EQ(redone.stages[1].name, "compare (reference Z-width)");
+  for (size_t i = 0; i < 2; ++i) {
+    for (size_t k = 0; k < plain.stability.b_grid.size(); ++k) {
+      EXPECT_EQ(given.figures->kcr_reference[i][k].K_cr, plain.figures->kcr_reference[i][k].K_cr);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace zwidth
