@@ -332,6 +332,14 @@ std::vector<double> MakeBGrid(const BGridOptions& o, double largest, double fall
   return g;
 }
 
+double ZWidth::NoCrossingProbe(const std::vector<Crossing>& xs) const {
+  // Far above every crossing's |K| (whatever its sign), so that a crossing
+  // near K = 0 lost to rounding lies between 0+ and the probe.
+  double k = 0.0;
+  for (const Crossing& x : xs) if (std::isfinite(x.K)) k = std::max(k, std::abs(x.K));
+  return k > 0.0 ? 2.0 * k : 1e6;
+}
+
 template <typename Stable>
 CriticalPoint ZWidth::PointFrom(double B, const std::vector<Crossing>& xs, const Stable& stable, Check check) const {
   const bool verify = check == Check::kVerify;
@@ -355,7 +363,15 @@ CriticalPoint ZWidth::PointFrom(double B, const std::vector<Crossing>& xs, const
     if (x.K > 0.0 && x.K < cp.K_cr) { cp.K_cr = x.K; cp.f_cr_hz = HzOf(x.theta); }
   }
   if (std::isinf(cp.K_cr)) {
-    cp.verified = !verify || stable(1e6);  // no crossing: stable for every K we try
+    // No crossing with K > 0: every K > 0 is as stable as K -> 0+, unless a
+    // crossing at K ~ 0 was lost to rounding (B on the K = 0 boundary, e.g.
+    // exactly at B_max_from_zero): then nothing is stable.
+    if (!stable(NoCrossingProbe(xs))) {
+      cp.K_cr = 0.0;
+      cp.verified = false;
+      return cp;
+    }
+    cp.verified = true;
     return cp;
   }
   cp.verified = !verify || !options_.verify ||
@@ -397,6 +413,7 @@ std::vector<KInterval> ZWidth::IntervalsFrom(const std::vector<Crossing>& xs, co
     else if (i == n) probe = 2.0 * a;
     else probe = std::sqrt(a * b);
     if (!stable(probe)) continue;
+    if (n == 0 && !stable(NoCrossingProbe(xs))) continue;  // see PointFrom
     if (!out.empty() && out.back().K_hi == a) {  // a tangential crossing: both sides stable
       out.back().K_hi = b;
       out.back().f_hi_hz = i == n ? std::numeric_limits<double>::quiet_NaN() : HzOf(ks[i].theta);
@@ -520,8 +537,22 @@ std::vector<double> ZWidth::ZeroKBoundary(const CriticalPoint& c0, DelaySummary*
   if (c0.unstable_at_zero_k) {
     s.B_max_from_zero = 0.0;
   } else {
-    for (double b : cand) {
-      if (IsStable(0.0, b * (1.0 - 1e-9)) && !IsStable(0.0, b * (1.0 + 1e-9))) { s.B_max_from_zero = b; break; }
+    // The first candidate where K -> 0+ turns from stable to unstable. Right at
+    // b the closed loop has a root on the circle: Schur-Cohn decides the sides
+    // at b (1 -+ delta), with delta widened (below half the gap to the
+    // neighbouring candidates) until they read stable below and unstable
+    // above, since a high-order polynomial (long delay, heavy device) can
+    // misjudge a root within ~1e-9 of the circle either way.
+    for (size_t i = 0; i < cand.size() && std::isinf(s.B_max_from_zero); ++i) {
+      const double b = cand[i];
+      double gap = b;
+      if (i > 0) gap = std::min(gap, b - cand[i - 1]);
+      if (i + 1 < cand.size()) gap = std::min(gap, cand[i + 1] - b);
+      for (double delta : {1e-9, 1e-7, 1e-5, 1e-3}) {
+        if (delta * b >= 0.5 * gap && delta > 1e-9) break;
+        const bool below = IsStable(0.0, b * (1.0 - delta)), above = IsStable(0.0, b * (1.0 + delta));
+        if (below && !above) { s.B_max_from_zero = b; break; }
+      }
     }
   }
   return cand;
@@ -597,20 +628,27 @@ void ZWidth::ScanKcrMax(const CriticalPoint& c0, const std::vector<double>& cand
   double prev_f = c0.f_cr_hz, prev_b = 0.0;
   s.K_cr_max = c0.K_cr;
   s.B_at_K_cr_max = 0.0;
-  for (int i = 1; i < n; ++i) {
-    const double b = b_hi * i / n;
+  // The last point lies just below b_hi, so that a jump in the last cell
+  // (a branch taking over just before the interval from 0+ closes) is seen.
+  for (int i = 1; i <= n; ++i) {
+    const double b = i < n ? b_hi * i / n : b_hi * (1.0 - 1e-6);
     const CriticalPoint cp = ValueAt(b);
     if (!(cp.K_cr > 0.0) || std::isinf(cp.K_cr)) break;
     if (cp.K_cr > s.K_cr_max) { s.K_cr_max = cp.K_cr; s.B_at_K_cr_max = b; }
     if (!s.has_transition && std::abs(std::log(cp.f_cr_hz / prev_f)) > std::log(1.5)) {
-      s.has_transition = true;
-      s.B_t = FindTransition(prev_b, b, prev_f, cp.f_cr_hz);
-      const double eps = 1e-9 * std::max(s.B_t, 1e-12);
-      const CriticalPoint before = ValueAt(s.B_t - eps), after = ValueAt(s.B_t + eps);
-      s.f_before_hz = before.f_cr_hz;
-      s.f_after_hz = after.f_cr_hz;
+      const double bt = FindTransition(prev_b, b, prev_f, cp.f_cr_hz);
+      const double eps = 1e-9 * std::max(bt, 1e-12);
+      const CriticalPoint before = ValueAt(bt - eps), after = ValueAt(bt + eps);
       for (const CriticalPoint& p : {before, after}) {
         if (p.K_cr > s.K_cr_max) { s.K_cr_max = p.K_cr; s.B_at_K_cr_max = p.B; }
+      }
+      // A jump only when f_CR really jumps at bt: a smooth but steep f_CR(B)
+      // can also change by 1.5x between two scan points.
+      if (std::abs(std::log(after.f_cr_hz / before.f_cr_hz)) > std::log(1.5)) {
+        s.has_transition = true;
+        s.B_t = bt;
+        s.f_before_hz = before.f_cr_hz;
+        s.f_after_hz = after.f_cr_hz;
       }
     }
     prev_f = cp.f_cr_hz;
@@ -619,11 +657,26 @@ void ZWidth::ScanKcrMax(const CriticalPoint& c0, const std::vector<double>& cand
   // Refine an interior maximum that is not at the transition.
   if (s.B_at_K_cr_max > 0.0 && (!s.has_transition || std::abs(s.B_at_K_cr_max - s.B_t) > b_hi / n)) {
     const double lo = std::max(0.0, s.B_at_K_cr_max - b_hi / n), hi = s.B_at_K_cr_max + b_hi / n;
-    const double bm = internal::GoldenExtremum([this](double b) { return ValueAt(b).K_cr; }, lo, hi, 1.0,
-                                               1e-12 * b_hi);
-    const double km = ValueAt(bm).K_cr;
+    double bm;
+    const double km = LargestKcr(lo, hi, 1e-12 * b_hi, &bm);
     if (km > s.K_cr_max) { s.K_cr_max = km; s.B_at_K_cr_max = bm; }
   }
+}
+
+double ZWidth::LargestKcr(double lo, double hi, double tol, double* b_at) const {
+  // The largest value the search evaluated, not the value at its last
+  // midpoint: where K_CR(B) rises to a corner (the interval from K = 0+
+  // closing at B_max_from_zero from below) the bracket closes on a
+  // discontinuity, and its midpoint can lie past it (K_CR = 0 there).
+  double best = -std::numeric_limits<double>::infinity(), best_b = std::numeric_limits<double>::quiet_NaN();
+  auto k_of = [&](double b) {
+    const double k = ValueAt(b).K_cr;
+    if (k > best) { best = k; best_b = b; }
+    return k;
+  };
+  k_of(internal::GoldenExtremum(k_of, lo, hi, 1.0, tol));
+  if (b_at) *b_at = best_b;
+  return best;
 }
 
 SummaryStd ZWidth::SummarizeNear(const DelaySummary& nom) const {
@@ -645,9 +698,7 @@ SummaryStd ZWidth::SummarizeNear(const DelaySummary& nom) const {
     }
   } else if (nom.B_at_K_cr_max > 0.0) {
     const double lo = nom.B_at_K_cr_max * (1 - w), hi = nom.B_at_K_cr_max * (1 + w);
-    const double bm = internal::GoldenExtremum([this](double b) { return ValueAt(b).K_cr; }, lo, hi, 1.0,
-                                               1e-12 * hi);
-    q.K_cr_max = ValueAt(bm).K_cr;
+    q.K_cr_max = LargestKcr(lo, hi, 1e-12 * hi, nullptr);
   } else {
     q.K_cr_max = q.K_cr_at_zero_B;
   }

@@ -216,6 +216,12 @@ class ZWidth {
   // region found ends the search).
   CriticalPoint ValueAt(double B) const;
   bool AnyStable(double B) const;
+  // The largest K_CR that a golden-section search on [lo, hi] evaluates (and
+  // where, when b_at is given).
+  double LargestKcr(double lo, double hi, double tol, double* b_at) const;
+  // Where no crossing has K > 0: a K at which to confirm that every K > 0 is
+  // as stable as K -> 0+.
+  double NoCrossingProbe(const std::vector<Crossing>& xs) const;
 
   SampledPlant sp_;
   double period_s_;

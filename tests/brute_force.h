@@ -12,9 +12,11 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <unsupported/Eigen/MatrixFunctions>
 
 #include "model/plant.h"
 #include "model/state_space.h"
+#include "stability/haptic_loop.h"
 #include "stability/zwidth.h"
 
 namespace zwidth::stability {
@@ -132,6 +134,21 @@ struct LoopBruteForce {
   }
   double MaxRoot(double K, double B) const { return Matrix(K, B).eigenvalues().cwiseAbs().maxCoeff(); }
 };
+
+// The loop brute force of a plant (with the loop's hand): its own ZOH,
+// e^{[[A, B], [0, 0]] T} without balancing; well conditioned for heavy
+// devices, where BruteForce's N(z) = det(zI - A + BC) - det(zI - A) loses its
+// digits to cancellation.
+inline LoopBruteForce MakeBrute(const model::Plant& p, const LoopOptions& loop, int delay, double T) {
+  const model::StateSpace c = ContinuousStateSpaceWithHand(p, loop.hand);
+  const int n = static_cast<int>(c.A.rows());
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n + 1, n + 1);
+  M.topLeftCorner(n, n) = c.A * T;
+  M.topRightCorner(n, 1) = c.B * T;
+  const Eigen::MatrixXd E = M.exp();
+  return LoopBruteForce(E.topLeftCorner(n, n), E.topRightCorner(n, 1), c.C, loop.filter_b, loop.filter_a,
+                        delay + p.delay_samples, T);
+}
 
 // Points of a (K, B) grid classified by ZWidth::StableIntervals and by a brute
 // force's largest closed-loop root (stable when < 1).

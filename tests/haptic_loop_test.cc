@@ -39,19 +39,6 @@ Hand HandOf(int level, const model::Plant& p) {
   return {M, (level == 1 ? 1.0 : 5.0) * p.b, w * w * (p.m + M)};
 }
 
-// The sampled plant (with hand) for the brute force: its own ZOH, e^{[[A, B], [0, 0]] T}
-// without balancing.
-LoopBruteForce MakeBrute(const model::Plant& p, const LoopOptions& loop, int delay, double T) {
-  const model::StateSpace c = ContinuousStateSpaceWithHand(p, loop.hand);
-  const int n = static_cast<int>(c.A.rows());
-  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n + 1, n + 1);
-  M.topLeftCorner(n, n) = c.A * T;
-  M.topRightCorner(n, 1) = c.B * T;
-  const Eigen::MatrixXd E = M.exp();
-  return LoopBruteForce(E.topLeftCorner(n, n), E.topRightCorner(n, 1), c.C, loop.filter_b, loop.filter_a,
-                        delay + p.delay_samples, T);
-}
-
 TEST(HapticLoop, HandStateSpaceIsGOverOnePlusGZ) {
   std::mt19937_64 rng(16);
   for (int k = 0; k < 8; ++k) {

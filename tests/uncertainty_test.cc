@@ -1,6 +1,8 @@
 // stability/uncertainty.h: the standard deviation of K_cr by the delta method
 // against a seeded Monte Carlo over the model's parameters.
 #include <cmath>
+#include <cstdio>
+#include <numbers>
 #include <random>
 #include <vector>
 
@@ -81,6 +83,25 @@ TEST_P(UncertaintyDelays, DeltaMethodAgreesWithMonteCarlo) {
 }
 
 INSTANTIATE_TEST_SUITE_P(TableOne, UncertaintyDelays, ::testing::Values(2, 8), test::DelayName());
+
+// K_CR^max where the interval from K = 0+ closes (B_at_K_cr_max =
+// B_max_from_zero: K_CR(B) rises to a corner there), on a device with a very
+// lightly damped mode (zeta 0.001, 120 Hz pole over a 100 Hz zero) at d = 4:
+// the delta method's std against Monte Carlo (it was 1e4 times too large when
+// the perturbed search read K_CR just past the corner).
+TEST(Uncertainty, DeltaMethodAtTheCornerWhereTheIntervalFromZeroCloses) {
+  const double w = 2 * std::numbers::pi * 120, v = 2 * std::numbers::pi * 100;
+  const model::Plant p{1e-3, 5e-3, {{w, 2 * 0.001 * w, v, 2 * 0.001 * v}}};
+  const std::vector<double> cov = TestCovariance(p, 0.01, 7);
+  const ZWidth z(p, 1e-3, 4);
+  const DelaySummary s = z.Summarize();
+  ASSERT_GT(s.B_at_K_cr_max, (1 - 1e-6) * s.B_max_from_zero);  // the corner
+  const SummaryStd dm = SummaryStdDelta(p, cov, 1e-3, 4, s);
+  const MonteCarloResult mc = SummaryMonteCarlo(p, cov, 1e-3, 4, 300, 13);
+  EXPECT_LT(dm.K_cr_max / mc.std.K_cr_max, 1.5);
+  EXPECT_GT(dm.K_cr_max / mc.std.K_cr_max, 1 / 1.5);
+  std::printf("corner: delta %.4g monte carlo %.4g\n", dm.K_cr_max, mc.std.K_cr_max);
+}
 
 TEST(Uncertainty, RejectsABadCovariance) {
   const model::Plant p = model::PhantomTable1();

@@ -197,6 +197,72 @@ TEST(StableIntervals, RowAtIsAtAndStableIntervalsTogether) {
   EXPECT_GT(with_two, 0);  // rows with an interval starting above 0 were compared too
 }
 
+// The summary read along K_CR(B) on devices unlike the PHANToM (a 20 kg
+// linear axis and a 5000 kg one, long delays as in networked haptics, a light
+// stiff rotary device at 10 kHz; issue 12's tryout found the summary losing
+// the curve there): against a dense scan of At(B) and against the brute
+// force's eigenvalues.
+// - K_CR^max is at least the scan's largest K_CR, and the brute force is
+//   stable just below it and unstable just above it at B_at_K_cr_max;
+// - B_max_from_zero is finite when the scan's K_CR falls to 0, and no K > 0
+//   is stable just past it;
+// - B_t is reported exactly when the scan's f_CR jumps by 1.5x between
+//   neighbours (before B_max_from_zero), and then f_CR jumps there.
+TEST(Summary, FollowsTheCurveOnHeavyDevicesLongDelaysAndFastLoops) {
+  auto mode = [](double f_pole, double z_pole, double f_zero, double z_zero) {
+    const double w = 2 * std::numbers::pi * f_pole, v = 2 * std::numbers::pi * f_zero;
+    return model::Mode{w, 2 * z_pole * w, v, 2 * z_zero * v};
+  };
+  model::Plant heavy{20.0, 50.0, {mode(15, 0.05, 12, 0.05), mode(40, 0.03, 33, 0.03)}};
+  model::Plant huge{5000.0, 20000.0, {mode(3, 0.02, 2.5, 0.02), mode(8, 0.05, 6, 0.05)}};
+  model::Plant light{1e-5, 1e-4, {mode(900, 0.05, 700, 0.05)}};
+  struct Case { const model::Plant* p; double T; int d; };
+  std::vector<Case> cases;
+  for (int d : {15, 20, 21, 23, 27, 31, 36, 38, 40}) cases.push_back({&heavy, 1e-3, d});
+  for (int d : {10, 22, 26, 40}) cases.push_back({&huge, 1e-3, d});
+  for (int d : {1, 2, 4}) cases.push_back({&light, 1e-4, d});
+  int transitions = 0, corners = 0;
+  for (const Case& c : cases) {
+    const ZWidth z(*c.p, c.T, c.d);
+    const DelaySummary s = z.Summarize();
+    const std::string at = "m = " + std::to_string(c.p->m) + ", d = " + std::to_string(c.d);
+    ASSERT_TRUE(std::isfinite(s.B_max_from_zero)) << at;
+    const int n = 400;
+    double scan_max = 0.0, f_prev = NAN, k_prev = NAN;
+    bool jump = false;
+    for (int i = 0; i < n; ++i) {
+      const double B = s.B_max_from_zero * i / n;
+      const CriticalPoint cp = z.At(B);
+      ASSERT_GT(cp.K_cr, 0.0) << at << " B = " << B;
+      scan_max = std::max(scan_max, cp.K_cr);
+      if (i > 0 && k_prev > 0 && std::abs(std::log(cp.f_cr_hz / f_prev)) > std::log(1.5)) jump = true;
+      f_prev = cp.f_cr_hz;
+      k_prev = cp.K_cr;
+    }
+    EXPECT_GE(s.K_cr_max, scan_max * (1 - 1e-9)) << at;
+    const LoopBruteForce bf = MakeBrute(*c.p, {}, c.d, c.T);
+    EXPECT_LT(bf.MaxRoot(s.K_cr_max * (1 - 1e-4), s.B_at_K_cr_max), 1.0) << at;
+    EXPECT_GT(bf.MaxRoot(s.K_cr_max * (1 + 1e-4), s.B_at_K_cr_max), 1.0) << at;
+    if (s.B_at_K_cr_max > 0.999 * s.B_max_from_zero) ++corners;
+    // Just past B_max_from_zero the loop with a small K is unstable.
+    EXPECT_GT(bf.MaxRoot(1e-3 * s.K_cr_at_zero_B, s.B_max_from_zero * (1 + 1e-4)), 1.0) << at;
+    // At B_max_from_zero itself (a crossing at K ~ 0 that rounding can lose)
+    // no interval may reach K = inf unless the loop is stable there.
+    for (const KInterval& iv : z.StableIntervals(s.B_max_from_zero)) {
+      if (std::isinf(iv.K_hi)) {
+        EXPECT_LT(bf.MaxRoot(std::max(2.0 * iv.K_lo, 10.0 * s.K_cr_at_zero_B), s.B_max_from_zero), 1.0) << at;
+      }
+    }
+    if (jump) EXPECT_TRUE(s.has_transition) << at;
+    if (s.has_transition) {
+      ++transitions;
+      EXPECT_GT(std::abs(std::log(s.f_after_hz / s.f_before_hz)), std::log(1.5)) << at;
+    }
+  }
+  EXPECT_GT(transitions, 3);
+  EXPECT_GT(corners, 0);  // K_CR^max where the interval from 0+ closes was met
+}
+
 TEST(StableIntervals, TheIssuesReopenedBands) {
   // Example 1: past B_max_from_zero ~ 0.4998 the band (1.82, 23.5) at
   // B = 0.5005 and (12.3, 23.0) at 0.505 (the issue's rounded values).
