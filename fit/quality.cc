@@ -27,6 +27,47 @@ double Chi2Limit(const FitResult& r, double kappa) {
   return 1.5 + 4.0 * std::sqrt(2.0 * std::max(1.0, kappa) / dof);
 }
 
+// Leakage of the Welch window (a tapered one: bin_correlation > 1.2; a
+// whole-record response of a periodic excitation has none). The estimate is
+// the response smoothed by the window's power kernel, of variance
+// sigma^2 = df^2 / 3 for Hann (df the bin spacing; by Parseval,
+// int w'^2 / (4 pi^2 int w^2) for w = sin^2(pi t / T_w)), which widens a peak of
+// half-power bandwidth bw [Hz] by the relative amount (4/3) (df / bw)^2 (a
+// Lorentzian's half-width gamma becomes gamma + sigma^2 / gamma): the fitted
+// damping of that pole or zero is biased up by about as much (the fit's
+// other parameters absorb part of it). A section narrower than 2 bins makes
+// the fit poor; a bias bound above 3 of its std errors is a warning.
+void LeakageChecks(const ident::FrequencyResponse& sub, FitResult* res) {
+  if (!(sub.bin_correlation > 1.2) || sub.window_length <= 0 || !(sub.sample_rate_hz > 0)) return;
+  const double df = sub.sample_rate_hz / sub.window_length;
+  const std::vector<model::Mode>& modes = res->plant.modes;
+  for (size_t i = 0; i < modes.size(); ++i) {
+    const bool have_std = i < res->std_errors.modes.size();
+    for (int zero = 0; zero < 2; ++zero) {
+      const double w = zero ? modes[i].v : modes[i].omega, c = zero ? modes[i].d : modes[i].c;
+      const double sd = have_std ? (zero ? res->std_errors.modes[i].d : res->std_errors.modes[i].c) : NAN;
+      const double bw = c / (2.0 * std::numbers::pi), r = df / bw, bias = 4.0 / 3.0 * r * r;
+      const double f = w / (2.0 * std::numbers::pi);
+      const int longer = 1 << static_cast<int>(std::ceil(std::log2(std::max(2.0, 4.0 * r))));
+      const std::string the = std::string("the ") + (zero ? "antiresonance" : "resonance");
+      if (r > 0.5) {
+        res->reasons.push_back(
+            {"mode_narrower_than_bins",
+             the + Fmt(" at %.4g Hz is %.3g Hz wide (half power), under 2 bins of the window (%.3g Hz): its leakage "
+                       "widens it, and the fitted damping is too large (by up to about %.0f %%)",
+                       f, bw, df, 100.0 * bias),
+             "a window " + std::to_string(longer) + " times longer (WelchOptions::window_length)"});
+      } else if (std::isfinite(sd) && sd > 0 && bias * c > 3.0 * sd) {
+        res->warnings.push_back(
+            "the damping of " + the +
+            Fmt(" at %.4g Hz (%.3g Hz wide) may be biased up by the window's leakage by up to %.2g %%, %.2g times "
+                "its std error; a longer WelchOptions::window_length reduces it (4 times longer: 16 times less)",
+                f, bw, 100.0 * bias, bias * c / sd));
+      }
+    }
+  }
+}
+
 // The quality tests (see FitResult::quality).
 void JudgeQuality(const Fixed& fx, const ident::FrequencyResponse& sub, const FitOptions& o, FitResult* res) {
   auto add = [&](std::string code, std::string msg, std::string advice) {
@@ -96,6 +137,7 @@ void JudgeQuality(const Fixed& fx, const ident::FrequencyResponse& sub, const Fi
                             " Welch segment(s): its per-bin std, hence the weights and the standard errors, mean little",
         "record a longer log or use a shorter WelchOptions::window_length");
   }
+  LeakageChecks(sub, res);
   for (const std::string& s : SpuriousSections(*res, o)) {
     const bool bound = s.find("bound") != std::string::npos;
     add(bound ? "parameter_at_bound" : "spurious_section", s,

@@ -2,6 +2,7 @@
 // quality verdict, short logs (order selection: order_test.cc). Logs are
 // simulated by SimulateLog (tests/fit_devices.h), seeded, 1 kHz.
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <random>
 
@@ -84,6 +85,41 @@ TEST(FitQuality, BandLimitsApplyToAGivenResponse) {
   EXPECT_GE(r.band.f_lo_hz, 2.0);
   EXPECT_LE(r.band.f_hi_hz, 20.0);
   EXPECT_EQ(r.num_residuals / 2, r.band.num_used);
+}
+
+// A very lightly damped mode (zeta 0.001 at 120 Hz, half-power bandwidth
+// 0.24 Hz, about one bin of the default 4096-sample window at 1 kHz): Welch
+// leakage widens the measured peak, so the fitted damping is biased up. The
+// fit must say so (poor, code mode_narrower_than_bins); with a window 16
+// times longer the section spans several bins, the reason goes, and the
+// fitted pole damping c is at most half as far from the truth.
+TEST(FitQuality, AModeNarrowerThanTwoBinsIsFlagged) {
+  const double w = 2 * std::numbers::pi * 120, v = 2 * std::numbers::pi * 100;
+  const model::Plant p{1e-3, 5e-3, {{w, 2 * 0.001 * w, v, 2 * 0.001 * v}}};
+  model::SimulateOptions so;
+  so.seed = 27;
+  so.seconds = 240;
+  so.encoder_step_rad = 1e-7;  // fine enough that quantisation does not hide the mode
+  const model::SimulatedLog log = model::SimulateLog(p, so);
+  FitOptions o;
+  o.num_modes = 1;
+  auto narrow = [](const FitResult& r) {
+    bool n = false;
+    for (const auto& q : r.reasons) n |= q.code == "mode_narrower_than_bins";
+    return n;
+  };
+  ident::WelchOptions wo;
+  const FitResult short_w = FitModel(ident::EstimateFrequencyResponse(log.torque, log.position, 1000, wo), o);
+  ASSERT_EQ(short_w.status, FitStatus::kConverged);
+  EXPECT_TRUE(narrow(short_w));
+  EXPECT_EQ(short_w.quality, FitQuality::kPoor);
+  wo.window_length = 65536;
+  const FitResult long_w = FitModel(ident::EstimateFrequencyResponse(log.torque, log.position, 1000, wo), o);
+  ASSERT_EQ(long_w.status, FitStatus::kConverged);
+  EXPECT_FALSE(narrow(long_w));
+  const double bias_short = short_w.plant.modes[0].c / p.modes[0].c - 1, bias_long = long_w.plant.modes[0].c / p.modes[0].c - 1;
+  std::printf("pole damping c: %+.2f %% with 4096 samples, %+.2f %% with 65536\n", 100 * bias_short, 100 * bias_long);
+  EXPECT_LT(std::abs(bias_long), 0.5 * std::abs(bias_short));
 }
 
 TEST(FitQuality, SixSampleDelayIsFoundAutomatically) {
