@@ -319,8 +319,17 @@ void AddFilterSweepCommand(CLI::App& app) {
     std::printf("measure %s (%s); delay %d, T = %g s, %zu cut-offs from %g to %g Hz\n", sf->measure.c_str(),
                 o.measure == stability::SweepMeasure::kKcrMax ? "K_CR^max [N m/rad]" : "area [N m/rad x N m s/rad]",
                 sf->delay, T, r.cutoffs_hz.size(), r.cutoffs_hz.front(), r.cutoffs_hz.back());
-    std::printf("best cut-off %.5g Hz: %.6g (lowest %.5g Hz: %.6g; highest %.5g Hz: %.6g)\n", r.cutoffs_hz[r.best],
-                r.measure[r.best], r.cutoffs_hz.front(), r.measure.front(), r.cutoffs_hz.back(), r.measure.back());
+    std::printf("best cut-off %.5g Hz: %.6g (lowest %.5g Hz: %.6g; highest %.5g Hz: %.6g; without filter: %.6g)\n",
+                r.cutoffs_hz[r.best], r.measure[r.best], r.cutoffs_hz.front(), r.measure.front(), r.cutoffs_hz.back(),
+                r.measure.back(), r.unfiltered);
+    if (r.unfiltered >= r.measure[r.best]) {
+      std::printf("no cut-off in the sweep beats the loop without a velocity filter (%.6g >= %.6g)\n", r.unfiltered,
+                  r.measure[r.best]);
+    }
+    if (r.best_at_edge) {
+      std::printf("the best lies at the %s end of the sweep: the optimum may be outside it (%s)\n",
+                  r.best == 0 ? "lower" : "upper", r.best == 0 ? "lower --f-min" : "raise --f-max, up to Nyquist");
+    }
   });
 }
 

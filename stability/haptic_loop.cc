@@ -440,6 +440,13 @@ CutoffSweepResult SweepCutoff(const model::Plant& plant, double T, int delay, co
     const double m = r.measure.back();
     if (std::isfinite(m) && (r.best < 0 || m > r.measure[r.best])) r.best = static_cast<int>(r.measure.size()) - 1;
   }
+  r.best_at_edge = r.best == 0 || (r.best >= 0 && r.best + 1 == static_cast<int>(r.measure.size()));
+  LoopOptions raw = loop;
+  raw.filter_b.clear();
+  raw.filter_a.clear();
+  const ZWidth z0(plant, T, delay, raw);
+  r.unfiltered = o.measure == SweepMeasure::kKcrMax ? z0.Summarize().K_cr_max
+                                                    : StableArea(z0, o.area_B_max, o.area_K_clip, o.area_B_points);
   return r;
 }
 

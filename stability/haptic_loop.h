@@ -152,6 +152,12 @@ struct CutoffSweepResult {
   std::vector<double> cutoffs_hz, measure;  // one per cut-off
   std::vector<DelaySummary> summaries;
   int best = -1;  // index of the largest finite measure; -1 = none finite
+  // The same measure without a velocity filter (the hand kept): a filter is
+  // worth having only where it beats this.
+  double unfiltered = std::numeric_limits<double>::quiet_NaN();
+  // The best is the first or the last cut-off: the optimum may lie outside
+  // the swept range.
+  bool best_at_edge = false;
 };
 
 // The hand in `loop` is kept; its filter is replaced by each low-pass.

@@ -460,6 +460,9 @@ TEST(CutoffSweep, BestCutoffHasTheLargestMeasure) {
     EXPECT_EQ(r.measure[i], ZWidth(p, 1e-3, 2, l).Summarize().K_cr_max);
     EXPECT_LE(r.measure[i], r.measure[r.best]);
   }
+  // The loop without a filter, beside the sweep, and whether the best is at an end.
+  EXPECT_EQ(r.unfiltered, ZWidth(p, 1e-3, 2).Summarize().K_cr_max);
+  EXPECT_EQ(r.best_at_edge, r.best == 0 || r.best == 7);
 }
 
 }  // namespace
