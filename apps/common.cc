@@ -114,12 +114,17 @@ std::string WithFlags(const std::string& message) {
   return out + message.substr(std::min(i, message.size()));
 }
 
+std::string EstimateFlags::ResolvedDetrend() const {
+  if (!detrend.empty()) return detrend;
+  return whole_record ? "mean" : "linear";
+}
+
 ident::WelchOptions EstimateFlags::Resolve() const {
   ident::WelchOptions o = welch;
   if (!ident::FromString(window, &o.window)) {
     throw InputError("--window '" + window + "' is not one of hann, hamming, rect");
   }
-  if (!ident::FromString(detrend, &o.detrend)) {
+  if (!ident::FromString(ResolvedDetrend(), &o.detrend)) {
     throw InputError("--detrend '" + detrend + "' is not one of none, mean, linear");
   }
   if (!ident::FromString(estimator, &o.estimator)) {
@@ -149,7 +154,9 @@ void AddEstimateFlags(CLI::App* cmd, EstimateFlags* f) {
   cmd->add_option("--window", f->window, "hann | hamming | rect (periodic)")->capture_default_str();
   cmd->add_option("--window-length", f->welch.window_length, "samples per Welch segment")->capture_default_str();
   cmd->add_option("--overlap", f->welch.overlap, "segment overlap fraction in [0, 1)")->capture_default_str();
-  cmd->add_option("--detrend", f->detrend, "none | mean | linear (per segment)")->capture_default_str();
+  cmd->add_option("--detrend", f->detrend,
+                  "none | mean | linear, per segment (default linear; mean with --whole-record, where linear biases "
+                  "the response)");
   cmd->add_option("--estimator", f->estimator, "h1 | h2")->capture_default_str();
   cmd->add_option("--fmin", f->welch.fmin_hz, "lowest frequency kept [Hz]")->capture_default_str();
   cmd->add_option("--fmax", f->welch.fmax_hz, "highest frequency kept [Hz], clipped below Nyquist")->capture_default_str();
@@ -208,6 +215,13 @@ void CheckRecordFlags(const EstimateFlags& flags) {
   if (flags.period_samples != 0 && (!flags.whole_record || flags.period_samples < 16)) {
     throw InputError("--period-samples " + std::to_string(flags.period_samples) +
                      ": needs --whole-record and a period of at least 16 samples");
+  }
+  if (flags.whole_record && flags.detrend == "linear") {
+    std::fprintf(stderr,
+                 "warning: --detrend linear with --whole-record: each rectangular segment (a whole record or period) "
+                 "loses its straight-line fit, and for a periodic response that fit is not a drift but part of the "
+                 "signal (a rigid body's slow swing): it leaks into every bin and biases |H| most where it is small; "
+                 "--detrend mean (the --whole-record default) or none avoids it\n");
   }
 }
 
@@ -326,6 +340,16 @@ LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const Estim
   ident::WelchOptions options = flags.Resolve();
   const bool closed = !flags.reference_column.empty() || !flags.reference_dataset.empty();
   CheckRecordFlags(flags);
+  // One segment: the per-bin std (the scatter between segments) would be infinite.
+  auto one_segment = [&] {
+    return InputError(std::string("--whole-record with one log and ") +
+                      (flags.period_samples > 0 ? "one whole period of --period-samples" : "no --period-samples") +
+                      " gives one segment: " +
+                      (for_fit ? "no per-bin std to weight the fit" : "no scatter to estimate the per-bin std from") +
+                      "; pass several runs of the same excitation, --period-samples for a periodic one, or drop "
+                      "--whole-record (Welch segments)");
+  };
+  if (flags.whole_record && flags.period_samples == 0 && paths.size() < 2) throw one_segment();  // before reading
   LogsEstimate out;
   std::vector<ident::RunSpectra> runs;
   for (const std::string& path : paths) {
@@ -336,16 +360,12 @@ LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const Estim
   }
   out.response = ident::CombineRuns(runs, options.estimator,
                                     flags.whole_record ? ident::StdSource::kRunScatter : ident::StdSource::kCoherence);
-  if (for_fit && flags.whole_record && runs.size() < 2) {
-    throw InputError("--whole-record with one log and no --period-samples gives one segment: no per-bin std to "
-                     "weight the fit; pass several runs of the same excitation, or --period-samples");
-  }
-  if (flags.whole_record && runs.size() < 2) {
-    std::fprintf(stderr, "warning: --whole-record with one segment: no scatter between runs, the per-bin std is "
-                         "infinite (pass several runs of the same excitation, or --period-samples)\n");
-  }
+  if (flags.whole_record && runs.size() < 2) throw one_segment();
   PrintCombined(out.response);
-  io::CheckFiniteResponse(out.response.frf, JoinPaths(paths));  // the stage named: estimate, before fit or write
+  // The stage named: estimate, before fit or write. Bins without input power
+  // first (H is 0/0 there), then any other non-finite value.
+  io::CheckInputPower(out.response.frf, JoinPaths(paths));
+  io::CheckFiniteResponse(out.response.frf, JoinPaths(paths));
   return out;
 }
 

@@ -31,7 +31,11 @@ std::string WithFlags(const std::string& message);
 struct EstimateFlags {
   io::LogSelect select;
   ident::WelchOptions welch;
-  std::string window = "hann", detrend = "linear", estimator = "h1";
+  std::string window = "hann", estimator = "h1";
+  // none | mean | linear; "" = not given: linear, or mean with whole_record
+  // (a per-segment linear detrend of a rectangular one-period segment leaks
+  // the slow response's straight-line fit into every bin).
+  std::string detrend;
   // Closed loop: the logged excitation (text/.mat column, HDF5 dataset); when
   // given, H = S_ry / S_ru (ident/joint.h).
   std::string reference_column, reference_dataset;
@@ -42,6 +46,7 @@ struct EstimateFlags {
   int period_samples = 0;
   // Parses the enum names; throws InputError naming the flag.
   ident::WelchOptions Resolve() const;
+  std::string ResolvedDetrend() const;  // detrend, or its default when not given
 };
 
 void AddLogFlags(CLI::App* cmd, io::LogSelect* select);
