@@ -182,6 +182,21 @@ LogInfo StreamLog(const std::string& path, const LogSelect& select, const LogSin
   };
   LogInfo info = format == LogFormat::kMat ? StreamMat(path, select, scaled) : StreamHdf5(path, select, scaled);
   if (info.layout.empty()) info.layout = format == LogFormat::kMat ? "MATLAB v5 .mat" : "HDF5";
+  // The text reader's plausibility range (log_text.cc), for time read in s.
+  if (select.sample_rate_hz <= 0.0 && info.sample_rate_hz > 0.0) {
+    const double r = info.sample_rate_hz;
+    std::ostringstream os;
+    os.precision(4);
+    os << "the log's time implies " << r << " Hz";
+    const std::string hint = "; a " + std::string(format == LogFormat::kMat ? ".mat" : "HDF5") +
+                             " log's time is read in s: if it is in ms, LogSelect::sample_rate_hz " +
+                             [&] { std::ostringstream h; h.precision(4); h << r * 1e3; return h.str(); }() +
+                             " gives the rate";
+    if (r <= 10.0 * (1.0 + 1e-9) || r > 1e6) {
+      throw InputError(path + ": " + os.str() + ", implausible for a device log (10 Hz..1 MHz)" + hint);
+    }
+    if (r < 100.0) info.warnings.push_back(os.str() + ", low for a haptic device log" + hint);
+  }
   return check_output(std::move(info));
 }
 

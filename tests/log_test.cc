@@ -284,6 +284,30 @@ TEST_F(LogFormats, MatV5AndV73ByContent) {
   }
 }
 
+// A .mat log's time is read in s: a 10 kHz log with its time in ms (10 Hz)
+// is refused with the rate to pass; 50 Hz is read with a warning.
+TEST_F(LogFormats, MatTimeInMillisecondsIsRefused) {
+  Signals s = MakeSignals(3000, 10000.0);
+  for (double& t : s.t) t *= 1e3;
+  LogSelect sel;
+  sel.time_column = "Time";
+  sel.input_column = "u";
+  sel.output_column = "Theta";
+  const std::string p = dir_ / "ms.mat";
+  WriteMat(p, MAT_FT_MAT5, s);
+  const std::string m = Refusal(p, sel);
+  EXPECT_NE(m.find("implies 10 Hz, implausible"), std::string::npos) << m;
+  EXPECT_NE(m.find("LogSelect::sample_rate_hz 1e+04"), std::string::npos) << m;
+  sel.sample_rate_hz = 10000.0;
+  EXPECT_EQ(ReadLog(p, sel).info.sample_rate_hz, 10000.0);
+  for (double& t : s.t) t *= 0.2;  // 50 Hz
+  WriteMat(p, MAT_FT_MAT5, s);
+  sel.sample_rate_hz = 0.0;
+  const Log log = ReadLog(p, sel);
+  ASSERT_EQ(log.info.warnings.size(), 1u);
+  EXPECT_NE(log.info.warnings[0].find("implies 50 Hz, low"), std::string::npos) << log.info.warnings[0];
+}
+
 // An HDF5 log whose sample_rate_hz attribute holds `n` values.
 void WriteLogWithArrayRate(const std::string& path, hsize_t n) {
   const hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
