@@ -145,6 +145,21 @@ expect simulate-rate "--rate 5 Hz: a device log's rate must be above 10 Hz" "$T/
 head -20 "$T/good.csv" > "$T/tiny.csv"
 expect tiny-log "the log is too short: 1 Welch segment\(s\) of 16 samples \(the shortest window\).*record a longer log \(at least 32 samples" "$T/w7.json" -- "$ZW" fit "$T/tiny.csv" --window-length 16 -o "$T/w7.json"
 
+# An Octave `save -hdf5` log stores each variable as a group {type, value}.
+if $PY -c "import h5py" 2>/dev/null; then
+  $PY - "$T" <<'PY'
+import sys, h5py, numpy as np
+d = sys.argv[1]; rng = np.random.default_rng(1)
+with h5py.File(f"{d}/oct.h5", "w") as f:
+    for name, v in (("u", rng.standard_normal(3000)), ("y", np.cumsum(rng.standard_normal(3000))), ("t", np.arange(3000) / 1000)):
+        f[f"/{name}/type"] = np.bytes_("matrix"); f[f"/{name}/value"] = v
+PY
+  expect octave-group "'/u' is a group, not a dataset \(members: type, value\); pass --input-dataset /u/value" "$T/o1.csv" -- "$ZW" estimate "$T/oct.h5" --input-dataset /u --output-dataset /y/value --time-dataset /t/value -o "$T/o1.csv"
+fi
+# Runs of different rates: the rates as numbers, not 2000.000000.
+"$ZW" simulate --model "$M" -o "$T/fast.csv" --seconds 10 --rate 2000 2>/dev/null
+expect runs-rates "run 2 has 2000 Hz and 4096-sample segments, run 1 1000 Hz" "$T/o2.csv" -- "$ZW" estimate "$T/good.csv" "$T/fast.csv" -o "$T/o2.csv"
+
 # ---- 13. simulate: an output of a few encoder steps is warned about
 $PY -c "import json,sys; m=json.load(open(sys.argv[1])); m['m']*=300; m['b']*=300; json.dump(m, open(sys.argv[2],'w'))" "$M" "$T/heavy.json"
 "$ZW" simulate --model "$T/heavy.json" -o "$T/h.csv" --seconds 5 2>"$T/err"
