@@ -21,9 +21,9 @@ void AddExportCommand(CLI::App& app) {
     if (!io::FromString(f->format, &fmt)) {
       throw InputError("--format '" + f->format + "' is not one of json, hdf5, matlab, python, statespace");
     }
-    const io::ModelFile mf = io::ReadModelJson(f->model);
+    io::ModelFile mf = io::ReadModelJsonFor(f->model, "export");  // not const: --period may convert its delay
     double T = 0.0;
-    if (!std::isnan(f->period)) T = ResolvePeriod(f->period, mf);
+    if (!std::isnan(f->period)) T = ResolvePeriod(f->period, &mf);
     else if (mf.sample_period_s) T = *mf.sample_period_s;
     io::ExportModel(mf, fmt, T, f->out);
   });

@@ -33,9 +33,17 @@ void AddFitCommands(CLI::App& app) {
     f->fit.Resolve(f->est.welch.fmin_hz, f->est.welch.fmax_hz);
     const bool linear = LinearUnits(f->units);
     const std::string source = JoinPaths(f->inputs);
-    if (!f->init.empty()) f->fit.o.init = io::ReadModelJson(f->init).plant;
+    if (!f->init.empty()) f->fit.o.init = io::ReadModelJsonFor(f->init, "fit --init").plant;
     StageTimer timer(false);
     const bool frf_file = f->inputs.size() == 1 && io::IsFrequencyResponseFile(f->inputs[0]);
+    if (f->inputs.size() > 1) {
+      for (const std::string& in : f->inputs) {
+        if (io::IsFrequencyResponseFile(in)) {
+          throw InputError(in + " is a saved frequency response: a saved frequency response can only be fitted "
+                           "alone (fit one response, or fit the runs' logs together, which averages their spectra)");
+        }
+      }
+    }
     const ident::FrequencyResponse frf = frf_file
         ? io::ReadFrequencyResponse(f->inputs[0], f->est.select.sample_rate_hz)
         : EstimateFromLogs(f->inputs, f->est, true).response.frf;
@@ -62,13 +70,14 @@ void AddFitCommands(CLI::App& app) {
   cc->add_option("--period", c->period, "sample period [s] (default: the model's, else 0.001)");
   cc->add_flag("--json", c->json, "print JSON on standard output");
   cc->callback([c] {
-    const io::ModelFile m = io::ReadModelJson(c->model);
+    io::ModelFile m = io::ReadModelJsonFor(c->model, "compare");  // not const: --period may convert its delay
     if (c->reference.empty()) {
       throw InputError("compare needs a reference: --reference table1 (Table I, the paper's PHANToM) or --reference MODEL.json");
     }
-    const io::ModelFile r = ReadReference(c->reference);
+    io::ModelFile r = ReadReference(c->reference);
     for (int d : c->delays) if (d < 0) throw InputError("--delays must be >= 0");
-    const double T = ResolvePeriod(c->period, m);
+    const double T = ResolvePeriod(c->period, &m);
+    ConvertDelayToPeriod(&r, T, "the reference");
     std::string text;
     const nlohmann::json j = CompareModels(m, r, c->delays, T, &text);
     if (c->json) std::cout << j.dump(2) << std::endl;

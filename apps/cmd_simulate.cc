@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cstdio>
 
 #include "apps/common.h"
@@ -8,6 +9,16 @@
 #include "model/simulate.h"
 
 namespace zwidth::app {
+namespace {
+// Fewer encoder steps than this over the whole output: warned about.
+constexpr double kFewEncoderSteps = 50.0;
+
+std::string Num(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
+}
+}  // namespace
 
 void AddSimulateCommand(CLI::App& app) {
   struct Flags {
@@ -30,6 +41,18 @@ void AddSimulateCommand(CLI::App& app) {
     io::CheckOutputFolder(f->out, {f->model});
     // At most kMaxSimulateSamples (1e8, 28 h at 1 kHz: 1.6 GB of samples in memory).
     constexpr double kMaxSimulateSamples = 1e8;
+    // The readers refuse a log under 10 Hz (io/log.h); a band at or past Nyquist aliases.
+    if (!(f->o.sample_rate_hz > 10.0)) {
+      throw InputError("--rate " + Num(f->o.sample_rate_hz) + " Hz: a device log's rate must be above 10 Hz (the "
+                       "log readers refuse slower logs); --rate is in Hz, e.g. 1000");
+    }
+    // Exactly Nyquist is the documented "white" (model/simulate.h); past it is a slip.
+    if (f->o.bandwidth_hz > 0.5 * f->o.sample_rate_hz * (1.0 + 1e-12)) {
+      throw InputError("--bandwidth-hz " + Num(f->o.bandwidth_hz) + " is above Nyquist (" +
+                       Num(0.5 * f->o.sample_rate_hz) + " Hz at --rate " + Num(f->o.sample_rate_hz) +
+                       "): no sampled torque has a band there; give a band up to Nyquist (--bandwidth-hz " +
+                       Num(0.5 * f->o.sample_rate_hz) + " is white noise) or raise --rate");
+    }
     const double samples = f->o.seconds * f->o.sample_rate_hz;
     if (!(samples <= kMaxSimulateSamples)) {
       throw InputError("--seconds x --rate = " + std::to_string(samples) + " samples, more than " +
@@ -39,9 +62,21 @@ void AddSimulateCommand(CLI::App& app) {
       throw InputError("--delay-samples " + std::to_string(f->o.delay_samples) + " is more than " +
                        std::to_string(io::kMaxDelaySamples));
     }
-    const io::ModelFile mf = io::ReadModelJson(f->model);
+    const io::ModelFile mf = io::ReadModelJsonFor(f->model, "simulate --model");
     const model::SimulatedLog log = model::SimulateLog(mf.plant, f->o);
     io::WriteLog(f->out, log.sample_rate_hz, log.torque, log.position);
+    // A device heavier or stiffer than the defaults (PHANToM values) barely
+    // moves: an output of a few encoder counts identifies nothing.
+    if (f->o.encoder_step_rad > 0.0 && !log.position.empty()) {
+      const auto [lo, hi] = std::minmax_element(log.position.begin(), log.position.end());
+      const double steps = (*hi - *lo) / f->o.encoder_step_rad;
+      if (steps < kFewEncoderSteps) {
+        std::fprintf(stderr,
+                     "warning: the output spans only %.0f encoder steps (%g, --encoder-step %g): quantisation "
+                     "dominates it and a fit will be poor; raise --torque-rms (now %g) or lower --encoder-step\n",
+                     steps, *hi - *lo, f->o.encoder_step_rad, f->o.torque_rms);
+      }
+    }
     std::fprintf(stderr, "wrote %zu samples at %g Hz to %s\n", log.torque.size(),
                  log.sample_rate_hz, f->out.c_str());
   });

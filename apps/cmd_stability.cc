@@ -232,8 +232,12 @@ void AddBoundaryCommand(CLI::App& app) {
     const std::vector<std::string> inputs = {bf->model, bf->loop.filter_coeffs};
     io::CheckOutputFolder(bf->out, inputs);
     if (!bf->summary.empty()) io::CheckOutputFolder(bf->summary, inputs);
-    const io::ModelFile mf = io::ReadModelJson(bf->model);
-    const double T = ResolvePeriod(bf->period, mf);
+    if (bf->out == "-" && bf->summary == "-") {
+      throw InputError("-o - and --summary - would both write to standard output, mixed beyond parsing: write one "
+                       "of them to a file");
+    }
+    io::ModelFile mf = io::ReadModelJsonFor(bf->model, "boundary");  // not const: --period may convert its delay
+    const double T = ResolvePeriod(bf->period, &mf);
     if (bf->delays.empty()) throw InputError("--delays is empty");
     for (int d : bf->delays) CheckDelay(d, "--delays");
     std::string why;
@@ -280,9 +284,9 @@ void AddFilterSweepCommand(CLI::App& app) {
   sw->add_option("-o,--output", sf->out, "CSV cutoff_hz,measure");
   sw->callback([sf] {
     if (!sf->out.empty()) io::CheckOutputFolder(sf->out, {sf->model});
-    const io::ModelFile mf = io::ReadModelJson(sf->model);
+    io::ModelFile mf = io::ReadModelJsonFor(sf->model, "filter-sweep");  // not const: --period may convert its delay
     CheckDelay(sf->delay, "--delay");
-    const double T = ResolvePeriod(sf->period, mf);
+    const double T = ResolvePeriod(sf->period, &mf);
     const double f_max = std::isnan(sf->f_max) ? 0.25 / T : sf->f_max;
     if (!(sf->f_min > 0.0 && f_max > sf->f_min && f_max < 0.5 / T)) {
       throw InputError("--f-min/--f-max: need 0 < f-min < f-max < Nyquist (" + std::to_string(0.5 / T) + " Hz)");
@@ -422,8 +426,8 @@ void AddRelayCommand(CLI::App& app) {
   AddLoopFlags(r, &rf->loop);
   r->callback([rf] {
     if (!rf->trace.empty()) io::CheckOutputFolder(rf->trace, {rf->model});
-    const io::ModelFile mf = io::ReadModelJson(rf->model);
-    rf->o.period_s = ResolvePeriod(rf->period, mf);
+    io::ModelFile mf = io::ReadModelJsonFor(rf->model, "relay");  // not const: --period may convert its delay
+    rf->o.period_s = ResolvePeriod(rf->period, &mf);
     CheckDelay(rf->o.delay_samples, "--delay");
     const std::vector<stability::LoopOptions> loops = ResolveLoops(rf->loop, rf->o.period_s);
     if (loops.size() != 1) throw InputError("relay: give at most one --hand (the experiment runs one loop)");
@@ -463,9 +467,9 @@ void AddCheckCommand(CLI::App& app) {
   c->add_flag("--json", cf->json, "print only JSON on standard output");
   AddLoopFlags(c, &cf->loop);
   c->callback([cf] {
-    const io::ModelFile mf = io::ReadModelJson(cf->model);
+    io::ModelFile mf = io::ReadModelJsonFor(cf->model, "check --model");  // not const: --period may convert its delay
     CheckDelay(cf->delay, "--delay");
-    const double T = ResolvePeriod(cf->period, mf);
+    const double T = ResolvePeriod(cf->period, &mf);
     const std::vector<io::SceneObject> objs = io::ReadScene(cf->scene);
     std::vector<stability::ZWidth> zs;  // one per hand: stable means stable for every hand
     for (const stability::LoopOptions& l : ResolveLoops(cf->loop, T)) zs.emplace_back(mf.plant, T, cf->delay, l);

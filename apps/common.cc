@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <sstream>
 
 #include "io/frf_file.h"
 #include "model/error.h"
@@ -114,12 +115,17 @@ std::string WithFlags(const std::string& message) {
   return out + message.substr(std::min(i, message.size()));
 }
 
+std::string EstimateFlags::ResolvedDetrend() const {
+  if (!detrend.empty()) return detrend;
+  return whole_record ? "mean" : "linear";
+}
+
 ident::WelchOptions EstimateFlags::Resolve() const {
   ident::WelchOptions o = welch;
   if (!ident::FromString(window, &o.window)) {
     throw InputError("--window '" + window + "' is not one of hann, hamming, rect");
   }
-  if (!ident::FromString(detrend, &o.detrend)) {
+  if (!ident::FromString(ResolvedDetrend(), &o.detrend)) {
     throw InputError("--detrend '" + detrend + "' is not one of none, mean, linear");
   }
   if (!ident::FromString(estimator, &o.estimator)) {
@@ -149,7 +155,9 @@ void AddEstimateFlags(CLI::App* cmd, EstimateFlags* f) {
   cmd->add_option("--window", f->window, "hann | hamming | rect (periodic)")->capture_default_str();
   cmd->add_option("--window-length", f->welch.window_length, "samples per Welch segment")->capture_default_str();
   cmd->add_option("--overlap", f->welch.overlap, "segment overlap fraction in [0, 1)")->capture_default_str();
-  cmd->add_option("--detrend", f->detrend, "none | mean | linear (per segment)")->capture_default_str();
+  cmd->add_option("--detrend", f->detrend,
+                  "none | mean | linear, per segment (default linear; mean with --whole-record, where linear biases "
+                  "the response)");
   cmd->add_option("--estimator", f->estimator, "h1 | h2")->capture_default_str();
   cmd->add_option("--fmin", f->welch.fmin_hz, "lowest frequency kept [Hz]")->capture_default_str();
   cmd->add_option("--fmax", f->welch.fmax_hz, "highest frequency kept [Hz], clipped below Nyquist")->capture_default_str();
@@ -208,6 +216,13 @@ void CheckRecordFlags(const EstimateFlags& flags) {
   if (flags.period_samples != 0 && (!flags.whole_record || flags.period_samples < 16)) {
     throw InputError("--period-samples " + std::to_string(flags.period_samples) +
                      ": needs --whole-record and a period of at least 16 samples");
+  }
+  if (flags.whole_record && flags.detrend == "linear") {
+    std::fprintf(stderr,
+                 "warning: --detrend linear with --whole-record: each rectangular segment (a whole record or period) "
+                 "loses its straight-line fit, and for a periodic response that fit is not a drift but part of the "
+                 "signal (a rigid body's slow swing): it leaks into every bin and biases |H| most where it is small; "
+                 "--detrend mean (the --whole-record default) or none avoids it\n");
   }
 }
 
@@ -326,6 +341,16 @@ LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const Estim
   ident::WelchOptions options = flags.Resolve();
   const bool closed = !flags.reference_column.empty() || !flags.reference_dataset.empty();
   CheckRecordFlags(flags);
+  // One segment: the per-bin std (the scatter between segments) would be infinite.
+  auto one_segment = [&] {
+    return InputError(std::string("--whole-record with one log and ") +
+                      (flags.period_samples > 0 ? "one whole period of --period-samples" : "no --period-samples") +
+                      " gives one segment: " +
+                      (for_fit ? "no per-bin std to weight the fit" : "no scatter to estimate the per-bin std from") +
+                      "; pass several runs of the same excitation, --period-samples for a periodic one, or drop "
+                      "--whole-record (Welch segments)");
+  };
+  if (flags.whole_record && flags.period_samples == 0 && paths.size() < 2) throw one_segment();  // before reading
   LogsEstimate out;
   std::vector<ident::RunSpectra> runs;
   for (const std::string& path : paths) {
@@ -336,16 +361,12 @@ LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const Estim
   }
   out.response = ident::CombineRuns(runs, options.estimator,
                                     flags.whole_record ? ident::StdSource::kRunScatter : ident::StdSource::kCoherence);
-  if (for_fit && flags.whole_record && runs.size() < 2) {
-    throw InputError("--whole-record with one log and no --period-samples gives one segment: no per-bin std to "
-                     "weight the fit; pass several runs of the same excitation, or --period-samples");
-  }
-  if (flags.whole_record && runs.size() < 2) {
-    std::fprintf(stderr, "warning: --whole-record with one segment: no scatter between runs, the per-bin std is "
-                         "infinite (pass several runs of the same excitation, or --period-samples)\n");
-  }
+  if (flags.whole_record && runs.size() < 2) throw one_segment();
   PrintCombined(out.response);
-  io::CheckFiniteResponse(out.response.frf, JoinPaths(paths));  // the stage named: estimate, before fit or write
+  // The stage named: estimate, before fit or write. Bins without input power
+  // first (H is 0/0 there), then any other non-finite value.
+  io::CheckInputPower(out.response.frf, JoinPaths(paths));
+  io::CheckFiniteResponse(out.response.frf, JoinPaths(paths));
   return out;
 }
 
@@ -357,12 +378,50 @@ double StageTimer::Lap(const std::string& stage) {
   return ms;
 }
 
-double ResolvePeriod(double flag, const io::ModelFile& mf) {
-  if (std::isnan(flag)) return mf.sample_period_s ? *mf.sample_period_s : 0.001;
-  if (!(flag > 0.0 && std::isfinite(flag))) {
-    throw InputError("--period = " + std::to_string(flag) + " s: must be finite and > 0");
+double ResolvePeriod(double flag, io::ModelFile* mf) {
+  if (std::isnan(flag)) return mf->sample_period_s ? *mf->sample_period_s : 0.001;
+  if (!(flag >= kMinPeriodS && flag <= kMaxPeriodS)) {
+    std::ostringstream os;
+    os.precision(6);
+    os << "--period = " << flag << " s: a sample period must lie in [1e-06, 0.1] s (a rate of 10 Hz..1 MHz); "
+       << "--period is the period T in seconds";
+    const bool rate = flag >= 10.0 && flag <= 1e6, ms = flag > 0.1 && flag <= 100.0;
+    if (rate) os << ", not the rate: for " << flag << " Hz pass --period " << 1.0 / flag;
+    if (ms) os << (rate ? "; " : ": ") << "for " << flag << " ms pass --period " << flag * 1e-3;
+    throw InputError(os.str());
   }
+  ConvertDelayToPeriod(mf, flag, "the model");
   return flag;
+}
+
+void ConvertDelayToPeriod(io::ModelFile* mf, double T, const std::string& what) {
+  if (!mf->sample_period_s || mf->plant.delay_samples == 0) return;
+  const double Tm = *mf->sample_period_s;
+  if (std::abs(Tm - T) <= 1e-12 * T) return;
+  const int d = mf->plant.delay_samples;
+  const double q = d * Tm / T;
+  char buf[400];
+  const bool whole = std::abs(q - std::round(q)) <= 1e-9 * std::max(1.0, q);
+  if (whole && std::round(q) > io::kMaxDelaySamples) {
+    std::snprintf(buf, sizeof buf, "%s's input delay of %d samples of %g s is %.0f samples at the period %g s, more "
+                  "than %d", what.c_str(), d, Tm, q, T, io::kMaxDelaySamples);
+    throw InputError(buf);
+  }
+  if (whole) {
+    const int dn = static_cast<int>(std::round(q));
+    std::fprintf(stderr,
+                 "note: %s's input delay is %d samples of its sample_period_s %g s (%g s): %d samples at the "
+                 "period %g s used here\n", what.c_str(), d, Tm, d * Tm, dn, T);
+    mf->plant.delay_samples = dn;
+    mf->sample_period_s = T;
+    return;
+  }
+  std::snprintf(buf, sizeof buf,
+                "%s's input delay is %d samples of its sample_period_s %g s (%g s), which is %.6g samples at "
+                "the period %g s: a delay of a fraction of a sample cannot be kept; re-fit the model from a log "
+                "at that rate, or edit its delay_samples (and sample_period_s) if you mean another delay",
+                what.c_str(), d, Tm, d * Tm, q, T);
+  throw InputError(buf);
 }
 
 }  // namespace zwidth::app

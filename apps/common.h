@@ -31,7 +31,11 @@ std::string WithFlags(const std::string& message);
 struct EstimateFlags {
   io::LogSelect select;
   ident::WelchOptions welch;
-  std::string window = "hann", detrend = "linear", estimator = "h1";
+  std::string window = "hann", estimator = "h1";
+  // none | mean | linear; "" = not given: linear, or mean with whole_record
+  // (a per-segment linear detrend of a rectangular one-period segment leaks
+  // the slow response's straight-line fit into every bin).
+  std::string detrend;
   // Closed loop: the logged excitation (text/.mat column, HDF5 dataset); when
   // given, H = S_ry / S_ru (ident/joint.h).
   std::string reference_column, reference_dataset;
@@ -42,6 +46,7 @@ struct EstimateFlags {
   int period_samples = 0;
   // Parses the enum names; throws InputError naming the flag.
   ident::WelchOptions Resolve() const;
+  std::string ResolvedDetrend() const;  // detrend, or its default when not given
 };
 
 void AddLogFlags(CLI::App* cmd, io::LogSelect* select);
@@ -77,8 +82,17 @@ class StageTimer {
 
 // Flags whose absence means "use the model's value".
 inline constexpr double kNotGiven = std::numeric_limits<double>::quiet_NaN();
-// --period when given (must be > 0), else the model's sample_period_s, else 1 ms.
-double ResolvePeriod(double flag, const io::ModelFile& mf);
+// --period when given, else the model's sample_period_s, else 1 ms. A given
+// --period must lie in [kMinPeriodS, kMaxPeriodS] (the rates a log may have,
+// 10 Hz..1 MHz). When T differs from the model's sample_period_s the model's
+// delay_samples (counted in its own period) is converted to samples of T
+// (ConvertDelayToPeriod).
+inline constexpr double kMinPeriodS = 1e-6, kMaxPeriodS = 0.1;
+double ResolvePeriod(double flag, io::ModelFile* mf);
+// delay_samples of a model with sample_period_s T_m, counted in samples of T:
+// d T_m / T when that is a whole number (to 1e-9; a note on stderr says so),
+// else an InputError saying why and what to do. `what` names the model.
+void ConvertDelayToPeriod(io::ModelFile* mf, double T, const std::string& what);
 
 void AddSimulateCommand(CLI::App& app);
 void AddEstimateCommand(CLI::App& app);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "model/error.h"
@@ -66,9 +67,14 @@ void CheckRunsAlike(const std::vector<RunSpectra>& runs, bool joint) {
     // different logger setting.
     if (std::abs(f.sample_rate_hz - first.sample_rate_hz) > 1e-3 * first.sample_rate_hz ||
         f.window_length != first.window_length || f.f_hz.size() != first.f_hz.size()) {
-      throw InputError("run " + std::to_string(i + 1) + " has " + std::to_string(f.sample_rate_hz) + " Hz and " +
+      auto hz = [](double v) {
+        char b[32];
+        std::snprintf(b, sizeof b, "%.10g", v);
+        return std::string(b);
+      };
+      throw InputError("run " + std::to_string(i + 1) + " has " + hz(f.sample_rate_hz) + " Hz and " +
                        std::to_string(f.window_length) + "-sample segments, run 1 " +
-                       std::to_string(first.sample_rate_hz) + " Hz and " + std::to_string(first.window_length) +
+                       hz(first.sample_rate_hz) + " Hz and " + std::to_string(first.window_length) +
                        ": runs of one estimate need the same rate and segment length (whole records: the same length)");
     }
     if (runs[i].ru.has_value() != joint || runs[i].ry.has_value() != joint) {

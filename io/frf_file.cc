@@ -1,5 +1,6 @@
 #include "io/frf_file.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -7,6 +8,8 @@
 #include <fstream>
 #include <map>
 #include <numbers>
+#include <utility>
+#include <vector>
 
 #include "io/atomic_file.h"
 #include "io/hdf5_api.h"
@@ -192,16 +195,52 @@ ident::FrequencyResponse ReadH5(const std::string& path, bool isolated) {
 
 void CheckFiniteResponse(const ident::FrequencyResponse& r, const std::string& source) {
   for (size_t k = 0; k < r.f_hz.size(); ++k) {
-    const double values[] = {r.f_hz[k], r.H[k].real(), r.H[k].imag(), r.coherence[k], r.H_std[k],
-                             k < r.S_uu.size() ? r.S_uu[k] : 0.0, k < r.S_yy.size() ? r.S_yy[k] : 0.0};
-    for (double v : values) {
-      if (!std::isfinite(v)) {
-        throw InputError(source + ": the frequency response has non-finite values (at bin " + std::to_string(k) +
-                         ", f = " + Num(r.f_hz[k]) + " Hz): input scaled out of range (values near 1e308 "
-                         "overflow the spectra); rescale the log's columns to SI units");
+    const double suu = k < r.S_uu.size() ? r.S_uu[k] : 0.0, syy = k < r.S_yy.size() ? r.S_yy[k] : 0.0;
+    const std::pair<const char*, double> values[] = {
+        {"f_hz", r.f_hz[k]}, {"H", std::abs(r.H[k].real()) + std::abs(r.H[k].imag())}, {"coherence", r.coherence[k]},
+        {"H_std", r.H_std[k]}, {"S_uu", suu}, {"S_yy", syy}};
+    for (const auto& [name, v] : values) {
+      if (std::isfinite(v)) continue;
+      const std::string where = source + ": the frequency response has non-finite values (" + name + " at bin " +
+                                std::to_string(k) + ", f = " + Num(r.f_hz[k]) + " Hz)";
+      if (!std::isfinite(suu) || !std::isfinite(syy)) {  // the spectra themselves overflowed
+        throw InputError(where + ": input scaled out of range (the spectra overflow: values near 1e154 or more "
+                         "square past 1e308); rescale the log's columns to SI units");
       }
+      if (std::string(name) == "H_std") {
+        throw InputError(where + ": the per-bin std cannot be estimated (a single segment has no scatter); "
+                         "give more segments (several runs, a longer log)");
+      }
+      throw InputError(where + " (S_uu " + Num(suu) + ", S_yy " + Num(syy) + ")");
     }
   }
+}
+
+void CheckInputPower(const ident::FrequencyResponse& r, const std::string& source) {
+  double peak = 0.0;
+  for (double s : r.S_uu) if (std::isfinite(s)) peak = std::max(peak, s);
+  if (!(peak > 0.0)) return;  // a constant input is refused by the log readers
+  std::vector<size_t> dead;
+  for (size_t k = 0; k < r.S_uu.size() && k < r.f_hz.size(); ++k) {
+    if (!(r.S_uu[k] > kNoInputPower * peak)) dead.push_back(k);
+  }
+  if (dead.empty()) return;
+  const size_t n = r.f_hz.size(), lo = dead.front(), hi = dead.back();
+  const bool block = hi - lo + 1 == dead.size();
+  std::string msg = source + ": no input power at " +
+                    (lo == hi ? Num(r.f_hz[lo]) : Num(r.f_hz[lo]) + "-" + Num(r.f_hz[hi])) + " Hz (" +
+                    (block ? "" : std::to_string(dead.size()) + " bins in that range, ") +
+                    "input PSD below 1e-24 of its peak: the excitation has no content there and the response is "
+                    "0/0): ";
+  if (block && hi == n - 1 && lo > 0) {
+    msg += "limit the band with WelchOptions::fmax_hz " + Num(r.f_hz[lo - 1]);
+  } else if (block && lo == 0 && hi < n - 1) {
+    msg += "limit the band with WelchOptions::fmin_hz " + Num(r.f_hz[hi + 1]);
+  } else {
+    msg += "limit the band with WelchOptions::fmin_hz/WelchOptions::fmax_hz to the excitation's "
+           "(and for a periodic excitation, make the segment its period)";
+  }
+  throw InputError(msg);
 }
 
 void WriteFrequencyResponse(const std::string& path, const ident::FrequencyResponse& r) {

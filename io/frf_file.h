@@ -23,10 +23,18 @@ ident::FrequencyResponse ReadFrequencyResponse(const std::string& path, double s
 // an HDF5 file with a /frf group.
 bool IsFrequencyResponseFile(const std::string& path);
 
-// Throws InputError naming `source` and the first bin when any value of r is
-// NaN or infinite (an input scaled out of range overflows the spectra).
+// Throws InputError naming `source`, the first bin and the value when any
+// value of r is NaN or infinite; the cause when it can tell (spectra that
+// overflowed: an input scaled out of range; an infinite per-bin std).
 // WriteFrequencyResponse calls it: a non-finite response is never written.
 void CheckFiniteResponse(const ident::FrequencyResponse& r, const std::string& source);
+
+// Throws InputError naming `source`, the band and the flag to limit it when
+// some bins have no input power: S_uu <= kNoInputPower x its peak (an
+// excitation with no content there, e.g. a band-limited multisine in a
+// rectangular segment, where H is 0/0 or rounding noise).
+inline constexpr double kNoInputPower = 1e-24;
+void CheckInputPower(const ident::FrequencyResponse& r, const std::string& source);
 
 namespace internal {
 // ReadFrequencyResponse without the child process for HDF5 (the fuzzer's

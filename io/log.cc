@@ -138,16 +138,34 @@ LogInfo StreamLog(const std::string& path, const LogSelect& select, const LogSin
   TimeScale(select.time_unit);  // validates the flag
   CheckInputFile(path, "log");
   size_t total = 0;
+  internal::ConstantCheck output_constant;
   const LogSink capped = [&](const double* u, const double* y, size_t n) {
     total += n;
     if (total > kMaxLogSamples) {
       throw InputError(path + ": more than " + std::to_string(kMaxLogSamples) +
                        " samples, more than zwidth reads; split the log");
     }
+    output_constant.Add(y, n);
     sink(u, y, n);
   };
   const LogFormat format = DetectLogFormat(path);
-  if (format == LogFormat::kCsv) return StreamCsv(path, select, capped);
+  // A constant output (an encoder not read, the wrong column) would give a
+  // response of zeros and a coherence of 0/0: said here, as for the input.
+  auto check_output = [&](LogInfo info) {
+    if (!output_constant.varies) {
+      const bool h5 = format == LogFormat::kHdf5;
+      std::ostringstream os;
+      os.precision(6);
+      os << path << ": output " << (h5 ? "dataset '" + select.output_dataset.substr(0, 40) + "'"
+                                       : "column '" + select.output_column.substr(0, 40) + "'")
+         << " is constant (every sample " << output_constant.first / select.output_scale
+         << "): the device did not move or its sensor was not read (wrong "
+         << (h5 ? "LogSelect::output_dataset" : "LogSelect::output_column") << "? sensor unplugged?)";
+      throw InputError(os.str());
+    }
+    return info;
+  };
+  if (format == LogFormat::kCsv) return check_output(StreamCsv(path, select, capped));
   if (!select.time_unit.empty() && select.time_unit != "s") {
     throw InputError(path + ": LogSelect::time_unit applies to text logs; this " +
                      std::string(format == LogFormat::kMat ? "MATLAB" : "HDF5") +
@@ -164,7 +182,22 @@ LogInfo StreamLog(const std::string& path, const LogSelect& select, const LogSin
   };
   LogInfo info = format == LogFormat::kMat ? StreamMat(path, select, scaled) : StreamHdf5(path, select, scaled);
   if (info.layout.empty()) info.layout = format == LogFormat::kMat ? "MATLAB v5 .mat" : "HDF5";
-  return info;
+  // The text reader's plausibility range (log_text.cc), for time read in s.
+  if (select.sample_rate_hz <= 0.0 && info.sample_rate_hz > 0.0) {
+    const double r = info.sample_rate_hz;
+    std::ostringstream os;
+    os.precision(4);
+    os << "the log's time implies " << r << " Hz";
+    const std::string hint = "; a " + std::string(format == LogFormat::kMat ? ".mat" : "HDF5") +
+                             " log's time is read in s: if it is in ms, LogSelect::sample_rate_hz " +
+                             [&] { std::ostringstream h; h.precision(4); h << r * 1e3; return h.str(); }() +
+                             " gives the rate";
+    if (r <= 10.0 * (1.0 + 1e-9) || r > 1e6) {
+      throw InputError(path + ": " + os.str() + ", implausible for a device log (10 Hz..1 MHz)" + hint);
+    }
+    if (r < 100.0) info.warnings.push_back(os.str() + ", low for a haptic device log" + hint);
+  }
+  return check_output(std::move(info));
 }
 
 Log ReadLog(const std::string& path, const LogSelect& select) {

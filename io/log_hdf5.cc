@@ -37,6 +37,24 @@ H5::DataSet OpenDataset(H5::H5File& file, const std::string& path, const std::st
   try {
     ds = file.openDataSet(name);
   } catch (const H5::Exception&) {
+    // A group (Octave's save -hdf5 stores a variable as a group of type and
+    // value): name its members, so the dataset to pass is plain.
+    try {
+      if (file.childObjType(name) == H5O_TYPE_GROUP) {
+        H5::Group g = file.openGroup(name);
+        const hsize_t n = g.getNumObjs();
+        std::string members, example;
+        for (hsize_t i = 0; i < n && i < 10; ++i) {
+          const std::string m = g.getObjnameByIdx(i).substr(0, 40);
+          members += (i ? ", " : "") + m;
+          if (example.empty() || m == "value") example = m;  // Octave's data is in "value"
+        }
+        if (n > 10) members += ", ...";
+        throw InputError(path + ": '" + name + "' is a group, not a dataset (members: " + members + "); pass " +
+                         flag + " " + name + "/" + (example.empty() ? "MEMBER" : example));
+      }
+    } catch (const H5::Exception&) {
+    }
     throw InputError(path + ": '" + name + "' is not a readable dataset");
   }
   internal::CheckH5DatasetLocal(ds.getId(), H5Where(path, name));

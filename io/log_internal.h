@@ -7,6 +7,9 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <limits>
+#include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -47,17 +50,11 @@ class TimeChecker {
       }
       min_dt_ = std::min(min_dt_, dt);
       max_dt_ = std::max(max_dt_, dt);
-      if (n_ >= 2 && uniform_) {
+      if (n_ >= 2 && uniform_ && !violation_) {
         const double mean = (last_ - first_) / static_cast<double>(n_ - 1);
-        if (std::abs(dt - mean) > tol_ * mean) {
-          std::ostringstream os;
-          os.precision(6);
-          os << source_ << ": not uniformly sampled at " << where() << ": interval " << dt
-             << " s differs from the mean interval " << mean << " s by "
-             << 100.0 * std::abs(dt - mean) / mean
-             << "% (missing or repeated samples?); resample the log first";
-          throw InputError(os.str());
-        }
+        // The first interval off the mean so far is kept, and refused when the
+        // rate is asked for, against the whole log's mean interval.
+        if (std::abs(dt - mean) > tol_ * mean) violation_ = Violation{where(), dt};
       }
     } else {
       first_ = t;
@@ -65,7 +62,23 @@ class TimeChecker {
     last_ = t;
     ++n_;
   }
-  double Rate() const { return n_ >= 2 ? static_cast<double>(n_ - 1) / (last_ - first_) : 0.0; }
+  // The mean rate of the time stamps (0 with fewer than 2); throws the first
+  // non-uniform interval (uniform = true) as an InputError.
+  double Rate() const {
+    if (violation_) {
+      const double mean = (last_ - first_) / static_cast<double>(n_ - 1);
+      std::ostringstream os;
+      os.precision(6);
+      os << source_ << ": not uniformly sampled at " << violation_->where << ": interval " << violation_->dt
+         << " s differs from the log's mean interval " << mean << " s by "
+         << 100.0 * std::abs(violation_->dt - mean) / mean
+         << " % (missing or repeated samples?); if only the time stamps jitter, LogSelect::sample_rate_hz "
+         << 1.0 / mean << " (the log's mean rate) reads it at that rate and only checks that time increases; "
+         << "else resample the log";
+      throw InputError(os.str());
+    }
+    return n_ >= 2 ? static_cast<double>(n_ - 1) / (last_ - first_) : 0.0;
+  }
   double MinInterval() const { return min_dt_; }
   double MaxInterval() const { return max_dt_; }
 
@@ -76,6 +89,11 @@ class TimeChecker {
   double min_dt_ = std::numeric_limits<double>::infinity(), max_dt_ = 0.0;
   double first_ = 0.0, last_ = 0.0;
   size_t n_ = 0;
+  struct Violation {
+    std::string where;
+    double dt;
+  };
+  std::optional<Violation> violation_;
 };
 
 inline void CheckFinite(double v, const std::string& source, const std::string& where) {

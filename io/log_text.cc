@@ -1,6 +1,7 @@
 #include "io/log.h"
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -214,6 +215,11 @@ CsvPreamble ReadPreamble(LineReader& reader, const std::string& path, const LogS
     if (IsBlank(line)) continue;
     if (!IsComment(line)) {
       std::string_view sv = TrimView(line);
+      if (!last && !sv.empty() && (sv[0] == '{' || sv[0] == '[')) {
+        throw InputError(path + ": line " + std::to_string(reader.line_no()) + " " + Shown(line) +
+                         ": this looks like a JSON file (a model or a scene), not a log; a model is what "
+                         "boundary, check, relay, compare and export take (fit makes one from a log)");
+      }
       const bool looks_numeric = !sv.empty() && (std::isdigit(static_cast<unsigned char>(sv[0])) ||
                                                  sv[0] == '-' || sv[0] == '+' || sv[0] == '.');
       if (delim) {
@@ -325,6 +331,30 @@ int FindColumn(const std::string& spec, bool required, const char* flag, const s
   throw InputError(msg);
 }
 
+// "ms" or "us" when a time column's name carries that unit as a word of its
+// own (t_ms, time_ms, "t [ms]", "time (us)", tUs is not split), else "".
+std::string UnitInName(const std::string& name) {
+  std::string word;
+  std::vector<std::string> words;
+  for (size_t i = 0; i <= name.size(); ++i) {
+    const unsigned char c = i < name.size() ? static_cast<unsigned char>(name[i]) : ' ';
+    if (std::isalnum(c) || c >= 0x80) {
+      word += static_cast<char>(std::tolower(c));
+    } else if (!word.empty()) {
+      words.push_back(word);
+      word.clear();
+    }
+  }
+  for (const std::string& w : words) {
+    if (w == "ms" || w == "msec" || w == "millisec" || w == "millisecond" || w == "milliseconds") return "ms";
+    if (w == "us" || w == "usec" || w == "microsec" || w == "microsecond" || w == "microseconds" ||
+        w == "\xc2\xb5s" || w == "\xce\xbcs") {  // micro sign or Greek mu, then s
+      return "us";
+    }
+  }
+  return "";
+}
+
 // The sample rate: --rate (with a warning when the time column disagrees),
 // or the time column's (refused when implausible for a device log).
 void ResolveRate(const std::string& path, const LogSelect& sel, const TimeChecker& times, int ct, size_t rows,
@@ -351,7 +381,8 @@ void ResolveRate(const std::string& path, const LogSelect& sel, const TimeChecke
     if (!(info.sample_rate_hz > 0.0) || !std::isfinite(info.sample_rate_hz)) {
       throw InputError(path + ": cannot tell the sample rate (fewer than 2 rows?); pass LogSelect::sample_rate_hz");
     }
-    if (sel.time_unit.empty() && (info.sample_rate_hz < 10.0 || info.sample_rate_hz > 1e6)) {
+    // 10 Hz itself is refused: a 10 kHz loop logged in ms reads as exactly that.
+    if (sel.time_unit.empty() && (info.sample_rate_hz <= 10.0 * (1.0 + 1e-9) || info.sample_rate_hz > 1e6)) {
       std::ostringstream os;
       os.precision(4);
       os << path << ": the time " << time_col_name << " implies a sample rate of " << info.sample_rate_hz
@@ -365,6 +396,14 @@ void ResolveRate(const std::string& path, const LogSelect& sel, const TimeChecke
       }
       os << "; LogSelect::time_unit s accepts it as is";
       throw InputError(os.str());
+    }
+    if (sel.time_unit.empty() && info.sample_rate_hz < 100.0) {
+      std::ostringstream os;
+      os.precision(4);
+      os << "the time " << time_col_name << " implies " << info.sample_rate_hz
+         << " Hz, low for a haptic device log: if it is in milliseconds pass LogSelect::time_unit ms ("
+         << info.sample_rate_hz * 1e3 << " Hz); LogSelect::time_unit s silences this";
+      info.warnings.push_back(os.str());
     }
   }
 }
@@ -444,6 +483,14 @@ LogInfo StreamCsv(const std::string& path, const LogSelect& sel, const LogSink& 
   const bool rate_given = sel.sample_rate_hz > 0.0;
   const CsvColumns cols = SelectColumns(sel, header, ncols, path);
   const int ci = cols.input, co = cols.output, ct = cols.time;
+  if (ct >= 0 && !cols.names.empty() && !rate_given && sel.time_unit.empty()) {
+    const std::string unit = UnitInName(cols.names[ct]);
+    if (!unit.empty()) {
+      throw InputError(path + ": the time column '" + cols.names[ct].substr(0, 40) + "' looks like " +
+                       (unit == "ms" ? "milliseconds" : "microseconds") + ": pass LogSelect::time_unit " + unit +
+                       " (or LogSelect::time_unit s if it is in seconds)");
+    }
+  }
   auto col_name = [&](int c) { return cols.Name(c); };
   TimeChecker times(path, sel.max_interval_deviation, !rate_given);
   ChunkedSink out(sink);

@@ -4,7 +4,10 @@
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
+#include <algorithm>
+#include <cctype>
 #include <limits>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -50,6 +53,13 @@ double Number(const json& obj, const std::string& key, const std::string& source
 // [kPlausibleMin, kPlausibleMax] (SI units, rad/s): values outside (m = 1e-300)
 // make the Z-width overflow to inf, which no device has.
 void CheckPlausible(double v, const std::string& source, const std::string& name) {
+  if (v == 0.0 && name != "m" && name.size() >= 1) {  // an undamped body or mode: not a unit slip
+    const char last = name.back();
+    if (last == 'b' || last == 'c' || last == 'd') {
+      Fail(source, "key '" + name + "' = 0: " + name.substr(name.rfind('.') + 1) + " must be > 0; use e.g. 1e-12 " +
+                       (last == 'b' ? "for an undamped body" : "for an undamped mode"));
+    }
+  }
   if (!(v >= kPlausibleMin && v <= kPlausibleMax)) {
     char b[64];
     std::snprintf(b, sizeof b, "%g", v);
@@ -135,6 +145,77 @@ void CheckJsonDepth(const std::string& text, const std::string& source, int max_
   }
 }
 
+void CheckNotJsonOfAnotherKind(const std::string& text, const std::string& source, const std::string& what,
+                               const std::string& command) {
+  const std::string takes = command + " takes a " + what + " JSON";
+  const std::string make = what == "model" ? " (make one from a log with `zwidth fit LOG -o MODEL.json`)"
+                                           : " ({\"objects\": [{\"name\": ..., \"K\": ..., \"B\": ...}]})";
+  for (size_t off : {0, 512, 1024, 2048}) {
+    if (text.size() >= off + 8 && text.compare(off, 8, "\x89HDF\r\n\x1a\n") == 0) {
+      throw InputError(source + ": not a " + what + " JSON: this is an HDF5 file (a log, or a frequency response "
+                       "saved by `zwidth estimate`; fit and estimate take those); " + takes + make);
+    }
+  }
+  if (text.rfind("MATLAB", 0) == 0) {
+    throw InputError(source + ": not a " + what + " JSON: this is a MATLAB .mat file (a log: fit and estimate take "
+                     "it); " + takes + make);
+  }
+  size_t b = text.rfind("\xEF\xBB\xBF", 0) == 0 ? 3 : 0;  // UTF-8 BOM
+  b = text.find_first_not_of(" \t\r\n", b);
+  if (b == std::string::npos || text[b] == '{' || text[b] == '[') return;
+  const size_t e = text.find_first_of("\r\n", b);
+  std::string line = text.substr(b, std::min<size_t>(e == std::string::npos ? text.size() - b : e - b, 60));
+  for (char& c : line) if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = '?';
+  const bool frf = line.rfind("f_hz", 0) == 0 || line.rfind("\"f_hz\"", 0) == 0;
+  const bool log = line.find_first_of(",;\t") != std::string::npos || line[0] == '#' ||
+                   std::isdigit(static_cast<unsigned char>(line[0])) || line[0] == '-';
+  if (frf) {
+    throw InputError(source + ": not a " + what + " JSON: it starts '" + line + "', a frequency response saved by "
+                     "`zwidth estimate` (fit takes it); " + takes + make);
+  }
+  if (log) {
+    throw InputError(source + ": not a " + what + " JSON: it starts '" + line + "', like a text log (fit and "
+                     "estimate take logs); " + takes + make);
+  }
+}
+
+void CheckDuplicateKeys(const std::string& text, const std::string& source) {
+  struct Level {
+    bool object;
+    bool expect_key;
+    std::map<std::string, size_t> keys;  // key -> line
+  };
+  std::vector<Level> stack;
+  size_t line = 1;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '\n') ++line;
+    if (c == '"') {
+      const size_t start = ++i;
+      while (i < text.size() && text[i] != '"') {
+        if (text[i] == '\\') ++i;
+        ++i;
+      }
+      if (!stack.empty() && stack.back().object && stack.back().expect_key) {
+        const std::string key = text.substr(start, std::min(i, text.size()) - start);
+        auto [it, fresh] = stack.back().keys.emplace(key, line);
+        if (!fresh) {
+          throw InputError(source + ": line " + std::to_string(line) + ": duplicate key '" + key.substr(0, 40) +
+                           "' (first at line " + std::to_string(it->second) +
+                           "; the last would silently win): remove one");
+        }
+        stack.back().expect_key = false;
+      }
+    } else if (c == '{' || c == '[') {
+      stack.push_back({c == '{', c == '{', {}});
+    } else if (c == '}' || c == ']') {
+      if (!stack.empty()) stack.pop_back();
+    } else if (c == ',' && !stack.empty() && stack.back().object) {
+      stack.back().expect_key = true;
+    }
+  }
+}
+
 std::string ReadSmallFile(const std::string& path, const std::string& what, size_t max_bytes) {
   CheckInputFile(path, what);
   std::ifstream in(path, std::ios::binary);
@@ -160,6 +241,7 @@ ModelFile ParseModelJson(const std::string& text, const std::string& source) {
   } catch (const json::exception& e) {  // parse_error, and out_of_range for 1e999
     Fail(source, std::string("not valid JSON (truncated or malformed): ") + e.what());
   }
+  CheckDuplicateKeys(text, source);  // valid JSON: nlohmann kept the last of a repeated key
   if (!j.is_object()) Fail(source, "top level must be a JSON object");
   CheckKeys(j, {"m", "b", "modes", "delay_samples", "sample_period_s", "name", "std", "fit", "covariance"},
             source, "");
@@ -224,11 +306,14 @@ ModelFile ParseModelJson(const std::string& text, const std::string& source) {
   return mf;
 }
 
-ModelFile ReadModelJson(const std::string& path) {
+ModelFile ReadModelJson(const std::string& path) { return ReadModelJsonFor(path, "this command"); }
+
+ModelFile ReadModelJsonFor(const std::string& path, const std::string& command) {
   const std::string text = ReadSmallFile(path, "model file", kMaxJsonBytes);
   if (text.find_first_not_of(" \t\r\n") == std::string::npos) {
     throw InputError(path + ": empty model file");
   }
+  CheckNotJsonOfAnotherKind(text, path, "model", command);
   return ParseModelJson(text, path);
 }
 

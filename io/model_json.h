@@ -52,6 +52,19 @@ std::string ReadSmallFile(const std::string& path, const std::string& what, size
 // Parses and validates; throws InputError naming the file and the key.
 ModelFile ParseModelJson(const std::string& text, const std::string& source);
 ModelFile ReadModelJson(const std::string& path);
+// The same; `command` names what takes the model in the message when the file
+// is of another kind (an HDF5 or .mat file, a text log, a saved frequency
+// response). Not an overload: Python binds &ReadModelJson.
+ModelFile ReadModelJsonFor(const std::string& path, const std::string& command);
+
+// InputError when `text` is evidently not JSON but another input of zwidth's
+// (HDF5/.mat signature, a text log's or a frequency response's first line),
+// naming what it looks like and what takes it; `what` is "model" or "scene".
+void CheckNotJsonOfAnotherKind(const std::string& text, const std::string& source, const std::string& what,
+                               const std::string& command);
+// InputError naming the key and its two lines when an object of `text` (valid
+// JSON) repeats a key, which a JSON parser resolves silently (the last wins).
+void CheckDuplicateKeys(const std::string& text, const std::string& source);
 
 nlohmann::json ModelToJson(const ModelFile& model);
 void WriteModelJson(const std::string& path, const ModelFile& model);

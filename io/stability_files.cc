@@ -74,6 +74,7 @@ nlohmann::json SummaryToJson(const stability::DelaySummary& s, const stability::
 
 std::vector<SceneObject> ReadScene(const std::string& path) {
   const std::string text = ReadSmallFile(path, "scene file");  // a regular file, bounded size
+  CheckNotJsonOfAnotherKind(text, path, "scene", "check");
   CheckJsonDepth(text, path);
   nlohmann::json j;
   try {
@@ -81,6 +82,7 @@ std::vector<SceneObject> ReadScene(const std::string& path) {
   } catch (const nlohmann::json::exception& e) {  // parse_error, out_of_range (1e999)
     throw InputError(path + ": not valid JSON (truncated or malformed): " + e.what());
   }
+  CheckDuplicateKeys(text, path);
   if (!j.is_object() || !j.contains("objects") || !j["objects"].is_array()) {
     throw InputError(path + ": expected {\"objects\": [{\"name\": ..., \"K\": ..., \"B\": ...}, ...]}");
   }

@@ -200,6 +200,53 @@ TEST_F(LogFormats, RefusalsSayWhatWasFound) {
   EXPECT_NE(Refusal(Write("o.csv", "t,torque,position\n0,1,2\n"), sel).find("LogSelect::input_scale"), std::string::npos);
 }
 
+// A 10 kHz loop logged with its time in ms reads as exactly 10 Hz in s.
+// The header's unit (t_ms, "t [ms]", ...) is a hint: without LogSelect::time_unit
+// the log is refused, naming the column; a time column in s implying exactly
+// 10 Hz is refused (the range is [10 Hz, 1 MHz] exclusive at 10), 10-100 Hz warned.
+TEST_F(LogFormats, TimeUnitFromTheHeaderAndLowRates) {
+  const Signals s = MakeSignals(3000, 10000.0);  // t in s at 10 kHz
+  for (const std::string name : {"t_ms", "time_ms", "t [ms]", "Time (ms)", "t_us", "t [us]", "time_usec",
+                                 "t [\xc2\xb5s]"}) {
+    const std::string unit = name.find("ms") != std::string::npos ? "ms" : "us";
+    const std::string p = Write("u.csv", name + ",torque,position\n" + Rows(s, ",", "\n", unit == "ms" ? 1e3 : 1e6));
+    LogSelect sel;
+    sel.time_column = name;
+    const std::string m = Refusal(p, sel);
+    EXPECT_NE(m.find("the time column '" + name + "' looks like " + (unit == "ms" ? "milli" : "micro")),
+              std::string::npos) << m;
+    EXPECT_NE(m.find("pass LogSelect::time_unit " + unit), std::string::npos) << m;
+    sel.time_unit = unit;
+    const Log log = ReadLog(p, sel);
+    EXPECT_NEAR(log.info.sample_rate_hz, 10000.0, 1e-6) << name;
+    EXPECT_TRUE(log.info.warnings.empty()) << name;
+  }
+  // Names that carry no unit word: read in s.
+  for (const std::string name : {"t", "time_s", "terms", "t [s]"}) {
+    LogSelect sel;
+    sel.time_column = name;
+    const Log log = ReadLog(Write("v.csv", name + ",torque,position\n" + Rows(s, ",", "\n")), sel);
+    EXPECT_NEAR(log.info.sample_rate_hz, 10000.0, 1e-6) << name;
+  }
+  // Exactly 10 Hz (10 kHz in ms under a plain "t"): refused with the suggestion.
+  const std::string p10 = Write("w.csv", "t,torque,position\n" + Rows(s, ",", "\n", 1e3));
+  EXPECT_NE(Refusal(p10, {}).find("pass LogSelect::time_unit ms (1e+04 Hz)"), std::string::npos) << Refusal(p10, {});
+  // 50 Hz: read, with a warning naming the flag; LogSelect::time_unit s silences it.
+  const std::string p50 = Write("x.csv", "t,torque,position\n" + Rows(s, ",", "\n", 200.0));
+  Log log = ReadLog(p50, {});
+  EXPECT_NEAR(log.info.sample_rate_hz, 50.0, 1e-9);
+  ASSERT_EQ(log.info.warnings.size(), 1u);
+  EXPECT_NE(log.info.warnings[0].find("implies 50 Hz"), std::string::npos) << log.info.warnings[0];
+  EXPECT_NE(log.info.warnings[0].find("LogSelect::time_unit ms (5e+04 Hz)"), std::string::npos) << log.info.warnings[0];
+  LogSelect sel;
+  sel.time_unit = "s";
+  EXPECT_TRUE(ReadLog(p50, sel).info.warnings.empty());
+  // 100 Hz and above: no warning.
+  log = ReadLog(Write("y.csv", "t,torque,position\n" + Rows(s, ",", "\n", 100.0)), {});
+  EXPECT_NEAR(log.info.sample_rate_hz, 100.0, 1e-9);
+  EXPECT_TRUE(log.info.warnings.empty());
+}
+
 // .mat through libmatio's writer, v5 and v7.3 (HDF5), named with misleading
 // extensions: the content decides.
 void WriteMat(const std::string& path, mat_ft version, const Signals& s) {
@@ -235,6 +282,30 @@ TEST_F(LogFormats, MatV5AndV73ByContent) {
     EXPECT_NE(m.find("variables: "), std::string::npos) << m;
     EXPECT_NE(m.find("Theta"), std::string::npos) << m;
   }
+}
+
+// A .mat log's time is read in s: a 10 kHz log with its time in ms (10 Hz)
+// is refused with the rate to pass; 50 Hz is read with a warning.
+TEST_F(LogFormats, MatTimeInMillisecondsIsRefused) {
+  Signals s = MakeSignals(3000, 10000.0);
+  for (double& t : s.t) t *= 1e3;
+  LogSelect sel;
+  sel.time_column = "Time";
+  sel.input_column = "u";
+  sel.output_column = "Theta";
+  const std::string p = dir_ / "ms.mat";
+  WriteMat(p, MAT_FT_MAT5, s);
+  const std::string m = Refusal(p, sel);
+  EXPECT_NE(m.find("implies 10 Hz, implausible"), std::string::npos) << m;
+  EXPECT_NE(m.find("LogSelect::sample_rate_hz 1e+04"), std::string::npos) << m;
+  sel.sample_rate_hz = 10000.0;
+  EXPECT_EQ(ReadLog(p, sel).info.sample_rate_hz, 10000.0);
+  for (double& t : s.t) t *= 0.2;  // 50 Hz
+  WriteMat(p, MAT_FT_MAT5, s);
+  sel.sample_rate_hz = 0.0;
+  const Log log = ReadLog(p, sel);
+  ASSERT_EQ(log.info.warnings.size(), 1u);
+  EXPECT_NE(log.info.warnings[0].find("implies 50 Hz, low"), std::string::npos) << log.info.warnings[0];
 }
 
 // An HDF5 log whose sample_rate_hz attribute holds `n` values.
