@@ -1,6 +1,7 @@
 // Shared by the report's own units; not installed.
 #pragma once
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -8,6 +9,12 @@
 #include "ident/joint.h"
 
 namespace zwidth::report {
+
+// Every figure's canvas [px] (a bound of what any of its panels draws across)
+// and how far a thinned line may lie from the computed one on it [px].
+inline constexpr double kFigureWidthPx = 900;
+inline constexpr double kFigureHeightPx = 640;
+inline constexpr double kThinTolerancePx = 0.2;
 
 // What the gnuplot script of `run` depends on.
 struct FigureScriptOptions {
@@ -25,6 +32,9 @@ struct FigureScriptOptions {
 
 // figures.gp: every figure in SVG (and PNG when asked), read from the .dat files beside it.
 std::string FigureScript(const FigureScriptOptions& o);
+
+// figures/: the .dat files (figure_files.cc) and figures.gp.
+void WriteFigureFiles(const analysis::RunAnalysis& a, const std::filesystem::path& fig, bool png);
 
 // report.html; have_figures: figures/*.svg exist.
 std::string RunHtml(const analysis::RunAnalysis& a, bool have_figures, const std::string& fit_report);
