@@ -76,6 +76,19 @@ double SegmentDistance(double px, double py, double ax, double ay, double bx, do
   return std::abs(ux * (py - ay) - uy * (px - ax)) / std::hypot(ux, uy);
 }
 
+// Point (x, y) inside the polygon (even-odd ray casting to +x) or within tol of its edges.
+bool InsideOrNear(const std::vector<std::pair<double, double>>& poly, double x, double y, double tol) {
+  bool in_poly = false;
+  double edge = std::numeric_limits<double>::infinity();
+  for (size_t p = 0, q = poly.size() - 1; p < poly.size(); q = p++) {
+    const auto [x1, y1] = poly[p];
+    const auto [x2, y2] = poly[q];
+    if ((y1 > y) != (y2 > y) && x < x1 + (y - y1) * (x2 - x1) / (y2 - y1)) in_poly = !in_poly;
+    edge = std::min(edge, SegmentDistance(x, y, x1, y1, x2, y2));
+  }
+  return in_poly || edge <= tol;
+}
+
 // The figure data of a run against what the analysis computed, in pixels of
 // the 900 x 640 canvas (the data's own range across it; every panel is
 // smaller, so a drawn pixel is smaller still): each model K_CR(B) lies within
@@ -144,17 +157,7 @@ TEST(RunReport, FigureDataLieWithinAFifthOfAPixelOfWhatWasComputed) {
       for (const auto& iv : st.rows[i * nB + k].intervals) {
         const double x = st.b_grid[k] * b_px, y = 0.5 * (iv.K_lo + std::min(iv.K_hi, k_clip)) * 640 / k_clip;
         bool inside = false;
-        for (const auto& poly : polys) {
-          bool in_poly = false;  // even-odd ray casting to +x
-          double edge = std::numeric_limits<double>::infinity();
-          for (size_t p = 0, q = poly.size() - 1; p < poly.size(); q = p++) {
-            const auto [x1, y1] = poly[p];
-            const auto [x2, y2] = poly[q];
-            if ((y1 > y) != (y2 > y) && x < x1 + (y - y1) * (x2 - x1) / (y2 - y1)) in_poly = !in_poly;
-            edge = std::min(edge, SegmentDistance(x, y, x1, y1, x2, y2));
-          }
-          inside = inside || in_poly || edge <= 0.2;
-        }
+        for (const auto& poly : polys) inside = inside || InsideOrNear(poly, x, y, 0.2);
         EXPECT_TRUE(inside) << "delay " << st.delays[i] << " B " << st.b_grid[k] << " K " << iv.K_lo;
       }
     }
