@@ -29,12 +29,22 @@ PixelAxis AxisSpanning(const std::vector<double>& values, double pixels, bool lo
   return a;
 }
 
-double DistanceToSegment(double px, double py, double ax, double ay, double bx, double by) {
+namespace {
+
+// The squared distance from (px, py) to the segment (ax, ay)-(bx, by).
+double SquaredDistanceToSegment(double px, double py, double ax, double ay, double bx, double by) {
   const double dx = bx - ax, dy = by - ay;
   const double len2 = dx * dx + dy * dy;
   double t = len2 > 0 ? ((px - ax) * dx + (py - ay) * dy) / len2 : 0.0;
   t = std::clamp(t, 0.0, 1.0);
-  return std::hypot(px - (ax + t * dx), py - (ay + t * dy));
+  const double ex = px - (ax + t * dx), ey = py - (ay + t * dy);
+  return ex * ex + ey * ey;
+}
+
+}  // namespace
+
+double DistanceToSegment(double px, double py, double ax, double ay, double bx, double by) {
+  return std::sqrt(SquaredDistanceToSegment(px, py, ax, ay, bx, by));
 }
 
 std::vector<size_t> ThinPolylines(const std::vector<double>& x, const PixelAxis& x_axis,
@@ -65,12 +75,12 @@ std::vector<size_t> ThinPolylines(const std::vector<double>& x, const PixelAxis&
     while (!stack.empty()) {
       const auto [s, e] = stack.back();
       stack.pop_back();
-      double worst = tol_px;
+      double worst = tol_px * tol_px;  // squared distances from here on
       size_t at = s;
       for (size_t i = s + 1; i < e; ++i) {
         for (size_t j = 0; j < m; ++j) {
           if (!(mask[a] >> j & 1)) continue;
-          const double d = DistanceToSegment(px[i], py[i * m + j], px[s], py[s * m + j], px[e], py[e * m + j]);
+          const double d = SquaredDistanceToSegment(px[i], py[i * m + j], px[s], py[s * m + j], px[e], py[e * m + j]);
           if (d > worst) {
             worst = d;
             at = i;
