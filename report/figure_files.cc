@@ -311,7 +311,7 @@ std::string Table2Dat(const std::vector<int>& delays) {
 
 }  // namespace
 
-void WriteFigureFiles(const analysis::RunAnalysis& a, const fs::path& fig, bool png) {
+std::string WriteFigureFiles(const analysis::RunAnalysis& a, const fs::path& fig, bool png) {
   const analysis::FigureData& f = *a.figures;
   fs::create_directories(fig);
   double k_clip = 1.0;
@@ -328,7 +328,9 @@ void WriteFigureFiles(const analysis::RunAnalysis& a, const fs::path& fig, bool 
                                a.input.response.method == ident::CombinedMethod::kJoint,
                                a.options.linear, a.input.reference.has_value(), table1,
                                k_clip, k_clip_loop, a.options.report_filter_hz, png};
-  WriteFigureFile(fig / "figures.gp", FigureScript(so));
+  std::string script = FigureScript(so);
+  WriteFigureFile(fig / "figures.gp", script);
+  return script;
 }
 
 }  // namespace zwidth::report

@@ -1,12 +1,12 @@
 #include "report/run_report.h"
 
 #include <filesystem>
+#include <optional>
 
 #include <nlohmann/json.hpp>
 
 #include "analysis/laps.h"
 #include "io/frf_file.h"
-#include "io/isolated.h"
 #include "io/stability_files.h"
 #include "report/report_internal.h"
 
@@ -52,11 +52,10 @@ void WriteDataFiles(const analysis::RunAnalysis& a, const fs::path& out) {
   io::WriteTextAtomically((out / "summary.json").string(), SummaryJson(a));
 }
 
-// gnuplot started with an argument vector in the figures folder: no shell, so
-// no folder name is ever interpreted. 127: not installed.
-FiguresStatus DrawFigures(const fs::path& fig) {
-  const int rc = io::RunProgram({"gnuplot", "figures.gp"}, fig.string(), (fig / "gnuplot.log").string());
-  return rc == 0 ? FiguresStatus::kDrawn : rc == 127 ? FiguresStatus::kGnuplotMissing : FiguresStatus::kGnuplotFailed;
+FiguresStatus StatusOf(int gnuplot_exit) {
+  return gnuplot_exit == 0     ? FiguresStatus::kDrawn
+         : gnuplot_exit == 127 ? FiguresStatus::kGnuplotMissing
+                               : FiguresStatus::kGnuplotFailed;
 }
 
 }  // namespace
@@ -64,17 +63,23 @@ FiguresStatus DrawFigures(const fs::path& fig) {
 RunReport WriteRunReport(const analysis::RunAnalysis& a, const io::OutputFolder& folder,
                          const RunReportOptions& options) {
   const fs::path out(folder.temp_path());
+  const fs::path fig = out / "figures";
   RunReport r;
   Laps laps;
+  // gnuplot starts first: it loads while the files are written.
+  std::optional<GnuplotProcess> gnuplot;
+  if (a.figures && options.draw_figures) {
+    fs::create_directories(fig);
+    gnuplot.emplace(fig);
+  }
   WriteDataFiles(a, out);
   r.stages.push_back({"write outputs", laps.Lap()});
   if (a.figures) {
-    const fs::path fig = out / "figures";
-    WriteFigureFiles(a, fig, options.png);
+    const std::string script = WriteFigureFiles(a, fig, options.png);
     r.stages.push_back({"figure files", laps.Lap()});
     r.figures = FiguresStatus::kNotDrawn;
-    if (options.draw_figures) {
-      r.figures = DrawFigures(fig);
+    if (gnuplot) {
+      r.figures = StatusOf(gnuplot->Run(script));
       if (r.figures != FiguresStatus::kGnuplotMissing) r.stages.push_back({"figures (gnuplot)", laps.Lap()});
     }
   }

@@ -2,7 +2,9 @@
 // analysis of a synthetic model (tests/run_input.h).
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -163,6 +165,72 @@ TEST(RunReport, FigureDataLieWithinAFifthOfAPixelOfWhatWasComputed) {
     }
   }
   EXPECT_GT(checked, nB);
+}
+
+// The run's analysis with figure data (delays 2 and 6, no reference).
+analysis::RunAnalysis FigureAnalysis() {
+  analysis::RunOptions o;
+  o.delays = {2, 6};
+  analysis::RunInput in = TestInput(0.0);
+  in.model.fit = {{"quality_reasons", nlohmann::json::array()}};
+  return analysis::Analyse(std::move(in), o);
+}
+
+report::RunReport WriteWithFigures(const analysis::RunAnalysis& a, const std::filesystem::path& dir) {
+  io::OutputFolder folder(dir.string(), false);
+  const report::RunReport r = report::WriteRunReport(a, folder);
+  folder.Commit();
+  return r;
+}
+
+// gnuplot, started before the files are written, draws all six SVGs from the
+// script it is handed; gnuplot.log holds no error (only the warning that the
+// K_CR +- 2 sigma band has no points: the test model has no covariance).
+TEST(RunReport, GnuplotDrawsEverySvg) {
+  if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) GTEST_SKIP() << "gnuplot is not installed";
+  const test::TempDir tmp("zwidth_run_report_gp_");
+  const report::RunReport r = WriteWithFigures(FigureAnalysis(), tmp.path() / "run");
+  EXPECT_EQ(r.figures, report::FiguresStatus::kDrawn);
+  const std::filesystem::path fig = tmp.path() / "run" / "figures";
+  for (const char* f : {"bode.svg", "coherence.svg", "kcr.svg", "region.svg", "loop.svg", "rigid.svg"}) {
+    const std::string svg = test::ReadFile(fig / f);
+    EXPECT_NE(svg.find("</svg>"), std::string::npos) << f;
+  }
+  std::istringstream log(test::ReadFile(fig / "gnuplot.log"));
+  for (std::string line; std::getline(log, line);) {
+    EXPECT_NE(line.find("warning: Skipping data file with no valid points"), std::string::npos) << line;
+  }
+  ASSERT_EQ(r.stages.size(), 3u);
+  EXPECT_EQ(r.stages[2].name, "figures (gnuplot)");
+}
+
+// A gnuplot that fails at once (before reading its script: the write to it
+// meets a closed pipe, whose SIGPIPE must not end this process) and one that
+// is not on PATH: the status says which, the data and the script are written.
+TEST(RunReport, AFailingOrMissingGnuplotIsReportedAndTheDataStay) {
+  const test::TempDir tmp("zwidth_run_report_nogp_");
+  const std::filesystem::path bin = tmp.path() / "bin";
+  std::filesystem::create_directories(bin);
+  {
+    std::ofstream fake(bin / "gnuplot");
+    fake << "#!/bin/sh\nexit 1\n";
+  }
+  std::filesystem::permissions(bin / "gnuplot", std::filesystem::perms::owner_all);
+  const char* old_path = std::getenv("PATH");
+  const std::string saved = old_path ? old_path : "";
+  const analysis::RunAnalysis a = FigureAnalysis();
+  ::setenv("PATH", (bin.string() + ":/usr/bin:/bin").c_str(), 1);
+  const report::RunReport failed = WriteWithFigures(a, tmp.path() / "failed");
+  ::setenv("PATH", (tmp.path() / "nothing").c_str(), 1);
+  const report::RunReport missing = WriteWithFigures(a, tmp.path() / "missing");
+  ::setenv("PATH", saved.c_str(), 1);
+  EXPECT_EQ(failed.figures, report::FiguresStatus::kGnuplotFailed);
+  EXPECT_EQ(missing.figures, report::FiguresStatus::kGnuplotMissing);
+  for (const char* run : {"failed", "missing"}) {
+    EXPECT_TRUE(std::filesystem::is_regular_file(tmp.path() / run / "figures" / "figures.gp")) << run;
+    EXPECT_TRUE(std::filesystem::is_regular_file(tmp.path() / run / "figures" / "bode.dat")) << run;
+    EXPECT_FALSE(std::filesystem::exists(tmp.path() / run / "figures" / "bode.svg")) << run;
+  }
 }
 
 }  // namespace
