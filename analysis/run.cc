@@ -36,49 +36,93 @@ BodeData MakeBode(const ident::FrequencyResponse& frf, const stability::SampledP
   return b;
 }
 
-// K_CR curves on the run's B grid, one per ZWidth.
-std::vector<std::vector<stability::CriticalPoint>> Curves(const std::vector<stability::ZWidth>& zs,
-                                                          const std::vector<double>& b_grid) {
-  std::vector<std::vector<stability::CriticalPoint>> c(zs.size());
-  ParallelFor(zs.size(), [&](size_t i) {
-    for (double B : b_grid) c[i].push_back(zs[i].At(B));
-  });
-  return c;
-}
+// The loop figure's two loops of one delay: the raw backward difference (the
+// run's own ZWidth when the run has no filter) and the report's low-pass, with
+// their passivity bounds, and the figure's upper B.
+struct LoopWork {
+  std::optional<stability::ZWidth> raw_own, filtered;
+  const stability::ZWidth* raw = nullptr;
+  std::optional<stability::Passivity> passive_raw, passive_filtered;
+  double top = 0.0;  // the last of the 300 B values [N m s/rad]
+};
 
-// The loop figure: without and with the report's velocity filter (the run's
-// hand in both), on 300 B values to 1.05 x the larger B_max.
-std::vector<LoopFigureDelay> LoopFigure(const RunAnalysis& a) {
+constexpr int kLoopFigureB = 300;  // B values of the loop figure, 0 to top
+constexpr size_t kChunks = 4;      // parts of a curve or a loop quantity, as separate tasks
+
+// [first, last) of part c of n items in kChunks parts.
+std::pair<size_t, size_t> Chunk(size_t n, size_t c) { return {n * c / kChunks, n * (c + 1) / kChunks}; }
+
+// The figure data other than the Bode plot: the K_CR curves of the reference
+// (`reference`, its ZWidth per delay; none without) and of the rigid body on
+// the run's B grid, and the loop figure (without and with the report's
+// velocity filter, the run's hand in both, on 300 B values to 1.05 x the
+// larger B_max). Work goes out as small independent tasks in two rounds (the
+// loop figure's B values need its loops' B_max first), so that the threads
+// stay busy; every value is computed as a plain loop would and written to its
+// own slot.
+void CurvesAndLoops(const RunAnalysis& a, const std::vector<stability::ZWidth>& reference,
+                    const std::vector<stability::ZWidth>& rigid, FigureData* f) {
   const double T = a.period_s;
   const stability::LoopOptions& loop = a.options.loop;
   const PlantStability& st = a.stability;
+  const size_t nd = st.delays.size(), nB = st.b_grid.size();
   stability::LoopOptions lf, lr;
   lf.hand = lr.hand = loop.hand;
   stability::SetLowPassFilter(a.options.report_filter_hz, T, &lf);
-  std::vector<LoopFigureDelay> out(st.delays.size());
-  ParallelFor(st.delays.size(), [&](size_t i) {
-    // Without a filter the run's own loop is the raw one: its ZWidth is reused.
-    std::optional<stability::ZWidth> raw_own;
-    if (loop.HasFilter()) raw_own.emplace(st.sampled, st.delays[i], lr);
-    const stability::ZWidth& zr = raw_own ? *raw_own : st.zwidths[i];
-    const stability::ZWidth zf(st.sampled, st.delays[i], lf);
-    const stability::Passivity pf(a.input.model.plant.b, T, zf.total_delay(), lf);
-    const stability::Passivity pr(a.input.model.plant.b, T, zr.total_delay(), lr);
-    // Likewise its summary.
-    const double bm = std::max(loop.HasFilter() ? zr.Summarize().B_max : st.summaries[i].B_max, zf.Summarize().B_max);
-    const double top = std::isfinite(bm) && bm > 0 ? 1.05 * bm : st.b_grid.back();
-    LoopFigureDelay f;
-    for (int k = 0; k < 300; ++k) {
-      const double B = top * k / 299.0;
-      f.B.push_back(B);
-      f.raw.push_back(zr.StableIntervals(B));
-      f.filtered.push_back(zf.StableIntervals(B));
-      f.K_passive_raw.push_back(pr.KHi(B));
-      f.K_passive_filtered.push_back(pf.KHi(B));
+  std::vector<LoopWork> work(nd);
+  if (!reference.empty()) f->kcr_reference.assign(nd, std::vector<stability::CriticalPoint>(nB));
+  f->kcr_rigid.assign(nd, std::vector<stability::CriticalPoint>(nB));
+  const size_t curve_sets = reference.empty() ? 1 : 2;
+  // Round 1: the loops, their B_max and passivity (one task per delay, the
+  // longest delays first), then the K_CR curves in chunks.
+  ParallelFor(nd + curve_sets * nd * kChunks, [&](size_t t) {
+    if (t < nd) {
+      const size_t i = nd - 1 - t;
+      LoopWork& w = work[i];
+      if (loop.HasFilter()) w.raw_own.emplace(st.sampled, st.delays[i], lr);
+      w.raw = w.raw_own ? &*w.raw_own : &st.zwidths[i];
+      w.filtered.emplace(st.sampled, st.delays[i], lf);
+      w.passive_filtered.emplace(a.input.model.plant.b, T, w.filtered->total_delay(), lf);
+      w.passive_raw.emplace(a.input.model.plant.b, T, w.raw->total_delay(), lr);
+      // Without a filter the run's summary is the raw loop's.
+      const double bm = std::max(loop.HasFilter() ? w.raw->Summarize().B_max : st.summaries[i].B_max,
+                                 w.filtered->Summarize().B_max);
+      w.top = std::isfinite(bm) && bm > 0 ? 1.05 * bm : st.b_grid.back();
+      return;
     }
-    out[i] = std::move(f);
+    t -= nd;
+    const bool rigid_set = t / (nd * kChunks) == curve_sets - 1;
+    const size_t i = t % (nd * kChunks) / kChunks;
+    const auto [k0, k1] = Chunk(nB, t % kChunks);
+    const stability::ZWidth& z = rigid_set ? rigid[i] : reference[i];
+    std::vector<stability::CriticalPoint>& out = rigid_set ? f->kcr_rigid[i] : f->kcr_reference[i];
+    for (size_t k = k0; k < k1; ++k) out[k] = z.At(st.b_grid[k]);
   });
-  return out;
+  // Round 2: per delay the B values, then each of the four quantities in chunks.
+  f->loop.assign(nd, {});
+  for (size_t i = 0; i < nd; ++i) {
+    LoopFigureDelay& d = f->loop[i];
+    for (int k = 0; k < kLoopFigureB; ++k) d.B.push_back(work[i].top * k / (kLoopFigureB - 1.0));
+    d.raw.resize(kLoopFigureB);
+    d.filtered.resize(kLoopFigureB);
+    d.K_passive_raw.resize(kLoopFigureB);
+    d.K_passive_filtered.resize(kLoopFigureB);
+  }
+  ParallelFor(nd * 4 * kChunks, [&](size_t t) {
+    const size_t i = t / (4 * kChunks), what = t / kChunks % 4;
+    const auto [k0, k1] = Chunk(kLoopFigureB, t % kChunks);
+    const LoopWork& w = work[i];
+    LoopFigureDelay& d = f->loop[i];
+    for (size_t k = k0; k < k1; ++k) {
+      const double B = d.B[k];
+      switch (what) {
+        case 0: d.raw[k] = w.raw->StableIntervals(B); break;
+        case 1: d.filtered[k] = w.filtered->StableIntervals(B); break;
+        case 2: d.K_passive_raw[k] = w.passive_raw->KHi(B); break;
+        default: d.K_passive_filtered[k] = w.passive_filtered->KHi(B); break;
+      }
+    }
+  });
 }
 
 // reference: the reference's Z-width per delay (none without a reference).
@@ -89,14 +133,12 @@ FigureData MakeFigures(const RunAnalysis& a, const std::vector<stability::ZWidth
   const bool plain_hand = a.options.loop.hand.IsNone();
   f.bode = plain_hand ? MakeBode(a.input.response.frf, a.stability.sampled, T)
                       : MakeBode(a.input.response.frf, stability::SampledPlant(a.input.model.plant, T), T);
-  if (!reference.empty()) f.kcr_reference = Curves(reference, a.stability.b_grid);
   model::Plant rigid = a.input.model.plant;
   rigid.modes.clear();
   const stability::SampledPlant rigid_sampled(rigid, T);
   std::vector<stability::ZWidth> rigid_zs;
   for (int d : a.options.delays) rigid_zs.emplace_back(rigid_sampled, d);
-  f.kcr_rigid = Curves(rigid_zs, a.stability.b_grid);
-  f.loop = LoopFigure(a);
+  CurvesAndLoops(a, reference, rigid_zs, &f);
   return f;
 }
 

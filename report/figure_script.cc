@@ -26,17 +26,16 @@ std::string FigureScript(const FigureScriptOptions& o) {
     gp << "set terminal " << term << "\n";
     gp << "set output 'bode." << ext << "'\nset multiplot layout 2,1 title 'Bode diagram: measured (" << ident::ToString(o.method) << ") and fitted model (exact ZOH) - Fig. 3'\n"
        << "set logscale x\nset logscale y\nset format y '10^{%L}'\nset ylabel 'magnitude [" << (o.linear ? "m/N" : "rad/(N m)") << "]'\nunset xlabel\n"
-       << "uc = " << (o.joint ? 9 : 7) << "\n"
-       << "plot 'bode.dat' u 1:(column(uc) > 0 ? $2 : NaN) w l lc rgb '#1f77b4' t 'measured, fitted band', "
-       << "'' u 1:(column(uc) > 0 ? NaN : $2) w p pt 7 ps 0.25 lc rgb '#bbbbbb' t 'measured, not used', "
-       << "'' u 1:4 w l lw 2 lc rgb 'black' t 'fitted model'\n"
+       << "plot 'bode.dat' index 0 u 1:2 w l lc rgb '#1f77b4' t 'measured, fitted band', "
+       << "'' index 1 u 1:2 w p pt 7 ps 0.25 lc rgb '#bbbbbb' t 'measured, not used', "
+       << "'' index 2 u 1:2 w l lw 2 lc rgb 'black' t 'fitted model'\n"
        << "unset logscale y\nset format y '%g'\nset ylabel 'phase [deg]'\nset xlabel 'frequency [Hz]'\n"
-       << "plot 'bode.dat' u 1:(column(uc) > 0 ? $3 : NaN) w l lc rgb '#1f77b4' t 'measured, fitted band', "
-       << "'' u 1:(column(uc) > 0 ? NaN : $3) w p pt 7 ps 0.25 lc rgb '#bbbbbb' t 'measured, not used', "
-       << "'' u 1:5 w l lw 2 lc rgb 'black' t 'fitted model'\nunset multiplot\n";
+       << "plot 'bode.dat' index 0 u 1:3 w l lc rgb '#1f77b4' t 'measured, fitted band', "
+       << "'' index 1 u 1:3 w p pt 7 ps 0.25 lc rgb '#bbbbbb' t 'measured, not used', "
+       << "'' index 2 u 1:3 w l lw 2 lc rgb 'black' t 'fitted model'\nunset multiplot\n";
     gp << "set output 'coherence." << ext << "'\nset title 'Magnitude-squared coherence'\nset xlabel 'frequency [Hz]'\nset ylabel 'coherence [-]'\nset yrange [0:1.05]\n"
-       << (o.joint ? "plot 'bode.dat' u 1:7 w l lc rgb '#1f77b4' t 'r -> u', '' u 1:8 w l lc rgb '#d62728' t 'r -> y'\n"
-                 : "plot 'bode.dat' u 1:6 w l lc rgb '#1f77b4' t 'coherence'\n")
+       << (o.joint ? "plot 'bode.dat' index 3 u 1:2 w l lc rgb '#1f77b4' t 'r -> u', '' index 3 u 1:3 w l lc rgb '#d62728' t 'r -> y'\n"
+                 : "plot 'bode.dat' index 3 u 1:2 w l lc rgb '#1f77b4' t 'coherence'\n")
        << "set yrange [*:*]\nunset logscale x\nunset title\n";
     gp << "set output 'kcr." << ext << "'\nset multiplot layout 2,1 title 'Critical stiffness and ultimate frequency vs damping - Fig. 6 / Fig. 10'\n"
        << "set xlabel 'B [" << (o.linear ? "N s/m" : "N m s/rad") << "]'\nset ylabel 'K_{CR} [" << (o.linear ? "N/m" : "N m/rad") << "]'\n"
@@ -51,8 +50,9 @@ std::string FigureScript(const FigureScriptOptions& o) {
        << "set xlabel 'B [N m s/rad]'\nset ylabel 'K [N m/rad]'\nset yrange [0:" << o.k_clip << "]\n"
        << "do for [i=1:words(delays)] {\n"
        << "  set title 'loop delay '.word(delays,i).' samples'\n"
-       << "  plot 'region_model.dat' index i-1 u 1:2:(0):($3-$2) w vectors nohead lc rgb '#9ecae1' t 'stable', "
-       << "'kcr_model.dat' index i-1 u 1:($2-2*$4):($2+2*$4) w filledcurves fs transparent solid 0.35 "
+       << "  plot 'region_model.dat' index i-1 u 1:2:3 w filledcurves fs solid 1.0 noborder lc rgb '#9ecae1' notitle, "
+       << "keyentry w l lw 2 lc rgb '#9ecae1' t 'stable', "
+       << "'kcr_model.dat' index i-1 u 1:5:6 w filledcurves fs transparent solid 0.35 "
        << "lc rgb '#d62728' t 'K_{CR} +- 2 sigma', '' index i-1 u 1:2 w l lw 2 lc rgb '#08306b' t 'K_{CR}(B)'\n"
        << "}\nunset multiplot\nset yrange [*:*]\nunset title\n";
     gp << "set output 'loop." << ext << "'\nset multiplot layout " << o.delays.size()
@@ -61,8 +61,8 @@ std::string FigureScript(const FigureScriptOptions& o) {
        << "set xlabel 'B [N m s/rad]'\nset ylabel 'K [N m/rad]'\nset yrange [0:" << o.k_clip_loop << "]\n"
        << "do for [i=1:words(delays)] {\n"
        << "  set title 'loop delay '.word(delays,i).' samples'\n"
-       << "  plot 'loop_region.dat' index i-1 u 1:($2==1?$3:1/0):(0):($4-$3) w vectors nohead lc rgb '#fdae6b' t 'stable, filtered', "
-       << "'' index i-1 u 1:($2==0?$3:1/0):(0):($4-$3) w vectors nohead lc rgb '#6baed6' t 'stable, raw difference', "
+       << "  plot 'loop_region.dat' index 2*i-2 u 1:2:3:4 w vectors nohead lc rgb '#fdae6b' t 'stable, filtered', "
+       << "'' index 2*i-1 u 1:2:3:4 w vectors nohead lc rgb '#6baed6' t 'stable, raw difference', "
        << "'loop_passive.dat' index i-1 u 1:2 w l lw 2 lc rgb 'black' t 'K_P, raw', '' index i-1 u 1:3 w l lw 2 dt 2 lc rgb '#7f2704' t 'K_P, filtered'\n"
        << "}\nunset multiplot\nset yrange [*:*]\nunset title\n";
     gp << "set output 'rigid." << ext << "'\nset title 'With the vibration modes and without (rigid body only) - Fig. 7'\n"

@@ -32,7 +32,10 @@ enum class FiguresStatus {
 
 struct RunReport {
   FiguresStatus figures = FiguresStatus::kNotRequested;
-  std::vector<analysis::RunStage> stages;  // "write outputs", "figure files", "figures (gnuplot)" [ms]
+  // "write outputs", "figure files", "figures (gnuplot)" [ms]; gnuplot is
+  // started before the outputs are written (it loads meanwhile), so its
+  // stage is the time from its script to its exit.
+  std::vector<analysis::RunStage> stages;
 };
 
 // Throws io's errors when a file cannot be written.
