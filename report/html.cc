@@ -61,20 +61,43 @@ std::string ZWidthTable(const analysis::PlantStability& st) {
   return z.str();
 }
 
+// The loop a table was computed on, in words.
+std::string LoopDescription(const stability::LoopOptions& l) {
+  if (!l.HasFilter() && l.hand.IsNone()) return "the paper's loop: raw backward difference, nobody holding the device";
+  std::ostringstream d;
+  d.precision(6);
+  if (l.HasFilter()) {
+    d << "velocity filter F(z) with b =";
+    for (double x : l.filter_b) d << " " << x;
+    d << ", a =";
+    for (double x : l.filter_a) d << " " << x;
+  } else {
+    d << "raw backward difference";
+  }
+  if (!l.hand.IsNone()) d << "; hand M = " << l.hand.M << ", B = " << l.hand.B << ", K = " << l.hand.K;
+  else d << "; nobody holding the device";
+  return d.str();
+}
+
 // The comparison, the margin note and the Z-width.
 void StabilitySection(const analysis::RunAnalysis& a, std::ostringstream& h) {
   const analysis::PlantStability& st = a.stability;
+  const bool own_loop = a.options.loop.HasFilter() || !a.options.loop.hand.IsNone();
   if (a.comparison) {
     h << "<h2>Comparison with the reference ("
-      << Html(a.input.reference_is_table1 ? "Table I, built in" : a.input.reference_name) << ")</h2>\n<pre>"
-      << Html(a.comparison->text) << "</pre>\n";
+      << Html(a.input.reference_is_table1 ? "Table I, built in" : a.input.reference_name) << ")</h2>\n"
+      << (own_loop ? "<p>Both models on the paper's loop (raw backward difference, nobody holding the device), as the "
+                     "reference was measured; the Z-width below is on this run's loop.</p>\n"
+                   : "")
+      << "<pre>" << Html(a.comparison->text) << "</pre>\n";
   } else {
     h << "<p>No reference comparison (pass <code>--reference table1</code> or a model JSON to compare).</p>\n";
   }
   h << "<p>The paper's gain-margin reading of eq. (4) differs from the exact K_CR in " << st.margin_disagreements
     << " of " << st.rows.size() << " B values: mostly past B_max_from_zero, where margin() stays positive although K -> 0+ is unstable "
     << "(see boundary.csv, column margin_agrees).</p>\n";
-  h << "<h2>Z-width (eq. 2)</h2>\n<pre>" << Html(ZWidthTable(st)) << "</pre>\n<p>B_max_0: where the stable interval "
+  h << "<h2>Z-width (eq. 2)</h2>\n<p>On " << Html(LoopDescription(a.options.loop)) << ".</p>\n<pre>"
+    << Html(ZWidthTable(st)) << "</pre>\n<p>B_max_0: where the stable interval "
     << "from K = 0+ closes (the paper's B_max); B_max: the largest B at which some K &gt; 0 is stable. "
     << "+- one std by the delta method from the fit's parameter covariance"
     << (st.has_std ? "" : " (not available: the fit has no covariance)") << ". boundary.csv lists every stable "
@@ -90,7 +113,9 @@ void FiguresSection(const analysis::RunAnalysis& a, bool have_figures, std::ostr
           << a.options.report_filter_hz << " Hz first-order velocity low-pass. Lines: the passivity boundary K_P(B) "
           << "(Colgate and Schenkel, with the model's damping b = " << a.input.model.plant.b << "): below it the wall stays "
           << "passive, so it stays stable against any passive hand, which the stable region alone does not promise "
-          << "(it assumes nobody holds the device). Passivity is bounded by the physical damping b (for the rigid "
+          << (a.options.loop.hand.IsNone() ? "(it assumes nobody holds the device)"
+                                           : "(it assumes the run's hand, in both colours)")
+          << ". Passivity is bounded by the physical damping b (for the rigid "
           << "body without delay or filter: b > K T/2 + |B|), so on a lightly damped device its region hugs the "
           << "origin: rendering beyond it relies on the stable region and on the hand being no worse than assumed.</p>\n";
       }

@@ -42,6 +42,30 @@ TEST(RunReport, WritesEveryFileIntoTheFolderAndNothingWithoutFigures) {
   EXPECT_FALSE(std::filesystem::exists(dir / "figures"));
   const std::string text = test::ReadFile(dir / "report.html");
   EXPECT_NE(text.find("No figures"), std::string::npos);
+  EXPECT_NE(text.find("On the paper's loop"), std::string::npos);  // the loop of the Z-width table, named
+}
+
+// With a hand and a velocity filter the report names the loop of its Z-width
+// table (the tryout read two tables of one device and delay, on two loops,
+// with nothing saying which was which).
+TEST(RunReport, NamesTheLoopOfTheZWidthTable) {
+  const test::TempDir tmp("zwidth_run_report_");
+  const std::filesystem::path dir = tmp.path() / "run";
+  analysis::RunOptions o;
+  o.figures = false;
+  o.loop.hand = {1e-3, 2e-3, 0.5};
+  stability::SetLowPassFilter(100.0, 1e-3, &o.loop);
+  analysis::RunInput in = TestInput(0.0);
+  in.model.fit = {{"quality_reasons", nlohmann::json::array()}};
+  const analysis::RunAnalysis a = analysis::Analyse(std::move(in), o);
+  {
+    io::OutputFolder folder(dir.string(), false);
+    report::WriteRunReport(a, folder);
+    folder.Commit();
+  }
+  const std::string text = test::ReadFile(dir / "report.html");
+  EXPECT_NE(text.find("On velocity filter F(z) with b = "), std::string::npos);
+  EXPECT_NE(text.find("hand M = 0.001, B = 0.002, K = 0.5"), std::string::npos);
 }
 
 // The blocks of a gnuplot data file (two blank lines apart), each a list of
