@@ -11,6 +11,7 @@
 #include <vector>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <sstream>
 
 #include "io/reference_models.h"
@@ -158,10 +159,13 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
   for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", WithFlags(w).c_str());
   if (r.status != fit::FitStatus::kConverged) throw ComputationError(r.message);
   io::ModelFile mf = io::FittedModelFile(r, frf, o, source);
-  // The files the CLI writes (model JSON, run's summary.json) give its flags.
-  for (auto& q : mf.fit["quality_reasons"]) {
-    for (const char* k : {"message", "advice"}) q[k] = WithFlags(q[k].get<std::string>());
-  }
+  // The files the CLI writes (model JSON, run's summary.json) give its flags:
+  // every text of the fit's record (reasons, warnings, order and delay choices).
+  std::function<void(nlohmann::json&)> flags = [&](nlohmann::json& j) {
+    if (j.is_string()) j = WithFlags(j.get<std::string>());
+    else if (j.is_array() || j.is_object()) for (auto& x : j) flags(x);
+  };
+  flags(mf.fit);
   return mf;
 }
 

@@ -181,5 +181,9 @@ grep -q "|H| rises with frequency" "$T/out" && grep -q -- "--input-column" "$T/o
 "$ZW" fit "$T/good.csv" --modes 2 -o "$T/ok.json" >"$T/out" 2>&1
 grep -q "sign_reversed\|rises with frequency" "$T/out" && bad "advice on a correct log" || ok "no sign/swap advice on the correct log"
 
+# ---- the model file's fit record names the CLI's flags, not the library's fields
+grep -q "Options::" "$T/neg.json" "$T/swap.json" "$T/ok.json" && bad "a model file names library fields: $(grep -o "[A-Za-z]*Options::[a-z_]*" "$T/neg.json" "$T/swap.json" | head -3)" \
+  || ok "model files name the CLI's flags only"
+
 echo "$pass passed, $fail failed"
 [ $fail -eq 0 ]
