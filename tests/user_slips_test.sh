@@ -182,8 +182,8 @@ grep -q "|H| rises with frequency" "$T/out" && grep -q -- "--input-column" "$T/o
 grep -q "sign_reversed\|rises with frequency" "$T/out" && bad "advice on a correct log" || ok "no sign/swap advice on the correct log"
 
 # ---- the model file's fit record names the CLI's flags, not the library's fields
-# (a 256-sample window gives a leakage warning that names the window length)
-"$ZW" fit "$T/good.csv" --modes 2 --window-length 256 -o "$T/leak.json" >"$T/out" 2>&1
+# (a 128-sample window gives a leakage warning that names the window length)
+"$ZW" fit "$T/good.csv" --modes 2 --window-length 128 -o "$T/leak.json" >"$T/out" 2>&1
 json "$T/leak.json" "' '.join(d['fit']['warnings'])" | grep -q -- "--window-length" || bad "no leakage warning naming --window-length in leak.json"
 grep -q "Options::" "$T/neg.json" "$T/swap.json" "$T/ok.json" "$T/leak.json" && bad "a model file names library fields: $(grep -o "[A-Za-z]*Options::[a-z_]*" "$T/neg.json" "$T/swap.json" | head -3)" \
   || ok "model files name the CLI's flags only"
