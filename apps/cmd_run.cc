@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <exception>
 #include <optional>
+#include <system_error>
 #include <thread>
 #include <filesystem>
 #include <memory>
@@ -57,13 +58,17 @@ analysis::RunInput EstimateAndFit(const RunFlags& f, const analysis::RunOptions&
   {
     std::jthread ref_thread;
     if (in.reference) {
-      ref_thread = std::jthread([&] {
-        try {
-          ref = analysis::ReferenceStabilityOf(*in.reference, 1.0 / in.response.frf.sample_rate_hz, o.delays);
-        } catch (...) {
-          ref_error = std::current_exception();
-        }
-      });
+      try {
+        ref_thread = std::jthread([&] {
+          try {
+            ref = analysis::ReferenceStabilityOf(*in.reference, 1.0 / in.response.frf.sample_rate_hz, o.delays);
+          } catch (...) {
+            ref_error = std::current_exception();
+          }
+        });
+      } catch (const std::system_error&) {
+        // No thread to be had: Analyse computes the reference after the fit.
+      }
     }
     in.model = FitToModelFile(in.response.frf, f.fit.o, in.source, &in.fit);
   }  // joined

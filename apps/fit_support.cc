@@ -142,7 +142,8 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
   // Too few segments at the shortest window: the library's advice (a shorter
   // window) cannot apply; the log is too short.
   constexpr int kShortestWindow = 16;  // WelchOptions::window_length >= 16
-  if (frf.num_averages < o.min_averages && !o.allow_few_averages && frf.window_length <= kShortestWindow) {
+  if (frf.num_averages < o.min_averages && !o.allow_few_averages && frf.window_length > 0 &&
+      frf.window_length <= kShortestWindow) {  // 0: a saved response, whose window is not known
     throw InputError("the log is too short: " + std::to_string(frf.num_averages) + " Welch segment(s) of " +
                      std::to_string(frf.window_length) + " samples (the shortest window), fewer than the " +
                      std::to_string(o.min_averages) + " a per-bin std needs; record a longer log (at least " +

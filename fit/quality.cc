@@ -48,7 +48,8 @@ void LeakageChecks(const ident::FrequencyResponse& sub, FitResult* res) {
       const double sd = have_std ? (zero ? res->std_errors.modes[i].d : res->std_errors.modes[i].c) : NAN;
       const double bw = c / (2.0 * std::numbers::pi), r = df / bw, bias = 4.0 / 3.0 * r * r;
       const double f = w / (2.0 * std::numbers::pi);
-      const int longer = 1 << static_cast<int>(std::ceil(std::log2(std::max(2.0, 4.0 * r))));
+      // (r is +inf for c = 0; the exponent is kept in int range)
+      const int longer = 1 << static_cast<int>(std::ceil(std::log2(std::clamp(4.0 * r, 2.0, 1e9))));
       const std::string the = std::string("the ") + (zero ? "antiresonance" : "resonance");
       if (r > 0.5) {
         res->reasons.push_back(

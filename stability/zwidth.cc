@@ -637,7 +637,8 @@ void ZWidth::ScanKcrMax(const CriticalPoint& c0, const std::vector<double>& cand
     if (cp.K_cr > s.K_cr_max) { s.K_cr_max = cp.K_cr; s.B_at_K_cr_max = b; }
     if (!s.has_transition && std::abs(std::log(cp.f_cr_hz / prev_f)) > std::log(1.5)) {
       const double bt = FindTransition(prev_b, b, prev_f, cp.f_cr_hz);
-      const double eps = 1e-9 * std::max(bt, 1e-12);
+      // Beyond FindTransition's final bracket (1e-14 absolute below B = 1).
+      const double eps = std::max(1e-9 * bt, 2e-14 * std::max(1.0, bt));
       const CriticalPoint before = ValueAt(bt - eps), after = ValueAt(bt + eps);
       for (const CriticalPoint& p : {before, after}) {
         if (p.K_cr > s.K_cr_max) { s.K_cr_max = p.K_cr; s.B_at_K_cr_max = p.B; }

@@ -263,6 +263,26 @@ TEST(Summary, FollowsTheCurveOnHeavyDevicesLongDelaysAndFastLoops) {
   EXPECT_GT(corners, 0);  // K_CR^max where the interval from 0+ closes was met
 }
 
+// Scaling m and b by s scales G by 1/s and the whole (B, K) region by s: the
+// summary must scale with it, down to a B_t of ~1e-7 (the transition's sides
+// were once read closer than FindTransition's absolute bracket there).
+TEST(Summary, ScalesWithTheDevice) {
+  const model::Plant p = model::PhantomTable1();
+  const DelaySummary s0 = ZWidth(p, 1e-3, 2).Summarize();
+  ASSERT_TRUE(s0.has_transition);
+  for (double sc : {1e3, 1e-3, 1e-5, 1e-6}) {
+    model::Plant q = p;
+    q.m *= sc;
+    q.b *= sc;
+    const DelaySummary s = ZWidth(q, 1e-3, 2).Summarize();
+    EXPECT_TRUE(s.has_transition) << sc;
+    EXPECT_NEAR(s.B_t / (sc * s0.B_t), 1.0, 1e-6) << sc;
+    EXPECT_NEAR(s.K_cr_max / (sc * s0.K_cr_max), 1.0, 1e-6) << sc;
+    EXPECT_NEAR(s.B_max_from_zero / (sc * s0.B_max_from_zero), 1.0, 1e-6) << sc;
+    EXPECT_NEAR(s.f_after_hz / s0.f_after_hz, 1.0, 1e-6) << sc;
+  }
+}
+
 TEST(StableIntervals, TheIssuesReopenedBands) {
   // Example 1: past B_max_from_zero ~ 0.4998 the band (1.82, 23.5) at
   // B = 0.5005 and (12.3, 23.0) at 0.505 (the issue's rounded values).
