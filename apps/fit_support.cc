@@ -111,15 +111,17 @@ std::optional<fit::QualityReason> SignOrSwap(const ident::FrequencyResponse& frf
   for (size_t i = 0; i < low; ++i) phase.push_back(std::arg(frf.H[used[i]]) * 180.0 / std::numbers::pi);
   std::nth_element(phase.begin(), phase.begin() + phase.size() / 2, phase.end());
   const double median_phase = phase[phase.size() / 2];
-  char band[160];
-  std::snprintf(band, sizeof band, "%.4g-%.4g Hz", frf.f_hz[used.front()], frf.f_hz[used.back()]);
-  char low_band[160];
-  std::snprintf(low_band, sizeof low_band, "%.4g-%.4g Hz", frf.f_hz[used.front()], frf.f_hz[used[low - 1]]);
+  auto band_to = [&](size_t last) {  // "f_first-f_last Hz" of the used bins 0..last
+    char b[80];
+    std::snprintf(b, sizeof b, "%.4g-%.4g Hz", frf.f_hz[used.front()], frf.f_hz[used[last]]);
+    return std::string(b);
+  };
+  const std::string band = band_to(used.size() - 1), low_band = band_to(low - 1);
   char msg[600];
   if (slope > 0.5) {
     std::snprintf(msg, sizeof msg,
                   "|H| rises with frequency (log-log slope %+.2f over %s), while eq. (1) falls (-1 to -2 decades per "
-                  "decade): the response looks inverted (1/G)", slope, band);
+                  "decade): the response looks inverted (1/G)", slope, band.c_str());
     return fit::QualityReason{"columns_swapped", msg,
                               "are the input and output columns swapped? check LogSelect::input_column (the torque "
                               "or force) and LogSelect::output_column (the position)"};
@@ -127,7 +129,7 @@ std::optional<fit::QualityReason> SignOrSwap(const ident::FrequencyResponse& frf
   if (slope < -0.5 && std::abs(median_phase) < 60.0) {
     std::snprintf(msg, sizeof msg,
                   "the response's phase at low frequency is %.0f deg (median over %s), while eq. (1)'s rigid body "
-                  "needs -90 to -180 deg there", median_phase, low_band);
+                  "needs -90 to -180 deg there", median_phase, low_band.c_str());
     return fit::QualityReason{"sign_reversed", msg,
                               "is the output's (or the input's) sign reversed, e.g. an encoder counting the other "
                               "way? fit with LogSelect::output_scale -1 (or LogSelect::input_scale -1)"};
@@ -174,11 +176,8 @@ std::string ParameterTable(const io::ModelFile& mf, bool linear) { return analys
 
 nlohmann::json CompareModels(const io::ModelFile& model, const io::ModelFile& ref,
                              const std::vector<int>& delays, double T, std::string* text, bool linear) {
-  const stability::SampledPlant sr(ref.plant, T);
-  std::vector<stability::DelaySummary> rs;
-  for (int d : delays) rs.push_back(stability::ZWidth(sr, d).Summarize());
-  analysis::ModelComparison c =
-      analysis::CompareModels(model, ref, delays, analysis::SummarizeDelays(model, T, delays), rs, linear);
+  analysis::ModelComparison c = analysis::CompareModels(model, ref, delays, analysis::SummarizeDelays(model, T, delays),
+                                                        analysis::ReferenceStabilityOf(ref, T, delays).summaries, linear);
   if (text) *text = std::move(c.text);
   return std::move(c.json);
 }

@@ -11,6 +11,8 @@
 #include <utility>
 #include <vector>
 
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include "analysis/run.h"
@@ -207,11 +209,21 @@ report::RunReport WriteWithFigures(const analysis::RunAnalysis& a, const std::fi
   return r;
 }
 
+// An executable `name` in a directory of PATH (as execvp finds it; no shell).
+bool OnPath(const std::string& name) {
+  const char* path = std::getenv("PATH");
+  std::istringstream dirs(path ? path : "");
+  for (std::string dir; std::getline(dirs, dir, ':');) {
+    if (!dir.empty() && ::access((std::filesystem::path(dir) / name).c_str(), X_OK) == 0) return true;
+  }
+  return false;
+}
+
 // gnuplot, started before the files are written, draws all six SVGs from the
 // script it is handed; gnuplot.log holds no error (only the warning that the
 // K_CR +- 2 sigma band has no points: the test model has no covariance).
 TEST(RunReport, GnuplotDrawsEverySvg) {
-  if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) GTEST_SKIP() << "gnuplot is not installed";
+  if (!OnPath("gnuplot")) GTEST_SKIP() << "gnuplot is not installed";
   const test::TempDir tmp("zwidth_run_report_gp_");
   const report::RunReport r = WriteWithFigures(FigureAnalysis(), tmp.path() / "run");
   EXPECT_EQ(r.figures, report::FiguresStatus::kDrawn);
