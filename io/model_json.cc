@@ -106,6 +106,33 @@ model::Plant ParsePlant(const json& j, const std::string& source, const std::str
 
 json NumberOrNull(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
+const char* const kFrictionKeys[] = {"coulomb_pos", "coulomb_neg", "offset", "breakaway_pos", "breakaway_neg"};
+
+double* FrictionField(model::Friction& f, int i) {
+  double* fields[] = {&f.coulomb_pos, &f.coulomb_neg, &f.offset, &f.breakaway_pos, &f.breakaway_neg};
+  return fields[i];
+}
+
+// "friction" or "std.friction": every key optional (0 when absent; null, in
+// the std only, = unknown).
+model::Friction ParseFriction(const json& j, const std::string& source, const std::string& where, bool is_std) {
+  if (!j.is_object()) Fail(source, "'" + where + "' must be an object");
+  CheckKeys(j, {"coulomb_pos", "coulomb_neg", "offset", "breakaway_pos", "breakaway_neg"}, source, where + ".");
+  model::Friction f;
+  for (int i = 0; i < 5; ++i) {
+    if (j.contains(kFrictionKeys[i])) *FrictionField(f, i) = Number(j, kFrictionKeys[i], source, where + ".", is_std);
+  }
+  std::string why;
+  if (!is_std && !f.IsValid(&why)) Fail(source, "invalid '" + where + "': " + why);
+  return f;
+}
+
+json FrictionToJson(model::Friction f) {
+  json j = json::object();
+  for (int i = 0; i < 5; ++i) j[kFrictionKeys[i]] = NumberOrNull(*FrictionField(f, i));
+  return j;
+}
+
 json PlantToJson(const model::Plant& p) {
   json j;
   j["m"] = NumberOrNull(p.m);
@@ -243,7 +270,8 @@ ModelFile ParseModelJson(const std::string& text, const std::string& source) {
   }
   CheckDuplicateKeys(text, source);  // valid JSON: nlohmann kept the last of a repeated key
   if (!j.is_object()) Fail(source, "top level must be a JSON object");
-  CheckKeys(j, {"m", "b", "modes", "delay_samples", "sample_period_s", "name", "std", "fit", "covariance"},
+  CheckKeys(j, {"m", "b", "modes", "delay_samples", "sample_period_s", "name", "std", "fit", "covariance",
+                "friction"},
             source, "");
   ModelFile mf;
   mf.plant = ParsePlant(j, source, "", false);
@@ -268,12 +296,17 @@ ModelFile ParseModelJson(const std::string& text, const std::string& source) {
   }
   if (auto it = j.find("std"); it != j.end()) {
     mf.std_errors = ParsePlant(*it, source, "std.", true);
-    CheckKeys(*it, {"m", "b", "modes"}, source, "std.");
+    CheckKeys(*it, {"m", "b", "modes", "friction"}, source, "std.");
+    if (auto f = it->find("friction"); f != it->end()) {
+      if (!j.contains("friction")) Fail(source, "'std.friction' is given but 'friction' is not");
+      mf.friction_std = ParseFriction(*f, source, "std.friction", true);
+    }
     if (mf.std_errors->modes.size() != mf.plant.modes.size()) {
       Fail(source, "'std.modes' has " + std::to_string(mf.std_errors->modes.size()) +
                        " entries but 'modes' has " + std::to_string(mf.plant.modes.size()));
     }
   }
+  if (auto it = j.find("friction"); it != j.end()) mf.friction = ParseFriction(*it, source, "friction", false);
   if (auto it = j.find("fit"); it != j.end()) mf.fit = *it;
   std::string why;
   if (!mf.plant.IsValid(&why)) Fail(source, "invalid parameter: " + why);
@@ -327,6 +360,10 @@ json ModelToJson(const ModelFile& mf) {
   j["delay_samples"] = mf.plant.delay_samples;
   if (mf.sample_period_s) j["sample_period_s"] = *mf.sample_period_s;
   if (mf.std_errors) j["std"] = PlantToJson(*mf.std_errors);
+  if (mf.friction) {
+    j["friction"] = FrictionToJson(*mf.friction);
+    if (mf.friction_std && mf.std_errors) j["std"]["friction"] = FrictionToJson(*mf.friction_std);
+  }
   if (!mf.log_covariance.empty()) {
     const size_t p = static_cast<size_t>(stability::NumLogParameters(mf.plant));
     json rows = json::array();
@@ -349,6 +386,7 @@ void WriteModelJson(const std::string& path, const ModelFile& mf) {
   for (const model::Mode& md : p.modes) {
     finite = finite && std::isfinite(md.omega) && std::isfinite(md.c) && std::isfinite(md.v) && std::isfinite(md.d);
   }
+  if (mf.friction) finite = finite && mf.friction->IsValid(nullptr);
   if (!finite) throw ComputationError("the model has a non-finite parameter; '" + path + "' was not written");
   WriteTextAtomically(path, ModelToJson(mf).dump(2) + "\n");
 }

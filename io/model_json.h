@@ -8,6 +8,10 @@
 //                   "matrix": [[...], ...]},          // fitted models only: the full
 //      covariance of the natural logs of the SI parameters (relative units),
 //      in the order of "parameters" (stability/uncertainty.h)
+//    "friction": {"coulomb_pos": 0.008, "coulomb_neg": 0.008, "offset": 0,
+//                 "breakaway_pos": 0, "breakaway_neg": 0},   // optional (model/friction.h);
+//      its std in "std.friction" (same keys, null = unknown), and the friction's
+//      parameters are not in "covariance" (which stays the linear part's)
 //    "fit": {...}}                                    // fit metrics, free form
 // Any other key is an error, so that a typo cannot pass silently.
 #pragma once
@@ -18,6 +22,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "model/friction.h"
 #include "model/plant.h"
 
 namespace zwidth::io {
@@ -27,6 +32,10 @@ struct ModelFile {
   // Standard errors, same shape as plant (fields may be +inf = unknown).
   std::optional<model::Plant> std_errors;
   std::optional<double> sample_period_s;
+  // Coulomb friction and offset identified with (or given beside) the linear
+  // plant; absent = a linear-only model. The plant is then the linear part.
+  std::optional<model::Friction> friction;
+  std::optional<model::Friction> friction_std;  // fields +inf = unknown
   // (2 + 4 N)^2 row-major covariance of the log parameters; empty = none.
   std::vector<double> log_covariance;
   nlohmann::json fit;  // null when absent

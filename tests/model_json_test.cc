@@ -45,6 +45,33 @@ TEST(ModelJson, DelaysAndParametersOutsideTheirRangesAreRefused) {
   EXPECT_THROW(ParseModelJson(R"({"m": 1e-3, "b": 5e-3, "modes": [)" + modes + "]}", "model.json"), InputError);
 }
 
+TEST(ModelJson, FrictionRoundTripsAndIsChecked) {
+  const std::string head = R"({"m": 1e-3, "b": 5e-3, "modes": [], )";
+  const ModelFile mf = ParseModelJson(
+      head + R"("friction": {"coulomb_pos": 0.008, "coulomb_neg": 0.006, "offset": -0.001, "breakaway_pos": 0.01}})",
+      "f.json");
+  ASSERT_TRUE(mf.friction.has_value());
+  EXPECT_EQ(mf.friction->coulomb_pos, 0.008);
+  EXPECT_EQ(mf.friction->coulomb_neg, 0.006);
+  EXPECT_EQ(mf.friction->offset, -0.001);
+  EXPECT_EQ(mf.friction->breakaway_pos, 0.01);
+  EXPECT_EQ(mf.friction->breakaway_neg, 0.0);
+  EXPECT_DOUBLE_EQ(mf.friction->MeanCoulomb(), 0.007);
+  const ModelFile back = ParseModelJson(ModelToJson(mf).dump(), "back.json");
+  ASSERT_TRUE(back.friction.has_value());
+  EXPECT_EQ(back.friction->offset, -0.001);
+  EXPECT_EQ(back.friction->StaticNeg(), 0.006);  // 0 = the Coulomb level
+  EXPECT_FALSE(ParseModelJson(head + R"("name": "x"})", "n.json").friction.has_value());
+  // A negative level, a breakaway below its Coulomb level, an unknown key, a std without a value.
+  EXPECT_THROW(ParseModelJson(head + R"("friction": {"coulomb_pos": -1}})", "f.json"), InputError);
+  EXPECT_THROW(ParseModelJson(head + R"("friction": {"coulomb_pos": 0.01, "breakaway_pos": 0.005}})", "f.json"),
+               InputError);
+  EXPECT_THROW(ParseModelJson(head + R"("friction": {"coulomb": 0.01}})", "f.json"), InputError);
+  EXPECT_THROW(ParseModelJson(head + R"("std": {"m": 1e-5, "b": 1e-5, "modes": [], "friction": {"offset": 1}}})",
+                              "f.json"),
+               InputError);
+}
+
 TEST(ModelJson, AModelFileMustBeARegularFile) {
   EXPECT_THROW(ReadModelJson("/dev/zero"), InputError);
   TempDir dir("zwidth_model_json_test_");
