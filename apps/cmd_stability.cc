@@ -135,6 +135,15 @@ void PrintBoundarySummary(const BoundaryTable& t, const io::ModelFile& mf, const
     for (const auto& band : s.reopened_bands) {
       std::printf("  reopened band: B in (%.6g, %.6g), largest stable K %.6g\n", band.B_lo, band.B_hi, band.K_max);
     }
+    for (const auto& j : s.frequency_jumps) {
+      std::printf("  f_CR jumps at B = %.6g: K_CR %.6g -> %.6g, f_CR %.5g -> %.5g Hz%s\n", j.B, j.K_before, j.K_after,
+                  j.f_before_hz, j.f_after_hz, j.B == s.B_t ? " (B_t)" : "");
+    }
+    if (!s.polynomial_test) {
+      std::printf("  stability from the closed loop's eigenvalues: the characteristic polynomial cannot place its "
+                  "roots here (rounding moves D(z)'s poles by %.3g of their distance to the unit circle)\n",
+                  s.pole_shift);
+    }
   }
   std::printf("B_max_0: where the interval from K = 0+ closes; B_max: the largest B with some stable K > 0\n");
   if (loops.size() > 1) {

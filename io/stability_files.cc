@@ -54,6 +54,11 @@ nlohmann::json SummaryToJson(const stability::DelaySummary& s, const stability::
   for (const auto& b : s.reopened_bands) {
     bands.push_back({{"B_lo", b.B_lo}, {"B_hi", b.B_hi}, {"K_max", NumberOrNull(b.K_max)}});
   }
+  nlohmann::json jumps = nlohmann::json::array();
+  for (const auto& f : s.frequency_jumps) {
+    jumps.push_back({{"B", f.B}, {"K_before", NumberOrNull(f.K_before)}, {"K_after", NumberOrNull(f.K_after)},
+                     {"f_before_hz", NumberOrNull(f.f_before_hz)}, {"f_after_hz", NumberOrNull(f.f_after_hz)}});
+  }
   nlohmann::json j = {{"delay_samples", s.delay_samples},
           {"K_cr_at_zero_B", NumberOrNull(s.K_cr_at_zero_B)},
           {"f_at_zero_B_hz", NumberOrNull(s.f_at_zero_B_hz)},
@@ -64,7 +69,11 @@ nlohmann::json SummaryToJson(const stability::DelaySummary& s, const stability::
           {"f_after_hz", NumberOrNull(s.f_after_hz)},
           {"B_max", NumberOrNull(s.B_max)},
           {"B_max_from_zero", NumberOrNull(s.B_max_from_zero)},
-          {"reopened_bands", bands}};
+          {"reopened_bands", bands},
+          {"frequency_jumps", jumps},
+          {"stability_test", {{"method", s.polynomial_test ? "schur-cohn" : "eigenvalues"},
+                              {"polynomial_error", NumberOrNull(s.polynomial_error)},
+                              {"pole_shift", NumberOrNull(s.pole_shift)}}}};
   if (std) {
     j["std"] = {{"K_cr_at_zero_B", NumberOrNull(std->K_cr_at_zero_B)}, {"B_t", NumberOrNull(std->B_t)},
                 {"K_cr_max", NumberOrNull(std->K_cr_max)}, {"B_max", NumberOrNull(std->B_max)}};

@@ -298,7 +298,10 @@ B_P_max) and, when the model carries a covariance, "std" (delta method): the
 CLI's summary JSON, one entry of 'delays' (None for NaN/inf).)doc")
       .def("characteristic_polynomial",
            [](const PyZWidth& z, double K, double B) { return ToArray(z.z->CharacteristicPolynomial(K, B)); },
-           py::arg("K"), py::arg("B"), "Closed-loop characteristic polynomial coefficients, z^0 first.");
+           py::arg("K"), py::arg("B"),
+           "Closed-loop characteristic polynomial coefficients, z^0 first. With many lightly damped, crowded\n"
+           "modes its roots are ill-conditioned (numpy.roots can put a stable root outside the circle);\n"
+           "is_stable decides by the closed loop's eigenvalues there (docs/zwidth.md).");
 }
 
 // zwidth.ZWidth: the Z-width of one loop.

@@ -57,7 +57,13 @@ std::string ZWidthTable(const analysis::PlantStability& st) {
                     band.B_lo, band.B_hi, band.K_max);
       z << line;
     }
+    for (const auto& j : s.frequency_jumps) {
+      std::snprintf(line, sizeof line, "       f_CR jumps at B = %.5g: K_CR %.5g -> %.5g, f_CR %.4g -> %.4g Hz%s\n", j.B,
+                    j.K_before, j.K_after, j.f_before_hz, j.f_after_hz, j.B == s.B_t ? " (B_t)" : "");
+      z << line;
+    }
   }
+  z << "B_t: where K_CR(B) peaks and the critical frequency f_CR jumps (the paper's section III)\n";
   return z.str();
 }
 
