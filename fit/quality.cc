@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "fit/fit_internal.h"
+#include "fit/friction_fit.h"
 
 namespace zwidth::fit {
 namespace internal {
@@ -220,6 +221,23 @@ std::vector<std::string> SpuriousSections(const FitResult& r, const FitOptions& 
     }
   }
   return out;
+}
+
+}  // namespace zwidth::fit
+
+namespace zwidth::fit {
+
+void AddFrictionReason(const FrictionFitResult& ff, FitResult* r) {
+  r->reasons.push_back(
+      {"friction",
+       internal::Fmt("the time-domain log shows Coulomb friction of %.3g +- %.2g (%.1f std; in the input's units): the "
+                     "linear fit's damping b = %.4g takes friction's amplitude-dependent damping (4 F_c / (pi w A) at "
+                     "amplitude A), so b and the Z-width depend on the drive level",
+                     ff.detection_coulomb, ff.detection_coulomb_std, ff.detection_coulomb / ff.detection_coulomb_std,
+                     r->plant.b),
+       "fit the friction with the linear model (FrictionFitOptions::model coulomb or auto); to test, record two "
+       "logs at drive levels 2-4 x apart: a linear device gives the same b at both"});
+  r->quality = FitQuality::kPoor;
 }
 
 }  // namespace zwidth::fit
