@@ -12,7 +12,7 @@ namespace zwidth::app {
 void AddFitCommands(CLI::App& app) {
   struct Flags {
     std::vector<std::string> inputs;
-    std::string out, init, units = "rotary";
+    std::string out, init, units = "rotary", friction = "auto";
     EstimateFlags est;
     FitFlags fit;
   };
@@ -26,6 +26,7 @@ void AddFitCommands(CLI::App& app) {
   cmd->add_option("--max-iterations", f->fit.o.max_iterations, "solver iterations per start")->capture_default_str();
   AddEstimateFlags(cmd, &f->est);
   AddUnitsFlag(cmd, &f->units);
+  AddFrictionFlag(cmd, &f->friction);
   cmd->callback([f] {
     std::vector<std::string> read = f->inputs;
     if (!f->init.empty()) read.push_back(f->init);
@@ -47,12 +48,32 @@ void AddFitCommands(CLI::App& app) {
     const ident::FrequencyResponse frf = frf_file
         ? io::ReadFrequencyResponse(f->inputs[0], f->est.select.sample_rate_hz)
         : EstimateFromLogs(f->inputs, f->est, true).response.frf;
+    // The friction fit needs the time-domain log: one log, not a saved response.
+    FrictionInput fin{f->inputs[0], f->est.select, {}};
+    fin.options.model = ResolveFrictionFlag(f->friction);
+    fin.options.welch = f->est.Resolve();
+    const bool one_log = !frf_file && f->inputs.size() == 1;
+    if (!one_log && fin.options.model == fit::FrictionModel::kCoulomb) {
+      throw InputError(std::string("--friction coulomb needs one time-domain log, not ") +
+                       (frf_file ? "a saved frequency response" : "several logs") +
+                       ": fit one log with --friction coulomb, or the runs with --friction none");
+    }
+    if (!one_log && fin.options.model == fit::FrictionModel::kAuto) {
+      std::fprintf(stderr, "warning: friction not checked (--friction auto needs one time-domain log); the fit is "
+                           "linear-only\n");
+    }
     fit::FitResult r;
-    const io::ModelFile mf = FitToModelFile(frf, f->fit.o, source, &r);
+    fit::FrictionFitResult ff;
+    const io::ModelFile mf = FitToModelFile(frf, f->fit.o, source, &r, one_log ? &fin : nullptr, &ff);
     io::WriteModelJson(f->out, mf);
     std::printf("%s", ParameterTable(mf, linear).c_str());
     std::printf("%s (%.1f ms)\n", r.BriefReport().c_str(), timer.Lap("fit"));
     std::printf("order: pole pairs sorted by omega, zero pairs by v (G is unchanged); sections numbered from 1\n");
+    if (ff.status == fit::FrictionFitStatus::kFitted) std::printf("friction: %s\n", ff.message.c_str());
+    if (ff.status == fit::FrictionFitStatus::kNotDetected && !ff.detected) {
+      std::printf("friction: none detected (F_c %.3g +- %.2g); the fit is linear\n", ff.detection_coulomb,
+                  ff.detection_coulomb_std);
+    }
     std::printf("%s", FitReport(r).c_str());
   });
 

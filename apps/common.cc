@@ -46,6 +46,7 @@ const std::vector<FieldFlag>& FieldFlags() {
       {"SimulateOptions::encoder_step_rad", "--encoder-step"},
       {"SimulateOptions::noise_std_rad", "--noise-std"},
       {"SimulateOptions::delay_samples", "--delay-samples"},
+      {"FrictionFitOptions::model", "--friction"},
       {"FitOptions::num_modes", "--modes"},
       {"FitOptions::auto_modes", "--modes auto"},
       {"FitOptions::max_modes", "--max-modes"},

@@ -139,8 +139,44 @@ std::optional<fit::QualityReason> SignOrSwap(const ident::FrequencyResponse& frf
 
 }  // namespace
 
+void AddFrictionFlag(CLI::App* cmd, std::string* flag) {
+  cmd->add_option("--friction", *flag,
+                  "Coulomb friction: auto (fitted when the log shows it), coulomb (always fitted) or none (the linear "
+                  "fit; friction only detected); needs one time-domain log")
+      ->capture_default_str();
+}
+
+fit::FrictionModel ResolveFrictionFlag(const std::string& flag) {
+  fit::FrictionModel m;
+  if (!fit::FrictionModelFromString(flag, &m)) {
+    throw InputError("--friction '" + flag + "': expected none, auto or coulomb");
+  }
+  return m;
+}
+
+namespace {
+
+// The friction fit's record in model.json's "fit" (the linear-only b beside).
+nlohmann::json FrictionRecord(const fit::FrictionFitResult& ff) {
+  return {{"status", fit::ToString(ff.status)},
+          {"detected", ff.detected},
+          {"detection_coulomb", ff.detection_coulomb},
+          {"detection_coulomb_std", ff.detection_coulomb_std},
+          {"idim_b", ff.idim_b},
+          {"idim_b_std", ff.idim_b_std},
+          {"linear_only_b", ff.linear_b},
+          {"linear_only_b_std", ff.linear_b_std},
+          {"cutoff_hz", ff.cutoff_hz},
+          {"rows_used", ff.rows_used},
+          {"iterations", ff.iterations},
+          {"message", ff.message}};
+}
+
+}  // namespace
+
 io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::FitOptions& o,
-                             const std::string& source, fit::FitResult* out) {
+                             const std::string& source, fit::FitResult* out, const FrictionInput* friction,
+                             fit::FrictionFitResult* friction_out) {
   // Too few segments at the shortest window: the library's advice (a shorter
   // window) cannot apply; the log is too short.
   constexpr int kShortestWindow = 16;  // WelchOptions::window_length >= 16
@@ -158,10 +194,23 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
   if (r.quality == fit::FitQuality::kPoor) {  // the likeliest cause first, before "more modes"
     if (auto reason = SignOrSwap(frf, r)) r.reasons.insert(r.reasons.begin(), *reason);
   }
+  fit::FrictionFitResult ff;
+  if (friction && r.status == fit::FitStatus::kConverged) {
+    const io::Log log = io::ReadLog(friction->path, friction->select);
+    ff = fit::FitLibrary().fit_friction_quiet(log.input, log.output, log.info.sample_rate_hz, r, o, friction->options);
+    if (ff.status == fit::FrictionFitStatus::kFailed) throw ComputationError(ff.message);
+    r = ff.fit;
+  }
   if (out) *out = r;
+  if (friction_out) *friction_out = ff;
   for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", WithFlags(w).c_str());
   if (r.status != fit::FitStatus::kConverged) throw ComputationError(r.message);
   io::ModelFile mf = io::FittedModelFile(r, frf, o, source);
+  if (ff.status == fit::FrictionFitStatus::kFitted) {
+    mf.friction = ff.friction;
+    mf.friction_std = ff.friction_std;
+  }
+  if (ff.status != fit::FrictionFitStatus::kNotRun && mf.fit.is_object()) mf.fit["friction"] = FrictionRecord(ff);
   // The files the CLI writes (model JSON, run's summary.json) give its flags:
   // every text of the fit's record (reasons, warnings, order and delay choices).
   std::function<void(nlohmann::json&)> flags = [&](nlohmann::json& j) {
