@@ -211,13 +211,14 @@ Idim DetectionIdim(const Motion& mo, const std::vector<double>& U, double m, dou
   return SolveIdim(mo, HeldBandLimited(U, fs, fc), HeldBandLimited(sg, fs, fc), one, m, fs, fc, min_speed_fraction);
 }
 
-// The simulation-based IDIM with the rigid body (m, b, F_c, offset) of *id:
-// simulated, regressed, repeated `rounds` times.
-Sliding SimulatedIdim(const Motion& mo, const std::vector<double>& U, double m, double fs, double fc,
+// The simulation-based IDIM with the rigid body (m, b, F_c, offset) of *id
+// (b_sim > 0: that b instead, a sharper estimate): simulated, regressed,
+// repeated `rounds` times.
+Sliding SimulatedIdim(const Motion& mo, const std::vector<double>& U, double m, double b_sim, double fs, double fc,
                       double min_speed_fraction, int rounds, Idim* id) {
   Sliding sl;
   for (int i = 0; i < rounds; ++i) {
-    sl = SimulateRigidBody(U, fs, m, std::max(id->b, 1e-9 * m * fs), std::max(id->fc, 0.0), id->offset, mo.v.front());
+    sl = SimulateRigidBody(U, fs, m, std::max(b_sim > 0 ? b_sim : id->b, 1e-9 * m * fs), std::max(id->fc, 0.0), id->offset, mo.v.front());
     std::vector<double> um(U.size());
     for (size_t j = 0; j < U.size(); ++j) um[j] = U[j] * sl.moving[j];
     *id = SolveIdim(mo, HeldBandLimited(um, fs, fc), HeldBandLimited(sl.sign, fs, fc),
@@ -238,22 +239,34 @@ std::vector<double> LinearPartInput(const std::vector<double>& U, const Sliding&
   return out;
 }
 
-// b from whichever estimate has the smaller std: the time-domain IDIM sees
-// the whole log's low band (below the response's fmin, where b shows), the
-// frequency-domain refit suffers less from a coarse encoder's noise. The
-// covariance's log b row and column are rescaled to the chosen std.
-void UseTheSharperB(double b, double b_std, FitResult* r) {
-  if (!(b > 0.0) || !(b_std > 0.0) || !(b_std < r->std_errors.b)) return;
-  const double old_rel = r->std_errors.b / r->plant.b, scale = (b_std / b) / old_rel;
+// Sets b and its std (log b row and column of the covariance rescaled).
+void SetB(double b, double b_std, FitResult* r) {
+  const double scale = (b_std / b) / (r->std_errors.b / r->plant.b);
   r->plant.b = b;
   r->std_errors.b = b_std;
   const size_t p = 2 + 4 * r->plant.modes.size();
-  if (r->log_covariance.size() == p * p && std::isfinite(scale)) {
-    for (size_t i = 0; i < p; ++i) {
-      r->log_covariance[1 * p + i] *= scale;
-      r->log_covariance[i * p + 1] *= scale;
-    }
+  if (r->log_covariance.size() != p * p || !std::isfinite(scale)) return;
+  for (size_t i = 0; i < p; ++i) {
+    r->log_covariance[1 * p + i] *= scale;
+    r->log_covariance[i * p + 1] *= scale;
   }
+}
+
+// b from whichever of the refit and the IDIM has the smaller std of its own:
+// the IDIM sees the whole log's low band (below the response's fmin), the
+// refit suffers less from a coarse encoder's noise. The refit's b also
+// depends on the F_c removed from its input: friction adds a damping of about
+// (b_linear - b) per F_c (the describing function is linear in F_c), so its
+// reported std gains (b_linear - b) / F_c x std(F_c) in quadrature (where
+// friction's damping is 30 x b, 1 % of F_c is 30 % of b). The IDIM's std
+// already holds its correlation with F_c.
+void ChooseB(double linear_b, const Idim& id, FitResult* r) {
+  if (id.b > 0.0 && id.b_std > 0.0 && id.b_std < r->std_errors.b) {
+    SetB(id.b, id.b_std, r);
+    return;
+  }
+  const double slope = id.fc > 0 && linear_b > r->plant.b ? (linear_b - r->plant.b) / id.fc : 0.0;
+  SetB(r->plant.b, std::hypot(r->std_errors.b, slope * id.fc_std), r);
 }
 
 double AutoCutoff(const model::Plant& p, double fs) {
@@ -338,9 +351,13 @@ FrictionFitResult FitFriction(const std::vector<double>& input, const std::vecto
   fo.auto_delay = false;
   fo.num_modes = static_cast<int>(plant.modes.size());
   fo.delay_samples = plant.delay_samples;
+  // The friction-free response can favour another basin than the linear
+  // fit's (whose sections friction distorted): converge a few screened starts.
+  fo.max_converged_starts = std::max(fo.max_converged_starts, 3);
   FitResult refit;
   for (int it = 0; it < o.iterations; ++it) {
-    const Sliding sl = SimulatedIdim(mo, U, plant.m, fs, r.cutoff_hz, o.min_speed_fraction, it == 0 ? 6 : 2, &id);
+    const double b_sim = it > 0 && refit.std_errors.b < id.b_std ? plant.b : 0.0;
+    const Sliding sl = SimulatedIdim(mo, U, plant.m, b_sim, fs, r.cutoff_hz, o.min_speed_fraction, it == 0 ? 6 : 2, &id);
     keep(id);
     fo.init = plant;
     refit = FitModel(ident::EstimateFrequencyResponse(LinearPartInput(U, sl, plant.delay_samples, id), output, fs,
@@ -352,10 +369,10 @@ FrictionFitResult FitFriction(const std::vector<double>& input, const std::vecto
       return r;
     }
     plant = refit.plant;
-    mo = Differentiate(output, fs, plant, r.cutoff_hz);
+      mo = Differentiate(output, fs, plant, r.cutoff_hz);
   }
   r.fit = refit;
-  UseTheSharperB(r.idim_b, r.idim_b_std, &r.fit);
+  ChooseB(r.linear_b, id, &r.fit);
   r.status = FrictionFitStatus::kFitted;
   r.message = Num("Coulomb friction %.4g +- %.2g", id.fc, id.fc_std) + Num(" (offset %.3g +- %.2g)", id.offset, id.offset_std) +
               Num(" fitted in %.0f rounds; b %.4g", r.iterations, plant.b) + Num(" (the linear-only fit's %.4g)", r.linear_b);

@@ -43,7 +43,8 @@
 //
 // The reported plant is the last refit's (m, sections, their std from its
 // covariance), with b from whichever of the refit and step 2 has the smaller
-// std; F_c and the offset from step 2 with their OLS std.
+// std, the refit's std including what std(F_c) does to it (friction_fit.cc,
+// ChooseB); F_c and the offset from step 2 with their OLS std.
 #pragma once
 
 #include <string>
@@ -74,7 +75,7 @@ struct FrictionFitOptions {
   // Samples whose |v| is below this fraction of v's rms are not used (stick,
   // where friction is not F_c sign v), in [0, 1).
   double min_speed_fraction = 0.0;
-  int iterations = 4;          // IDIM + refit rounds, in [1, 20]
+  int iterations = 6;          // IDIM + refit rounds, in [1, 20] (converged by 4-5 on the tests' logs)
   double detection_z = 5.0;    // F_c / std(F_c) above which friction is detected, > 0
   ident::WelchOptions welch;   // the refit's estimate (use the linear fit's)
 
