@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <limits>
 #include <cstdio>
 #include <numbers>
 
@@ -19,6 +20,7 @@ namespace {
 
 using cd = std::complex<double>;
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 std::string Num(const char* fmt, double a, double b = 0.0) {
   char s[200];
@@ -333,7 +335,8 @@ FrictionFitResult FitFriction(const std::vector<double>& input, const std::vecto
   r.detected = id.fc > o.detection_z * id.fc_std;
   auto keep = [&](const Idim& d) {
     r.friction = model::Friction{d.fc, d.fc, d.offset, 0.0, 0.0};
-    r.friction_std = model::Friction{d.fc_std, d.fc_std, d.offset_std, 0.0, 0.0};
+    // The breakaway level is not identified (rest phases are not fitted): unknown.
+    r.friction_std = model::Friction{d.fc_std, d.fc_std, d.offset_std, kInf, kInf};
     r.idim_b = d.b;
     r.idim_b_std = d.b_std;
     r.rows_used = d.rows;
