@@ -32,6 +32,7 @@ void AddFitCommands(CLI::App& app) {
     if (!f->init.empty()) read.push_back(f->init);
     io::CheckOutputFolder(f->out, read);
     f->fit.Resolve(f->est.welch.fmin_hz, f->est.welch.fmax_hz);
+    const fit::FrictionModel friction_model = ResolveFrictionFlag(f->friction);
     const bool linear = LinearUnits(f->units);
     const std::string source = JoinPaths(f->inputs);
     if (!f->init.empty()) f->fit.o.init = io::ReadModelJsonFor(f->init, "fit --init").plant;
@@ -45,35 +46,18 @@ void AddFitCommands(CLI::App& app) {
         }
       }
     }
+    const std::optional<FrictionInput> fin = FrictionInputFor(f->inputs, frf_file, f->est, friction_model);
     const ident::FrequencyResponse frf = frf_file
         ? io::ReadFrequencyResponse(f->inputs[0], f->est.select.sample_rate_hz)
         : EstimateFromLogs(f->inputs, f->est, true).response.frf;
-    // The friction fit needs the time-domain log: one log, not a saved response.
-    FrictionInput fin{f->inputs[0], f->est.select, {}};
-    fin.options.model = ResolveFrictionFlag(f->friction);
-    fin.options.welch = f->est.Resolve();
-    const bool one_log = !frf_file && f->inputs.size() == 1;
-    if (!one_log && fin.options.model == fit::FrictionModel::kCoulomb) {
-      throw InputError(std::string("--friction coulomb needs one time-domain log, not ") +
-                       (frf_file ? "a saved frequency response" : "several logs") +
-                       ": fit one log with --friction coulomb, or the runs with --friction none");
-    }
-    if (!one_log && fin.options.model == fit::FrictionModel::kAuto) {
-      std::fprintf(stderr, "warning: friction not checked (--friction auto needs one time-domain log); the fit is "
-                           "linear-only\n");
-    }
     fit::FitResult r;
     fit::FrictionFitResult ff;
-    const io::ModelFile mf = FitToModelFile(frf, f->fit.o, source, &r, one_log ? &fin : nullptr, &ff);
+    const io::ModelFile mf = FitToModelFile(frf, f->fit.o, source, &r, fin ? &*fin : nullptr, &ff);
     io::WriteModelJson(f->out, mf);
     std::printf("%s", ParameterTable(mf, linear).c_str());
     std::printf("%s (%.1f ms)\n", r.BriefReport().c_str(), timer.Lap("fit"));
     std::printf("order: pole pairs sorted by omega, zero pairs by v (G is unchanged); sections numbered from 1\n");
-    if (ff.status == fit::FrictionFitStatus::kFitted) std::printf("friction: %s\n", ff.message.c_str());
-    if (ff.status == fit::FrictionFitStatus::kNotDetected && !ff.detected) {
-      std::printf("friction: none detected (F_c %.3g +- %.2g); the fit is linear\n", ff.detection_coulomb,
-                  ff.detection_coulomb_std);
-    }
+    std::printf("%s", FrictionLine(ff).c_str());
     std::printf("%s", FitReport(r).c_str());
   });
 

@@ -154,6 +154,34 @@ fit::FrictionModel ResolveFrictionFlag(const std::string& flag) {
   return m;
 }
 
+std::optional<FrictionInput> FrictionInputFor(const std::vector<std::string>& inputs, bool frf_file,
+                                              const EstimateFlags& est, fit::FrictionModel model) {
+  if (model == fit::FrictionModel::kNone && (frf_file || inputs.size() != 1)) return std::nullopt;
+  if (frf_file || inputs.size() != 1) {
+    if (model == fit::FrictionModel::kCoulomb) {
+      throw InputError(std::string("--friction coulomb needs one time-domain log, not ") +
+                       (frf_file ? "a saved frequency response" : "several logs") +
+                       ": fit one log with --friction coulomb, or the runs with --friction none");
+    }
+    std::fprintf(stderr, "warning: friction not checked (--friction auto needs one time-domain log); the fit is "
+                         "linear-only\n");
+    return std::nullopt;
+  }
+  FrictionInput in{inputs[0], est.select, {}};
+  in.options.model = model;
+  in.options.welch = est.Resolve();
+  return in;
+}
+
+std::string FrictionLine(const fit::FrictionFitResult& ff) {
+  if (ff.status == fit::FrictionFitStatus::kFitted) return "friction: " + ff.message + "\n";
+  if (ff.status != fit::FrictionFitStatus::kNotDetected || ff.detected) return "";
+  char s[200];
+  std::snprintf(s, sizeof s, "friction: none detected (F_c %.3g +- %.2g); the fit is linear\n", ff.detection_coulomb,
+                ff.detection_coulomb_std);
+  return s;
+}
+
 namespace {
 
 // The friction fit's record in model.json's "fit" (the linear-only b beside).

@@ -1,12 +1,14 @@
 // Wiring shared by `fit`, `compare` and `run`.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "apps/common.h"
 #include "fit/fit.h"
 #include "fit/friction_fit.h"
 #include "io/log.h"
@@ -46,6 +48,16 @@ struct FrictionInput {
   io::LogSelect select;
   fit::FrictionFitOptions options;
 };
+
+// The friction fit's input for `fit`: the one time-domain log with the
+// estimate's selection and Welch options; none (with a warning for auto) for
+// several logs or a saved response, which --friction coulomb refuses.
+std::optional<FrictionInput> FrictionInputFor(const std::vector<std::string>& inputs, bool frf_file,
+                                              const EstimateFlags& est, fit::FrictionModel model);
+
+// "friction: ..." (fitted, or none detected) for `fit`; "" otherwise (the
+// verdict's `friction` reason speaks for a detection that was not fitted).
+std::string FrictionLine(const fit::FrictionFitResult& ff);
 
 // Fits and packs the model file (std, fit metrics); throws ComputationError
 // when the fit does not converge. With `friction`, the friction fit

@@ -225,6 +225,9 @@ Sliding SimulatedIdim(const Motion& mo, const std::vector<double>& U, double m, 
     for (size_t j = 0; j < U.size(); ++j) um[j] = U[j] * sl.moving[j];
     *id = SolveIdim(mo, HeldBandLimited(um, fs, fc), HeldBandLimited(sl.sign, fs, fc),
                     HeldBandLimited(sl.moving, fs, fc), m, fs, fc, min_speed_fraction);
+    // F_c >= 0 (model/friction.h): a negative estimate (noise about 0) is 0,
+    // its std kept.
+    id->fc = std::max(id->fc, 0.0);
   }
   return sl;
 }
