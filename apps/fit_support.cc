@@ -223,11 +223,19 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
     if (auto reason = SignOrSwap(frf, r)) r.reasons.insert(r.reasons.begin(), *reason);
   }
   fit::FrictionFitResult ff;
-  if (friction && r.status == fit::FitStatus::kConverged) {
+  // Not on a log whose sign or columns look wrong: its friction would mean nothing.
+  const bool broken = !r.reasons.empty() && (r.reasons.front().code == "sign_reversed" ||
+                                             r.reasons.front().code == "columns_swapped");
+  if (friction && r.status == fit::FitStatus::kConverged && !broken) {
     const io::Log log = io::ReadLog(friction->path, friction->select);
-    ff = fit::FitLibrary().fit_friction_quiet(log.input, log.output, log.info.sample_rate_hz, r, o, friction->options);
+    try {
+      ff = fit::FitLibrary().fit_friction_quiet(log.input, log.output, log.info.sample_rate_hz, r, o, friction->options);
+    } catch (const InputError& e) {  // e.g. too few usable samples: auto goes on linear-only
+      if (friction->options.model == fit::FrictionModel::kCoulomb) throw;
+      r.warnings.push_back(std::string("friction not checked: ") + e.what());
+    }
     if (ff.status == fit::FrictionFitStatus::kFailed) throw ComputationError(ff.message);
-    r = ff.fit;
+    if (ff.status != fit::FrictionFitStatus::kNotRun) r = ff.fit;
   }
   if (out) *out = r;
   if (friction_out) *friction_out = ff;

@@ -282,41 +282,6 @@ double AutoCutoff(const model::Plant& p, double fs) {
 
 }  // namespace
 
-std::string ToString(FrictionModel f) {
-  switch (f) {
-    case FrictionModel::kNone: return "none";
-    case FrictionModel::kAuto: return "auto";
-    case FrictionModel::kCoulomb: return "coulomb";
-  }
-  return "?";
-}
-
-bool FrictionModelFromString(const std::string& s, FrictionModel* f) {
-  for (FrictionModel c : {FrictionModel::kNone, FrictionModel::kAuto, FrictionModel::kCoulomb}) {
-    if (s == ToString(c)) { *f = c; return true; }
-  }
-  return false;
-}
-
-std::string ToString(FrictionFitStatus s) {
-  switch (s) {
-    case FrictionFitStatus::kNotRun: return "not run";
-    case FrictionFitStatus::kFitted: return "fitted";
-    case FrictionFitStatus::kNotDetected: return "not detected";
-    case FrictionFitStatus::kFailed: return "failed";
-  }
-  return "?";
-}
-
-bool FrictionFitOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) { if (why) *why = m; return false; };
-  if (!(cutoff_hz >= 0.0) || !std::isfinite(cutoff_hz)) return fail(Num("FrictionFitOptions::cutoff_hz = %g: must be 0 (automatic) or > 0 [Hz]", cutoff_hz));
-  if (!(min_speed_fraction >= 0.0 && min_speed_fraction < 1.0)) return fail(Num("FrictionFitOptions::min_speed_fraction = %g: must be in [0, 1)", min_speed_fraction));
-  if (iterations < 1 || iterations > 20) return fail(Num("FrictionFitOptions::iterations = %.0f: must be in [1, 20]", iterations));
-  if (!(detection_z > 0.0) || !std::isfinite(detection_z)) return fail(Num("FrictionFitOptions::detection_z = %g: must be > 0", detection_z));
-  return true;
-}
-
 FrictionFitResult FitFriction(const std::vector<double>& input, const std::vector<double>& output, double fs,
                               const FitResult& linear, const FitOptions& fit_options, const FrictionFitOptions& o) {
   std::string why;
