@@ -94,6 +94,9 @@ set(CPACK_PACKAGE_VENDOR "zwidth")
 # A placeholder address (example.org is reserved, RFC 2606) until the project has one.
 set(CPACK_PACKAGE_CONTACT "zwidth maintainers <zwidth-maintainers@example.org>")
 set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
+# Empty: each package's description below starts with its own synopsis, and
+# CPackDeb would put this one (the project's DESCRIPTION) in front of all three.
+set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "")
 set(CPACK_STRIP_FILES ON)  # the executable, the plugins and the Python extension
 set(CPACK_DEB_COMPONENT_INSTALL ON)
 set(CPACK_COMPONENTS_ALL ${ZWIDTH_COMPONENTS})
@@ -107,11 +110,13 @@ if(ZWIDTH_DPKG_SHLIBDEPS)
   set(_shlibdeps ON)
 endif()
 
+# (No double quotes: CPackConfig.cmake carries the text unescaped; no line may
+# start with a dot, a control line in a Debian description.)
 set(_about "zwidth turns a haptic device's recorded logs (text, HDF5, MATLAB
-.mat) into a validated plant model, and into the virtual stiffness K and
+files) into a validated plant model, and into the virtual stiffness K and
 damping B that its sampled control loop renders stably: its Z-width, after
-Gil, Puerto, Diaz and Sanchez, \"On the Z-Width Limitation due to the
-Vibration Modes of Haptic Interfaces\". Welch frequency responses with
+Gil, Puerto, Diaz and Sanchez, On the Z-Width Limitation due to the
+Vibration Modes of Haptic Interfaces. Welch frequency responses with
 per-bin std, a Ceres fit of a rigid body with resonance/antiresonance
 sections and a verdict on the fit, the exact stable (B, K) region per loop
 delay with its delta-method std, the relay experiment simulated, checks of
