@@ -227,7 +227,7 @@ std::string Words(const std::vector<std::string>& words) {
   return out;
 }
 
-// Every name of an option (-o --output), and whether it takes a value.
+// Every name of an option: -o --output.
 std::vector<std::string> Names(const CLI::Option& o) {
   std::vector<std::string> names;
   for (const std::string& s : o.get_snames()) names.push_back("-" + s);
@@ -241,7 +241,7 @@ void OrganizeHelp(CLI::App& app) {
   auto formatter = std::make_shared<TopicFormatter>();
   app.formatter(formatter);
   app.name("zwidth");  // not argv[0]: the usage line reads the same wherever it runs (the man page)
-  app.footer("Examples: one per command in zwidth COMMAND --help; every command's help: zwidth --help-all.\n"
+  app.footer("Examples: in zwidth COMMAND --help; every command's help: zwidth --help-all.\n"
              "Exit status: 0 success; 2 a bad request or a bad file (nothing written); 1 a computation\n"
              "that failed on valid input; 3 (check) some object of the scene is unstable.\n");
   for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
