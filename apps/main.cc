@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   zwidth::app::AddExportCommand(app);
   zwidth::app::AddRunCommand(app);
   zwidth::app::AddExciteCommand(app);
+  zwidth::app::AddValidateCommand(app);
   zwidth::app::OrganizeHelp(app);  // after every command: topics, examples, --help-all, completion
   try {
     app.parse(argc, argv);
