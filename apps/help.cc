@@ -102,7 +102,10 @@ constexpr OptionTopic kOptionTopics[] = {
     // the std of the Z-width
     {"", "monte-carlo", "Uncertainty", ""},
     {"boundary", "seed", "Uncertainty", ""},
+    // a model against a fresh log
+    {"validate", "max-lag", "Validation", ""},
     // what is written, and where
+    {"", "trace", "Output", ""},
     {"", "output", "Output", ""},
     {"", "summary", "Output", ""},
     {"", "coherences-output", "Output", ""},
@@ -140,12 +143,16 @@ constexpr Example kExamples[] = {
      "a Schroeder-phase multisine, 1-200 Hz, to play on the rig"},
     {"simulate", "zwidth simulate --model /usr/share/zwidth/phantom/table1.json --seconds 30 -o log.h5",
      "30 s of white-noise torque through the paper's PHANToM model (Table I)"},
+    {"simulate", "zwidth simulate --model /usr/share/zwidth/phantom/table1.json --seed 2 -o fresh.h5",
+     "another log of the same device (another seed), to validate a fit on"},
     {"estimate", "zwidth estimate log.h5 -o frf.csv", "the frequency response, Welch H1 with a Hann window"},
     {"fit", "zwidth fit log.h5 --modes auto --delay-samples auto -o model.json",
      "fit eq. (1): order by BIC, delay from the phase slope; prints the verdict"},
     {"fit", "zwidth fit frf.csv --modes 2 -o model2.json", "fit a saved frequency response with two sections"},
     {"compare", "zwidth compare model.json --reference table1",
      "parameters and Z-width at delays 2, 4, 8 against the paper's Table I"},
+    {"validate", "zwidth validate model.json fresh.h5",
+     "the model on a log it was not fitted to: fit %, residual correlations, misfit in std units, verdict"},
     {"boundary", "zwidth boundary model.json --delays 2,4,8 -o boundary.csv --summary summary.json",
      "the stable K intervals at every B, and B_t, K_CR^max, B_max per delay"},
     {"relay", "zwidth relay model.json --delay 2 --damping 0 --seconds 5",

@@ -42,7 +42,7 @@ cd "$T" || exit 1
 echo '{"objects":[{"name":"soft","K":1,"B":0.001},{"name":"hard","K":80,"B":0.001}]}' >scene.json
 # The pipeline's order (each example uses the files the ones before wrote), then any other
 # command (by then log.h5, frf.csv and model.json exist).
-order="excite simulate estimate fit compare boundary relay check export filter-sweep run"
+order="excite simulate estimate fit compare validate boundary relay check export filter-sweep run"
 for c in $order; do
   [[ " $(echo $commands) " == *" $c "* ]] || bad "the example order names $c, which zwidth has not"
 done
