@@ -14,6 +14,9 @@ namespace zwidth::app {
 const std::vector<FieldFlag>& FieldFlags() {
   static const std::vector<FieldFlag> table = {
       {"LogSelect::time_column", "--time-column"},
+      {"ValidateOptions::max_lag", "--max-lag"},
+      {"ValidateOptions::min_averages", ""},
+      {"ValidateOptions::relative_std_floor", ""},
       {"LogSelect::input_column", "--input-column"},
       {"LogSelect::output_column", "--output-column"},
       {"LogSelect::delimiter", "--delimiter"},

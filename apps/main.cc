@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include "apps/common.h"
+#include "apps/help.h"
 #include "build_info.h"
 #include "model/error.h"
 
@@ -26,6 +27,7 @@ int main(int argc, char** argv) {
   zwidth::app::AddRunCommand(app);
   zwidth::app::AddExciteCommand(app);
   zwidth::app::AddValidateCommand(app);
+  zwidth::app::OrganizeHelp(app);  // after every command: topics, examples, --help-all, completion
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
