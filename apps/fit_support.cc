@@ -18,6 +18,7 @@
 
 #include "fit/fit_api.h"
 #include "io/fit_file.h"
+#include "io/printable.h"
 #include "io/stability_files.h"
 #include "model/error.h"
 #include "stability/uncertainty.h"
@@ -159,7 +160,7 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
     if (auto reason = SignOrSwap(frf, r)) r.reasons.insert(r.reasons.begin(), *reason);
   }
   if (out) *out = r;
-  for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", WithFlags(w).c_str());
+  for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", io::Printable(WithFlags(w)).c_str());
   if (r.status != fit::FitStatus::kConverged) throw ComputationError(r.message);
   io::ModelFile mf = io::FittedModelFile(r, frf, o, source);
   // The files the CLI writes (model JSON, run's summary.json) give its flags:

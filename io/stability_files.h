@@ -68,6 +68,22 @@ ObjectVerdict Classify(const SceneObject& o, const stability::CriticalPoint& cri
 ObjectVerdict CheckObject(const stability::ZWidth& z, const SceneObject& o);
 nlohmann::json NumberOrNull(double v);
 
+// The bounds of a scene (refused beyond them, before the JSON is parsed): at
+// most kMaxSceneObjects objects in at most kMaxSceneBytes. `check` costs about
+// 20 us and 2 kB per object (one Z-width evaluation at its B, per hand), so a
+// scene at the bound takes ~2 s and ~200 MB; a 1.2-million-object scene (64
+// MiB) took 21 s and 2.2 GB.
+inline constexpr size_t kMaxSceneObjects = 100000;
+// The loop delays a command takes: each in [0, kMaxLoopDelaySamples], at most
+// kMaxLoopDelays of them. A delay's Z-width costs time and memory in
+// proportion to it (its frequency grid has ~ grid_points_per_delay x d
+// points): d = 1000 takes ~X s; `--delays 5000` ran past 20 s.
+inline constexpr int kMaxLoopDelaySamples = 1000;
+inline constexpr size_t kMaxLoopDelays = 64;
+// "" when `delays` keeps those bounds (and is not empty), else the message
+// naming `name` (a flag or an options field).
+std::string LoopDelaysProblem(const std::vector<int>& delays, const std::string& name);
+inline constexpr size_t kMaxSceneBytes = 16u << 20;
 std::vector<SceneObject> ReadScene(const std::string& path);
 
 // The largest B >= 0 with a passive K >= 0 (Colgate-Schenkel; bisection on
