@@ -359,6 +359,9 @@ TEST(Hdf5Log, AnArrayAttributeIsRefusedInTheChildAndInProcess) {
 }  // namespace
 }  // namespace zwidth::io
 
+namespace zwidth::io {
+namespace {
+
 // Issue 30: HDF5 logs read in three threads while a fourth saves a .h5 file.
 // libhdf5 is thread-safe with one global lock; a reader's child forked while
 // the saver held it inherited it held and hung at its first HDF5 call (the
@@ -397,3 +400,6 @@ TEST(Hdf5Log, ThreeReadersAndASaverInThreadsNeverHang) {
   EXPECT_EQ(reads, 75);
   EXPECT_EQ(saves, 60);
 }
+
+}  // namespace
+}  // namespace zwidth::io
