@@ -79,7 +79,7 @@ void AddFitCommands(CLI::App& app) {
     io::ModelFile r = ReadReference(c->reference);
     if (const std::string why = io::LoopDelaysProblem(c->delays, "--delays"); !why.empty()) throw InputError(why);
     const double T = ResolvePeriod(c->period, &m);
-    ConvertDelayToPeriod(&r, T, "the reference");
+    app::ConvertDelayToPeriod(&r, T, "the reference");
     std::string text;
     const nlohmann::json j = CompareModels(m, r, c->delays, T, &text);
     if (c->json) std::cout << j.dump(2) << std::endl;
