@@ -5,6 +5,8 @@
 #include "apps/fit_support.h"
 #include "io/atomic_file.h"
 #include "io/frf_file.h"
+#include "io/printable.h"
+#include "io/stability_files.h"
 #include "model/error.h"
 
 namespace zwidth::app {
@@ -54,11 +56,11 @@ void AddFitCommands(CLI::App& app) {
     fit::FrictionFitResult ff;
     const io::ModelFile mf = FitToModelFile(frf, f->fit.o, source, &r, fin ? &*fin : nullptr, &ff);
     io::WriteModelJson(f->out, mf);
-    std::printf("%s", ParameterTable(mf, linear).c_str());
+    std::printf("%s", io::PrintableLines(ParameterTable(mf, linear)).c_str());
     std::printf("%s (%.1f ms)\n", r.BriefReport().c_str(), timer.Lap("fit"));
     std::printf("order: pole pairs sorted by omega, zero pairs by v (G is unchanged); sections numbered from 1\n");
     std::printf("%s", FrictionLine(ff).c_str());
-    std::printf("%s", FitReport(r).c_str());
+    std::printf("%s", io::PrintableLines(FitReport(r)).c_str());
   });
 
   struct CompareFlags {
@@ -80,13 +82,13 @@ void AddFitCommands(CLI::App& app) {
       throw InputError("compare needs a reference: --reference table1 (Table I, the paper's PHANToM) or --reference MODEL.json");
     }
     io::ModelFile r = ReadReference(c->reference);
-    for (int d : c->delays) if (d < 0) throw InputError("--delays must be >= 0");
+    if (const std::string why = io::LoopDelaysProblem(c->delays, "--delays"); !why.empty()) throw InputError(why);
     const double T = ResolvePeriod(c->period, &m);
     app::ConvertDelayToPeriod(&r, T, "the reference");
     std::string text;
     const nlohmann::json j = CompareModels(m, r, c->delays, T, &text);
     if (c->json) std::cout << j.dump(2) << std::endl;
-    else std::printf("%s", text.c_str());
+    else std::printf("%s", io::PrintableLines(text).c_str());
   });
 }
 

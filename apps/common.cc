@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <sstream>
 
 #include "io/frf_file.h"
+#include "io/printable.h"
 #include "model/error.h"
 
 namespace zwidth::app {
@@ -194,9 +196,12 @@ std::string JoinPaths(const std::vector<std::string>& paths) {
 namespace {
 
 void PrintRead(const io::LogInfo& info) {
-  std::fprintf(stderr, "%s: %zu samples at %g Hz; %s\n", info.source.c_str(), info.num_samples,
-               info.sample_rate_hz, info.layout.c_str());
-  for (const auto& w : info.warnings) std::fprintf(stderr, "warning: %s: %s\n", info.source.c_str(), WithFlags(w).c_str());
+  const std::string source = io::Printable(info.source);
+  std::fprintf(stderr, "%s: %zu samples at %g Hz; %s\n", source.c_str(), info.num_samples, info.sample_rate_hz,
+               io::Printable(info.layout).c_str());
+  for (const auto& w : info.warnings) {
+    std::fprintf(stderr, "warning: %s: %s\n", source.c_str(), io::Printable(WithFlags(w)).c_str());
+  }
 }
 
 // Samples after the last whole segment are not used: say so.
@@ -209,7 +214,7 @@ void WarnDropped(const std::string& path, size_t n_samples, const ident::WelchOp
   std::fprintf(stderr,
                "warning: %s: the last %zu samples (%.1f %% of the log) do not fill a %zu-sample segment and are "
                "not used; a --window-length that fits, or --whole-record for a sweep or periodic excitation, uses them\n",
-               path.c_str(), dropped, 100.0 * dropped / n_samples, n);
+               io::Printable(path).c_str(), dropped, 100.0 * dropped / n_samples, n);
 }
 
 }  // namespace
@@ -251,9 +256,14 @@ io::LogSelect ExcitationSelect(const std::string& path, const EstimateFlags& fla
 
 // Open loop in Welch segments: one streaming pass, memory for a few windows.
 ident::RunSpectra StreamedRun(const std::string& path, const EstimateFlags& flags, const ident::WelchOptions& options,
-                              io::LogInfo* info) {
+                              io::LogInfo* info, std::uint64_t* fingerprint) {
   ident::WelchEstimator est(options);
-  *info = io::StreamLog(path, flags.select, [&](const double* u, const double* y, size_t n) { est.Push(u, y, n); });
+  io::LogFingerprint fp;
+  *info = io::StreamLog(path, flags.select, [&](const double* u, const double* y, size_t n) {
+    est.Push(u, y, n);
+    fp.Add(u, y, n);
+  });
+  *fingerprint = fp.value();
   PrintRead(*info);
   WarnDropped(path, info->num_samples, options);
   ident::RunSpectra spectra;
@@ -286,9 +296,13 @@ std::vector<ident::RunSpectra> PeriodRuns(const std::string& path, const io::Log
 // The log in memory (closed loop, or --whole-record): its run, or one run per
 // period with --period-samples.
 std::vector<ident::RunSpectra> InMemoryRuns(const std::string& path, const EstimateFlags& flags, bool closed,
-                                            const io::LogSelect& rsel, ident::WelchOptions o, io::LogInfo* info) {
+                                            const io::LogSelect& rsel, ident::WelchOptions o, io::LogInfo* info,
+                                            std::uint64_t* fingerprint) {
   io::Log log = io::ReadLog(path, flags.select);
   *info = log.info;
+  io::LogFingerprint fp;
+  fp.Add(log.input.data(), log.output.data(), log.input.size());
+  *fingerprint = fp.value();
   PrintRead(*info);
   std::vector<double> r;
   if (closed) {
@@ -317,11 +331,12 @@ std::vector<ident::RunSpectra> InMemoryRuns(const std::string& path, const Estim
 
 // One log's runs; an InputError names the file first.
 std::vector<ident::RunSpectra> LogRuns(const std::string& path, const EstimateFlags& flags, bool closed,
-                                       const ident::WelchOptions& options, io::LogInfo* info) {
+                                       const ident::WelchOptions& options, io::LogInfo* info,
+                                       std::uint64_t* fingerprint) {
   const io::LogSelect rsel = closed ? ExcitationSelect(path, flags) : flags.select;
   try {
-    if (!closed && !flags.whole_record) return {StreamedRun(path, flags, options, info)};
-    return InMemoryRuns(path, flags, closed, rsel, options, info);
+    if (!closed && !flags.whole_record) return {StreamedRun(path, flags, options, info, fingerprint)};
+    return InMemoryRuns(path, flags, closed, rsel, options, info, fingerprint);
   } catch (const InputError& e) {
     const std::string what = e.what();
     throw InputError(what.rfind(path, 0) == 0 ? what : path + ": " + what);
@@ -343,6 +358,19 @@ void PrintCombined(const ident::CombinedResponse& r) {
   std::fprintf(stderr, "\n");
 }
 
+// The same samples twice (a file given twice, a copy, a link) are not two
+// runs: averaged, they shrink every per-bin std by 1/sqrt(2). Refused, since
+// no use of it is right; the message names both.
+void RefuseRepeatedLog(const std::vector<std::string>& paths, const std::vector<std::uint64_t>& seen,
+                       std::uint64_t fingerprint, const std::string& path) {
+  for (size_t i = 0; i < seen.size(); ++i) {
+    if (seen[i] != fingerprint) continue;
+    throw InputError(path + " holds the same samples as " + paths[i] +
+                     " (the same file, a copy or a link): runs are averaged as independent, and the same data twice "
+                     "would shrink every std by 1/sqrt(2) while adding nothing; give each run once");
+  }
+}
+
 }  // namespace
 
 LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const EstimateFlags& flags, bool for_fit) {
@@ -361,9 +389,15 @@ LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const Estim
   if (flags.whole_record && flags.period_samples == 0 && paths.size() < 2) throw one_segment();  // before reading
   LogsEstimate out;
   std::vector<ident::RunSpectra> runs;
+  std::vector<std::uint64_t> seen;  // one fingerprint per log read
   for (const std::string& path : paths) {
     io::LogInfo info;
-    for (ident::RunSpectra& run : LogRuns(path, flags, closed, options, &info)) runs.push_back(std::move(run));
+    std::uint64_t fingerprint = 0;
+    for (ident::RunSpectra& run : LogRuns(path, flags, closed, options, &info, &fingerprint)) {
+      runs.push_back(std::move(run));
+    }
+    RefuseRepeatedLog(paths, seen, fingerprint, path);
+    seen.push_back(fingerprint);
     out.total_samples += info.num_samples;
     out.infos.push_back(info);
   }
@@ -388,16 +422,7 @@ double StageTimer::Lap(const std::string& stage) {
 
 double ResolvePeriod(double flag, io::ModelFile* mf) {
   if (std::isnan(flag)) return mf->sample_period_s ? *mf->sample_period_s : 0.001;
-  if (!(flag >= kMinPeriodS && flag <= kMaxPeriodS)) {
-    std::ostringstream os;
-    os.precision(6);
-    os << "--period = " << flag << " s: a sample period must lie in [1e-06, 0.1] s (a rate of 10 Hz..1 MHz); "
-       << "--period is the period T in seconds";
-    const bool rate = flag >= 10.0 && flag <= 1e6, ms = flag > 0.1 && flag <= 100.0;
-    if (rate) os << ", not the rate: for " << flag << " Hz pass --period " << 1.0 / flag;
-    if (ms) os << (rate ? "; " : ": ") << "for " << flag << " ms pass --period " << flag * 1e-3;
-    throw InputError(os.str());
-  }
+  if (const std::string why = io::SamplePeriodProblem(flag, "--period"); !why.empty()) throw InputError(why);
   app::ConvertDelayToPeriod(mf, flag, "the model");
   return flag;
 }

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <locale>
 #include <sstream>
 
 #include "io/atomic_file.h"
@@ -13,15 +14,24 @@
 namespace zwidth::io {
 namespace {
 
+// Locale-independent (to_chars): embedded in a process whose C locale is
+// German (Python after locale.setlocale), "%.17g" wrote m = 0,001168, which
+// MATLAB and Octave read as m = 0.
 std::string Num(double v) {
-  char b[40];
-  std::snprintf(b, sizeof b, "%.17g", v);
-  return b;
+  std::string s;
+  internal::AppendG(&s, v, 17);
+  return s;
 }
+
+// A stream that writes numbers the same under any global C++ locale (no
+// digit grouping: 1000 stays 1000).
+struct ClassicStream : std::ostringstream {
+  ClassicStream() { imbue(std::locale::classic()); }
+};
 
 // "[a b; c d]" (MATLAB) or "[[a, b], [c, d]]" (Python).
 std::string Matrix(const Eigen::MatrixXd& M, bool python) {
-  std::ostringstream os;
+  ClassicStream os;
   os << "[";
   for (int i = 0; i < M.rows(); ++i) {
     if (python) os << (i ? ", [" : "[");
@@ -119,7 +129,7 @@ std::string FrictionVariables(const ModelFile& mf, const char* comment, const ch
 
 std::string Matlab(const ModelFile& mf, double T) {
   const model::Plant& p = mf.plant;
-  std::ostringstream os;
+  ClassicStream os;
   os << "% zwidth model export for MATLAB or GNU Octave (pkg load control).\n"
      << "% The parameters of eq. (1) as named variables (SI units, rad/s); G(s) built from its\n"
      << "% factored sections as in the paper's appendix. The model's name is in `name`.\n"
@@ -164,7 +174,7 @@ std::string Matlab(const ModelFile& mf, double T) {
 std::string Python(const ModelFile& mf, double T) {
   const model::Plant& p = mf.plant;
   const model::StateSpace c = model::ContinuousStateSpace(p);
-  std::ostringstream os;
+  ClassicStream os;
   os << "\"\"\"zwidth model export. Needs NumPy and SciPy; python-control objects too when it is installed.\n\n"
      << "name: the model's name. m, b, modes, delay_samples: the parameters of eq. (1).\n"
      << "G: continuous scipy.signal.StateSpace of eq. (1) (a well-conditioned cascade realisation).\n";
