@@ -7,12 +7,14 @@
 #include <CLI/CLI.hpp>
 
 #include "apps/common.h"
+#include "apps/help.h"
 #include "build_info.h"
 #include "model/error.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"zwidth: haptic device identification and Z-width (stable K, B) analysis"};
   app.require_subcommand(1);
+  zwidth::app::SetCommandLine(argc, argv);
   namespace bi = zwidth::build_info;
   app.set_version_flag("--version", std::string("zwidth ") + bi::kVersion + "\nbuilt with Ceres " + bi::kCeres +
                                         ", Eigen " + bi::kEigen + ", FFTW " + bi::kFftw + ", HDF5 " + bi::kHdf5 +
@@ -24,6 +26,8 @@ int main(int argc, char** argv) {
   zwidth::app::AddExportCommand(app);
   zwidth::app::AddRunCommand(app);
   zwidth::app::AddExciteCommand(app);
+  zwidth::app::AddValidateCommand(app);
+  zwidth::app::OrganizeHelp(app);  // after every command: topics, examples, --help-all, completion
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
