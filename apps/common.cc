@@ -32,6 +32,13 @@ const std::vector<FieldFlag>& FieldFlags() {
       {"ReadFrequencyResponse::sample_rate_hz", "--rate"},
       {"OutputFolder::force", "--force"},
       {"WelchOptions::window_length", "--window-length"},
+      {"LocalModelOptions::method", "--estimator"},
+      {"LocalModelOptions::half_width", "--local-half-width"},
+      {"LocalModelOptions::order", "--local-order"},
+      {"LocalModelOptions::denominator_order", "--local-denominator-order"},
+      {"LocalModelOptions::differences", "--local-differences"},
+      {"LocalModelOptions::fmin_hz", "--fmin"},
+      {"LocalModelOptions::fmax_hz", "--fmax"},
       {"WelchOptions::overlap", "--overlap"},
       {"WelchOptions::fmin_hz", "--fmin"},
       {"WelchOptions::fmax_hz", "--fmax"},
@@ -72,6 +79,7 @@ const std::vector<FieldFlag>& FieldFlags() {
       {"FitOptions::max_zero_damping_ratio", ""},
       {"FitOptions::max_frequency_fraction", ""},
       {"FitOptions::relative_std_floor", ""},
+      {"FitOptions::local_relative_std_floor", ""},
       {"FitOptions::function_tolerance", ""},
       {"FitOptions::max_converged_starts", ""},
       {"FitOptions::runner_up_cost_ratio", ""},
@@ -138,11 +146,21 @@ ident::WelchOptions EstimateFlags::Resolve() const {
   if (!ident::FromString(ResolvedDetrend(), &o.detrend)) {
     throw InputError("--detrend '" + detrend + "' is not one of none, mean, linear");
   }
-  if (!ident::FromString(estimator, &o.estimator)) {
-    throw InputError("--estimator '" + estimator + "' is not one of h1, h2");
+  if (!IsLocal() && !ident::FromString(estimator, &o.estimator)) {
+    throw InputError("--estimator '" + estimator + "' is not one of h1, h2, lpm, lrm");
   }
   std::string why;
   if (!o.IsValid(&why)) throw InputError(why);
+  return o;
+}
+
+ident::LocalModelOptions EstimateFlags::ResolveLocal() const {
+  ident::LocalModelOptions o = local;
+  ident::FromString(estimator, &o.method);
+  o.fmin_hz = welch.fmin_hz;
+  o.fmax_hz = welch.fmax_hz;
+  std::string why;
+  if (!o.IsValid(&why)) throw InputError(WithFlags(why));
   return o;
 }
 
@@ -168,7 +186,15 @@ void AddEstimateFlags(CLI::App* cmd, EstimateFlags* f) {
   cmd->add_option("--detrend", f->detrend,
                   "none | mean | linear, per segment (default linear; mean with --whole-record, where linear biases "
                   "the response)");
-  cmd->add_option("--estimator", f->estimator, "h1 | h2")->capture_default_str();
+  cmd->add_option("--estimator", f->estimator,
+                  "h1 | h2 (Welch) | lpm | lrm (local polynomial / rational method on the whole record, "
+                  "docs/estimators.md)")->capture_default_str();
+  cmd->add_option("--local-half-width", f->local.half_width,
+                  "lpm/lrm: bins either side of each estimate (0: 6 for lpm, 7 for lrm)")->capture_default_str();
+  cmd->add_option("--local-order", f->local.order, "lpm/lrm: order of the local polynomials (lrm: numerators)")->capture_default_str();
+  cmd->add_option("--local-denominator-order", f->local.denominator_order, "lrm: order of the local denominator")->capture_default_str();
+  cmd->add_option("--local-differences", f->local.differences,
+                  "lpm/lrm: times the output is differenced first (2: the rigid body's poles at z = 1 removed)")->capture_default_str();
   cmd->add_option("--fmin", f->welch.fmin_hz, "lowest frequency kept [Hz]")->capture_default_str();
   cmd->add_option("--fmax", f->welch.fmax_hz, "highest frequency kept [Hz], clipped below Nyquist")->capture_default_str();
   cmd->add_option("--reference-column", f->reference_column, "closed loop: column/variable of the logged excitation r (H = S_ry/S_ru)");
@@ -373,7 +399,56 @@ void RefuseRepeatedLog(const std::vector<std::string>& paths, const std::vector<
 
 }  // namespace
 
+namespace {
+
+// --estimator lpm|lrm: every log read whole (with its excitation in closed
+// loop), one local estimate over all of them.
+LogsEstimate EstimateLocalFromLogs(const std::vector<std::string>& paths, const EstimateFlags& flags, bool closed) {
+  if (flags.whole_record || flags.period_samples != 0 || flags.welch.window_length != ident::WelchOptions{}.window_length ||
+      flags.welch.overlap != ident::WelchOptions{}.overlap) {
+    throw InputError("--estimator " + flags.estimator + " fits a local model on each whole log: drop --whole-record, "
+                     "--period-samples, --window-length and --overlap (Welch options)");
+  }
+  const ident::LocalModelOptions o = flags.ResolveLocal();
+  LogsEstimate out;
+  std::vector<ident::LocalRecord> runs;
+  double rate = 0.0;
+  for (const std::string& path : paths) {
+    try {
+      io::Log log = io::ReadLog(path, flags.select);
+      PrintRead(log.info);
+      ident::LocalRecord run{std::move(log.input), std::move(log.output), {}};
+      if (closed) run.r = std::move(io::ReadLog(path, ExcitationSelect(path, flags)).input);
+      if (rate == 0.0) rate = log.info.sample_rate_hz;
+      if (std::abs(log.info.sample_rate_hz - rate) > 1e-3 * rate) {
+        throw InputError("the log's rate differs from the first log's: runs of one estimate need one rate");
+      }
+      out.total_samples += log.info.num_samples;
+      out.infos.push_back(log.info);
+      runs.push_back(std::move(run));
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      throw InputError(what.rfind(path, 0) == 0 ? what : path + ": " + what);
+    }
+  }
+  ident::LocalEstimate est = ident::EstimateLocal(runs, rate, o);
+  for (const std::string& w : est.warnings) std::fprintf(stderr, "warning: %s\n", WithFlags(w).c_str());
+  out.response = ident::ToCombined(std::move(est), o.method, static_cast<int>(runs.size()));
+  std::fprintf(stderr, "%s (%s) from %zu run%s, %d bins per local window, %d residual degrees of freedom\n",
+               ident::ToString(out.response.method).c_str(), out.response.frf.estimator.c_str(), runs.size(),
+               runs.size() > 1 ? "s" : "", 2 * o.HalfWidth() + 1, out.response.frf.num_averages);
+  return out;
+}
+
+}  // namespace
+
 LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const EstimateFlags& flags, bool for_fit) {
+  if (flags.IsLocal()) {
+    LogsEstimate out = EstimateLocalFromLogs(paths, flags, !flags.reference_column.empty() || !flags.reference_dataset.empty());
+    io::CheckInputPower(out.response.frf, JoinPaths(paths));
+    io::CheckFiniteResponse(out.response.frf, JoinPaths(paths));
+    return out;
+  }
   ident::WelchOptions options = flags.Resolve();
   const bool closed = !flags.reference_column.empty() || !flags.reference_dataset.empty();
   CheckRecordFlags(flags);

@@ -9,6 +9,7 @@
 #include <CLI/CLI.hpp>
 
 #include "ident/joint.h"
+#include "ident/local_models.h"
 #include "ident/welch.h"
 #include "io/log.h"
 #include "io/model_json.h"
@@ -49,8 +50,13 @@ struct EstimateFlags {
   // With whole_record: one segment per period of this many samples (a
   // periodic excitation's period) instead of one per log; 0 = the whole log.
   int period_samples = 0;
+  // --estimator lpm|lrm: the local methods' options (ident/local_models.h);
+  // the band comes from welch.fmin_hz/fmax_hz.
+  ident::LocalModelOptions local;
+  bool IsLocal() const { return estimator == "lpm" || estimator == "lrm"; }
   // Parses the enum names; throws InputError naming the flag.
   ident::WelchOptions Resolve() const;
+  ident::LocalModelOptions ResolveLocal() const;  // with IsLocal()
   std::string ResolvedDetrend() const;  // detrend, or its default when not given
 };
 

@@ -21,6 +21,7 @@ bool FitOptions::IsValid(std::string* why) const {
   if (!(max_zero_damping_ratio > min_damping_ratio)) return bad("FitOptions::max_zero_damping_ratio must be > FitOptions::min_damping_ratio");
   if (!(max_frequency_fraction > 0 && max_frequency_fraction < 1)) return bad("FitOptions::max_frequency_fraction must be in (0, 1)");
   if (!(relative_std_floor >= 0)) return bad("FitOptions::relative_std_floor must be >= 0");
+  if (!(local_relative_std_floor >= 0)) return bad("FitOptions::local_relative_std_floor must be >= 0");
   if (max_iterations < 1) return bad("FitOptions::max_iterations must be >= 1");
   if (!(function_tolerance > 0)) return bad("FitOptions::function_tolerance must be > 0");
   if (max_starts < 1) return bad("FitOptions::max_starts must be >= 1");

@@ -62,6 +62,7 @@ ModelFile FittedModelFile(const fit::FitResult& r, const ident::FrequencyRespons
             {"covariance_ok", r.covariance_ok},
             {"num_bins", r.num_residuals / 2},
             {"num_averages", frf.num_averages},
+            {"estimator", frf.estimator.empty() ? std::string("unknown") : frf.estimator},
             {"sample_rate_hz", frf.sample_rate_hz},
             {"f_min_hz", r.band.f_lo_hz},
             {"f_max_hz", r.band.f_hi_hz},
