@@ -75,6 +75,7 @@ constexpr OptionTopic kOptionTopics[] = {
     {"", "min-coherence", "Fit", ""},
     {"", "init", "Fit", ""},
     {"", "starts", "Fit", ""},
+    {"fit", "friction", "Fit", "none auto coulomb"},
     {"", "max-iterations", "Fit", ""},
     // a second model to compare with
     {"", "reference", "Comparison", "table1", true},
