@@ -260,6 +260,19 @@ std::string ReadSmallFile(const std::string& path, const std::string& what, size
   return text;
 }
 
+std::string SamplePeriodProblem(double T, const std::string& name) {
+  if (T >= kMinPeriodS && T <= kMaxPeriodS) return "";
+  std::ostringstream os;
+  os.precision(6);
+  os << name << " = " << T << " s: a sample period must lie in [1e-06, 0.1] s (a rate of 10 Hz..1 MHz); " << name
+     << " is the period T in seconds";
+  const bool rate = T >= 10.0 && T <= 1e6, ms = T > 0.1 && T <= 100.0;
+  const std::string give = name.rfind("--", 0) == 0 ? "pass " + name + " " : "write ";
+  if (rate) os << ", not the rate: for " << T << " Hz " << give << 1.0 / T;
+  if (ms) os << (rate ? "; " : ": ") << "for " << T << " ms " << give << T * 1e-3;
+  return os.str();
+}
+
 ModelFile ParseModelJson(const std::string& text, const std::string& source) {
   CheckJsonDepth(text, source);
   json j;
@@ -291,7 +304,7 @@ ModelFile ParseModelJson(const std::string& text, const std::string& source) {
   }
   if (j.contains("sample_period_s")) {
     const double t = Number(j, "sample_period_s", source, "");
-    if (t <= 0.0) Fail(source, "key 'sample_period_s' must be > 0");
+    if (const std::string why = SamplePeriodProblem(t, "key 'sample_period_s'"); !why.empty()) Fail(source, why);
     mf.sample_period_s = t;
   }
   if (auto it = j.find("std"); it != j.end()) {
@@ -348,6 +361,36 @@ ModelFile ReadModelJsonFor(const std::string& path, const std::string& command) 
   }
   CheckNotJsonOfAnotherKind(text, path, "model", command);
   return ParseModelJson(text, path);
+}
+
+std::string ConvertDelayToPeriod(ModelFile* mf, double T, const std::string& what) {
+  if (!mf->sample_period_s || mf->plant.delay_samples == 0) return "";
+  const double Tm = *mf->sample_period_s;
+  if (std::abs(Tm - T) <= 1e-12 * T) return "";
+  const int d = mf->plant.delay_samples;
+  const double q = d * Tm / T;
+  char buf[400];
+  const bool whole = std::abs(q - std::round(q)) <= 1e-9 * std::max(1.0, q);
+  if (whole && std::round(q) > kMaxDelaySamples) {
+    std::snprintf(buf, sizeof buf, "%s's input delay of %d samples of %g s is %.0f samples at the period %g s, more "
+                  "than %d", what.c_str(), d, Tm, q, T, kMaxDelaySamples);
+    throw InputError(buf);
+  }
+  if (whole) {
+    const int dn = static_cast<int>(std::round(q));
+    std::snprintf(buf, sizeof buf,
+                  "%s's input delay is %d samples of its sample_period_s %g s (%g s): %d samples at the "
+                  "period %g s used here", what.c_str(), d, Tm, d * Tm, dn, T);
+    mf->plant.delay_samples = dn;
+    mf->sample_period_s = T;
+    return buf;
+  }
+  std::snprintf(buf, sizeof buf,
+                "%s's input delay is %d samples of its sample_period_s %g s (%g s), which is %.6g samples at "
+                "the period %g s: a delay of a fraction of a sample cannot be kept; re-fit the model from a log "
+                "at that rate, or edit its delay_samples (and sample_period_s) if you mean another delay",
+                what.c_str(), d, Tm, d * Tm, q, T);
+  throw InputError(buf);
 }
 
 json ModelToJson(const ModelFile& mf) {

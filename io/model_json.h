@@ -48,6 +48,14 @@ inline constexpr double kPlausibleMin = 1e-12;     // m, b, omega, c, v, d in
 inline constexpr double kPlausibleMax = 1e12;      //   [min, max] (SI, rad/s)
 inline constexpr int kMaxJsonDepth = 64;           // nesting of [ and { (anywhere, "fit" too)
 inline constexpr size_t kMaxJsonBytes = 64u << 20; // size of a model or scene file
+// A sample period, from a model's "sample_period_s" or a --period flag, lies
+// in [kMinPeriodS, kMaxPeriodS] s: the rates a log may have, 10 Hz..1 MHz.
+inline constexpr double kMinPeriodS = 1e-6, kMaxPeriodS = 0.1;
+
+// "" when T lies in that range, else the message naming `name` ("--period",
+// "key 'sample_period_s'") with the likely slip (a rate or milliseconds typed
+// for a period in s) and the value to give instead.
+std::string SamplePeriodProblem(double T, const std::string& name);
 
 // InputError when `text` nests arrays/objects deeper than max_depth: checked
 // by a scan of the brackets (outside strings) before nlohmann parses, whose
@@ -74,6 +82,16 @@ void CheckNotJsonOfAnotherKind(const std::string& text, const std::string& sourc
 // InputError naming the key and its two lines when an object of `text` (valid
 // JSON) repeats a key, which a JSON parser resolves silently (the last wins).
 void CheckDuplicateKeys(const std::string& text, const std::string& source);
+
+// The model used at the sample period T (the one rule for a model's delay at
+// another period, used by the CLI, the C++ API and Python): its delay_samples
+// counts samples of its own sample_period_s T_m, so at T it is d T_m / T when
+// that is a whole number (to 1e-9), and the model's period becomes T; a model
+// without a period, without a delay or at T already is left as it is. Returns
+// a note saying what was converted ("" when nothing was); throws InputError
+// saying why and what to do when d T_m / T is not whole or exceeds
+// kMaxDelaySamples. `what` names the model in the texts ("the model").
+std::string ConvertDelayToPeriod(ModelFile* model, double T, const std::string& what);
 
 nlohmann::json ModelToJson(const ModelFile& model);
 void WriteModelJson(const std::string& path, const ModelFile& model);

@@ -1,12 +1,16 @@
 #include "report/run_report.h"
 
 #include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
 #include <optional>
 
 #include <nlohmann/json.hpp>
 
 #include "analysis/laps.h"
 #include "io/frf_file.h"
+#include "io/printable.h"
 #include "io/stability_files.h"
 #include "report/report_internal.h"
 
@@ -31,14 +35,16 @@ std::string SummaryJson(const analysis::RunAnalysis& a) {
                              "B_max_from_zero: the B where the interval from K = 0+ closes (the paper's B_max)";
   summary["margin_disagreements"] = st.margin_disagreements;
   if (a.comparison) summary["comparison"] = a.comparison->json;
-  summary["log"] = in.source;
-  summary["logs"] = in.logs;
+  // File names as valid UTF-8 (a Latin-1 name made the JSON writer throw after all the work).
+  summary["log"] = io::Utf8ForJson(in.source);
+  summary["logs"] = nlohmann::json::array();
+  for (const std::string& log : in.logs) summary["logs"].push_back(io::Utf8ForJson(log));
   summary["estimate"] = ident::ToString(in.response.method);
   summary["whole_record"] = in.whole_record;
   summary["sample_rate_hz"] = in.response.frf.sample_rate_hz;
   summary["num_samples"] = in.total_samples;
   summary["fit"] = in.model.fit;
-  summary["reference"] = in.reference ? (in.reference_is_table1 ? "table1 (built in)" : in.reference_name) : "none";
+  summary["reference"] = in.reference ? (in.reference_is_table1 ? "table1 (built in)" : io::Utf8ForJson(in.reference_name)) : "none";
   nlohmann::ordered_json top = {{"fit_quality", fit::ToString(in.fit.quality)},
                                 {"fit_quality_reasons", nlohmann::ordered_json::parse(in.model.fit.value("quality_reasons", nlohmann::json::array()).dump())}};
   for (const auto& [k, v] : summary.items()) top[k] = nlohmann::ordered_json::parse(v.dump());
@@ -50,6 +56,19 @@ void WriteDataFiles(const analysis::RunAnalysis& a, const fs::path& out) {
   io::WriteFrequencyResponse((out / "frf.csv").string(), a.input.response.frf);
   io::WriteBoundaryCsv((out / "boundary.csv").string(), a.stability.rows);
   io::WriteTextAtomically((out / "summary.json").string(), SummaryJson(a));
+}
+
+// The SVGs gnuplot drew, by name, for report.html to inline.
+std::map<std::string, std::string> DrawnSvgs(const fs::path& fig) {
+  std::map<std::string, std::string> svgs;
+  for (const char* name : {"bode", "coherence", "kcr", "region", "loop", "rigid"}) {
+    std::ifstream in(fig / (std::string(name) + ".svg"), std::ios::binary);
+    if (!in) continue;
+    std::ostringstream text;
+    text << in.rdbuf();
+    svgs[name] = text.str();
+  }
+  return svgs;
 }
 
 FiguresStatus StatusOf(int gnuplot_exit) {
@@ -83,7 +102,9 @@ RunReport WriteRunReport(const analysis::RunAnalysis& a, const io::OutputFolder&
       if (r.figures != FiguresStatus::kGnuplotMissing) r.stages.push_back({"figures (gnuplot)", laps.Lap()});
     }
   }
-  io::WriteTextAtomically((out / "report.html").string(), RunHtml(a, r.figures == FiguresStatus::kDrawn, options.fit_report));
+  const std::map<std::string, std::string> svgs =
+      r.figures == FiguresStatus::kDrawn ? DrawnSvgs(fig) : std::map<std::string, std::string>{};
+  io::WriteTextAtomically((out / "report.html").string(), RunHtml(a, svgs, options.fit_report, options.command_line));
   return r;
 }
 
