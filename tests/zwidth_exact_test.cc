@@ -205,6 +205,7 @@ TEST_P(ZWidthFamilies, IntervalsAgreeWithIndependentEigenvaluesOnAGrid) {
   EXPECT_LT(t.stable, t.points) << "and the unstable one";
 }
 
+#ifndef ZWIDTH_MANY_MODES
 INSTANTIATE_TEST_SUITE_P(
     ClusteredModes, ZWidthFamilies,
     ::testing::Values(FamilyCase{"one_section_zeta1e4_d0", 1, 300, 1.08, 1e-4, 0, false},
@@ -214,11 +215,18 @@ INSTANTIATE_TEST_SUITE_P(
                       FamilyCase{"eight_sections_8pct_zeta0025_d2", 8, 300, 1.08, 0.025, 2, false},
                       FamilyCase{"eight_sections_1pct_zeta1e4_d8", 8, 300, 1.01, 1e-4, 8, false},
                       FamilyCase{"twelve_sections_2pct_zeta01_d1", 12, 800, 1.02, 0.1, 1, false},
-                      FamilyCase{"sixteen_sections_4pct_zeta001_d20_filter", 16, 300, 1.04, 0.01, 20, true},
-                      FamilyCase{"thirtytwo_sections_1pct_zeta1e3_d3", 32, 500, 1.01, 1e-3, 3, false},
+                      FamilyCase{"sixteen_sections_4pct_zeta001_d20_filter", 16, 300, 1.04, 0.01, 20, true}),
+    [](const ::testing::TestParamInfo<FamilyCase>& i) { return i.param.name; });
+#else
+// 32 and 64 sections: minutes each (the eigenvalue test is O(n^3) per
+// region), so in the stress label (zwidth_exact_stress_test).
+INSTANTIATE_TEST_SUITE_P(
+    ManyModes, ZWidthFamilies,
+    ::testing::Values(FamilyCase{"thirtytwo_sections_1pct_zeta1e3_d3", 32, 500, 1.01, 1e-3, 3, false},
                       FamilyCase{"sixtyfour_sections_8pct_zeta0025_d2", 64, 300, 1.08, 0.025, 2, false},
                       FamilyCase{"sixtyfour_sections_1pct_zeta1e4_d0", 64, 300, 1.01, 1e-4, 0, false}),
     [](const ::testing::TestParamInfo<FamilyCase>& i) { return i.param.name; });
+#endif
 
 }  // namespace
 }  // namespace zwidth::stability
