@@ -108,7 +108,7 @@ void Run(RunFlags& f) {
   o.loop = ResolveLoops(f.loop, 1.0 / in.response.frf.sample_rate_hz)[0];
   const analysis::RunAnalysis a = analysis::Analyse(std::move(in), o);
   const std::string fit_report = FitReport(a.input.fit);  // the CLI's wording, for the terminal and report.html
-  const report::RunReport rep = report::WriteRunReport(a, folder, {.draw_figures = true, .png = f.png, .fit_report = fit_report});
+  const report::RunReport rep = report::WriteRunReport(a, folder, {.draw_figures = true, .png = f.png, .fit_report = fit_report, .command_line = CommandLine()});
   for (const analysis::RunStage& s : a.stages) {
     if (s.name.rfind("figure", 0) == 0) continue;
     PrintStage(s.name, s.ms);

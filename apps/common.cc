@@ -434,4 +434,30 @@ void ConvertDelayToPeriod(io::ModelFile* mf, double T, const std::string& what) 
   throw InputError(buf);
 }
 
+namespace {
+std::string& StoredCommandLine() {
+  static std::string line;
+  return line;
+}
+}  // namespace
+
+void SetCommandLine(int argc, char** argv) {
+  std::string& line = StoredCommandLine();
+  line.clear();
+  for (int i = 0; i < argc; ++i) {
+    const std::string a = i == 0 ? "zwidth" : argv[i];
+    const bool plain = !a.empty() && a.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                                         "0123456789-_./=:,+@%") == std::string::npos;
+    std::string q = a;
+    if (!plain) {
+      q = "'";
+      for (char c : a) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+      q += "'";
+    }
+    line += (i ? " " : "") + q;
+  }
+}
+
+const std::string& CommandLine() { return StoredCommandLine(); }
+
 }  // namespace zwidth::app
