@@ -129,4 +129,12 @@ nlohmann::json ObjectCheckJson(const ObjectCheck& c, const io::SceneObject& o) {
   return j;
 }
 
+nlohmann::json SceneCheckJson(const SceneCheck& sc, const std::vector<io::SceneObject>& objects, int delay,
+                              double T, const SceneCheckOptions& o) {
+  nlohmann::json out = {{"delay_samples", delay}, {"period_s", T}, {"objects", nlohmann::json::array()},
+                        {"marginal_sigmas", sc.has_std ? nlohmann::json(o.marginal_sigmas) : nlohmann::json(nullptr)}};
+  for (size_t i = 0; i < objects.size(); ++i) out["objects"].push_back(ObjectCheckJson(sc.objects[i], objects[i]));
+  return out;
+}
+
 }  // namespace zwidth::analysis

@@ -59,5 +59,9 @@ SceneCheck CheckScene(const model::Plant& plant, const std::vector<double>& log_
 // The object's entry of `check --json`: ObjectVerdict::ToJson plus status,
 // boundary_K, boundary_f_hz, boundary_K_std and sigmas_to_boundary.
 nlohmann::json ObjectCheckJson(const ObjectCheck& c, const io::SceneObject& o);
+// What `check --json` prints (and zwidth.check returns): delay_samples,
+// period_s, marginal_sigmas (null without a std) and the objects.
+nlohmann::json SceneCheckJson(const SceneCheck& sc, const std::vector<io::SceneObject>& objects, int delay_samples,
+                              double period_s, const SceneCheckOptions& options);
 
 }  // namespace zwidth::analysis

@@ -504,13 +504,8 @@ void AddCheckCommand(CLI::App& app) {
     const analysis::SceneCheck sc =
         analysis::CheckScene(mf.plant, mf.log_covariance, T, cf->delay, ResolveLoops(cf->loop, T), objs, cf->options);
     if (!mf.log_covariance.empty() && !sc.has_std) std::fprintf(stderr, "note: no std (and no marginal status) with several hands\n");
-    nlohmann::json out = {{"delay_samples", cf->delay}, {"period_s", T}, {"objects", nlohmann::json::array()},
-                          {"marginal_sigmas", sc.has_std ? nlohmann::json(cf->options.marginal_sigmas) : nlohmann::json(nullptr)}};
-    for (size_t i = 0; i < objs.size(); ++i) {
-      out["objects"].push_back(analysis::ObjectCheckJson(sc.objects[i], objs[i]));
-      if (!cf->json) PrintObjectCheck(sc.objects[i], objs[i]);
-    }
-    if (cf->json) std::cout << out.dump() << std::endl;
+    for (size_t i = 0; i < objs.size() && !cf->json; ++i) PrintObjectCheck(sc.objects[i], objs[i]);
+    if (cf->json) std::cout << analysis::SceneCheckJson(sc, objs, cf->delay, T, cf->options).dump() << std::endl;
     const int code = sc.num_unstable > 0 ? 3 : sc.num_marginal > 0 ? 4 : 0;
     if (code != 0 && !cf->json) {
       std::printf("%d of %zu objects unstable, %d marginal (within %g std of a boundary) (exit status %d)\n",

@@ -84,6 +84,13 @@ std::string Alternatives(const std::vector<std::string>& items) {
   return out;
 }
 
+// More modes: the order search when it was not used, else a higher limit
+// (when the search reached it) or nothing (more modes were tried and lost).
+std::string MoreModesAdvice(const FitOptions& o, const FitResult& r) {
+  if (!o.auto_modes) return "more modes (FitOptions::auto_modes)";
+  return static_cast<int>(r.plant.modes.size()) >= o.max_modes ? "more modes (FitOptions::max_modes)" : "";
+}
+
 // The quality tests (see FitResult::quality).
 void JudgeQuality(const Fixed& fx, const ident::FrequencyResponse& sub, const FitOptions& o, FitResult* res) {
   auto add = [&](std::string code, std::string msg, std::string advice) {
@@ -91,12 +98,7 @@ void JudgeQuality(const Fixed& fx, const ident::FrequencyResponse& sub, const Fi
   };
   const double kappa = std::max(1.0, sub.bin_correlation);
   const double chi_limit = Chi2Limit(*res, sub.bin_correlation);
-  // More modes: the order search when it was not used, else a higher limit
-  // (when the search reached it) or nothing (more modes were tried and lost).
-  const bool at_limit = o.auto_modes && static_cast<int>(res->plant.modes.size()) >= o.max_modes;
-  const std::string more_modes = !o.auto_modes ? "more modes (FitOptions::auto_modes)"
-                                 : at_limit    ? "more modes (FitOptions::max_modes)"
-                                               : "";
+  const std::string more_modes = MoreModesAdvice(o, *res);
   if (res->chi2_per_dof > chi_limit) {
     add("chi2_per_dof", Fmt("chi2/dof %.3g is above %.3g: the model does not explain the response within its std",
                             res->chi2_per_dof, chi_limit),
