@@ -52,7 +52,7 @@ analysis::RunInput EstimateAndFit(const RunFlags& f, const analysis::RunOptions&
   in.whole_record = f.est.whole_record;
   *t_total_ms = timer.Lap("estimate (read + Welch)");
   // The reference's delay is counted in its own period: in the log's (or refused).
-  if (in.reference) ConvertDelayToPeriod(&*in.reference, 1.0 / in.response.frf.sample_rate_hz, "the reference");
+  if (in.reference) app::ConvertDelayToPeriod(&*in.reference, 1.0 / in.response.frf.sample_rate_hz, "the reference");
   std::exception_ptr ref_error;
   std::optional<analysis::ReferenceStability> ref;
   {

@@ -106,5 +106,6 @@ void AddStabilityCommands(CLI::App& app);  // boundary, relay, check
 void AddExportCommand(CLI::App& app);
 void AddRunCommand(CLI::App& app);
 void AddExciteCommand(CLI::App& app);
+void AddValidateCommand(CLI::App& app);    // validate a model on a fresh log
 
 }  // namespace zwidth::app
