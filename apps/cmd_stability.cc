@@ -9,6 +9,7 @@
 #include "apps/common.h"
 #include "analysis/scene_check.h"
 #include "apps/loop_flags.h"
+#include "io/printable.h"
 #include "stability/haptic_loop.h"
 #include "io/atomic_file.h"
 #include "io/model_json.h"
@@ -31,7 +32,7 @@ nlohmann::json LoopJson(const std::vector<stability::LoopOptions>& loops) {
 }
 
 void CheckDelay(int d, const char* flag) {
-  if (d < 0) throw InputError(std::string(flag) + " = " + std::to_string(d) + ": delays must be >= 0 samples");
+  if (const std::string why = io::LoopDelaysProblem({d}, flag); !why.empty()) throw InputError(why);
 }
 
 // The boundary table of every delay: one loop per hand, the region stable for
@@ -239,8 +240,7 @@ void AddBoundaryCommand(CLI::App& app) {
     }
     io::ModelFile mf = io::ReadModelJsonFor(bf->model, "boundary");  // not const: --period may convert its delay
     const double T = ResolvePeriod(bf->period, &mf);
-    if (bf->delays.empty()) throw InputError("--delays is empty");
-    for (int d : bf->delays) CheckDelay(d, "--delays");
+    if (const std::string why = io::LoopDelaysProblem(bf->delays, "--delays"); !why.empty()) throw InputError(why);
     std::string why;
     if (!bf->grid.IsValid(&why)) throw InputError(why);
     if (bf->monte_carlo < 0) throw InputError("--monte-carlo must be >= 0");
@@ -471,7 +471,8 @@ void PrintObjectCheck(const analysis::ObjectCheck& c, const io::SceneObject& o) 
   const char* status = c.status == analysis::SceneStatus::kStable     ? "stable  "
                        : c.status == analysis::SceneStatus::kMarginal ? "marginal"
                                                                       : "UNSTABLE";
-  std::printf("%-20s K = %-10g B = %-8g %s  %s  K_cr = %-10.5g%s\n", o.name.c_str(), o.K, o.B, status, where.c_str(),
+  std::printf("%-20s K = %-10g B = %-8g %s  %s  K_cr = %-10.5g%s\n", io::Printable(o.name).c_str(), o.K, o.B, status,
+              where.c_str(),
               v.critical.K_cr, sigma.c_str());
 }
 
@@ -511,9 +512,7 @@ void AddCheckCommand(CLI::App& app) {
       std::printf("%d of %zu objects unstable, %d marginal (within %g std of a boundary) (exit status %d)\n",
                   sc.num_unstable, objs.size(), sc.num_marginal, cf->options.marginal_sigmas, code);
     }
-    std::cout.flush();
-    std::fflush(stdout);
-    if (code != 0) std::exit(code);  // documented: 3 some object unstable, 4 none unstable but some marginal
+    if (code != 0) throw ExitStatus{code};  // documented: 3 some object unstable, 4 none unstable but some marginal
   });
 }
 

@@ -135,6 +135,23 @@ ident::FrequencyResponse ReadCsv(const std::string& path) {
   return r;
 }
 
+// Per bin: a std of 0 would weight the fit by 1/0 (an infinite chi2 or one bin
+// alone deciding it), a coherence outside [0, 1] or a negative frequency is
+// no response an estimate gives.
+void CheckBinValues(const ident::FrequencyResponse& r, const std::string& path) {
+  for (size_t k = 0; k < r.f_hz.size(); ++k) {
+    const std::string where = path + ": bin " + std::to_string(k) + " (f = " + Num(r.f_hz[k]) + " Hz): ";
+    if (!(r.H_std[k] > 0.0)) {
+      throw InputError(where + "H_std = " + Num(r.H_std[k]) + ", a per-bin std must be > 0 (the fit weights each "
+                       "bin by 1/std): write the std the estimate gave, or drop the H_std column (then |H| x 1e-3)");
+    }
+    if (!(r.coherence[k] >= 0.0 && r.coherence[k] <= 1.0)) {
+      throw InputError(where + "coherence = " + Num(r.coherence[k]) + " is outside [0, 1]");
+    }
+    if (!(r.f_hz[k] >= 0.0)) throw InputError(where + "a frequency must be >= 0");
+  }
+}
+
 // The rate (--rate wins over the file's) and the checks common to both formats.
 void Finish(ident::FrequencyResponse& r, const std::string& path, double rate) {
   if (!(std::isfinite(r.effective_averages) && r.effective_averages >= 0.0)) {
@@ -143,6 +160,7 @@ void Finish(ident::FrequencyResponse& r, const std::string& path, double rate) {
   if (!(std::isfinite(r.bin_correlation) && r.bin_correlation > 0.0)) {
     throw InputError(path + ": bin_correlation = " + Num(r.bin_correlation) + " must be finite, > 0");
   }
+  CheckBinValues(r, path);
   if (rate > 0.0) r.sample_rate_hz = rate;
   if (!(r.sample_rate_hz > 0.0) || !std::isfinite(r.sample_rate_hz)) {
     throw InputError(path + ": no sample_rate_hz column or attribute; pass ReadFrequencyResponse::sample_rate_hz (the log's sample rate)");
