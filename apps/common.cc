@@ -25,6 +25,11 @@ const std::vector<FieldFlag>& FieldFlags() {
       {"LogSelect::input_scale", "--input-scale"},
       {"LogSelect::output_scale", "--output-scale"},
       {"LogSelect::time_unit", "--time-unit"},
+      {"LogSelect::input_unit", "--input-unit"},
+      {"LogSelect::output_unit", "--output-unit"},
+      {"LogSelect::counts_per_rev", "--counts-per-rev"},
+      {"LogSelect::counts_per_m", "--counts-per-m"},
+      {"LogSelect::decimal_comma", "--decimal-comma"},
       {"LogSelect::time_dataset", "--time-dataset"},
       {"LogSelect::input_dataset", "--input-dataset"},
       {"LogSelect::output_dataset", "--output-dataset"},
@@ -172,6 +177,11 @@ void AddLogFlags(CLI::App* cmd, io::LogSelect* s) {
   cmd->add_option("--input-scale", s->input_scale, "factor applied to the input (e.g. volts -> N m)")->capture_default_str();
   cmd->add_option("--output-scale", s->output_scale, "factor applied to the output (e.g. counts -> rad)")->capture_default_str();
   cmd->add_option("--time-unit", s->time_unit, "unit of the text time column: s | ms | us (default s)");
+  cmd->add_option("--input-unit", s->input_unit, "unit of the text input column (mN m, N mm, N, ...; si: as is; default: from the header, else N m)");
+  cmd->add_option("--output-unit", s->output_unit, "unit of the text output column (deg, rad, mm, um, m, counts, ...; si: as is; default: from the header, else rad)");
+  cmd->add_option("--counts-per-rev", s->counts_per_rev, "encoder counts per turn, for an output in counts (to rad)");
+  cmd->add_option("--counts-per-m", s->counts_per_m, "encoder counts per metre, for an output in counts (to m)");
+  cmd->add_flag("--decimal-comma", s->decimal_comma, "text numbers use ',' as the decimal mark (detected when the first data line reads only so)");
   cmd->add_option("--input-dataset", s->input_dataset, "HDF5 dataset of the input")->capture_default_str();
   cmd->add_option("--output-dataset", s->output_dataset, "HDF5 dataset of the output")->capture_default_str();
   cmd->add_option("--time-dataset", s->time_dataset, "HDF5 dataset of the time stamps")->capture_default_str();

@@ -73,6 +73,28 @@ void LeakageChecks(const ident::FrequencyResponse& sub, FitResult* res) {
   }
 }
 
+// "a", "a or b", "a, b, or c": the non-empty items as alternatives of one
+// advice sentence (an empty list gives "").
+std::string Alternatives(const std::vector<std::string>& items) {
+  std::vector<std::string> kept;
+  for (const std::string& s : items) {
+    if (!s.empty()) kept.push_back(s);
+  }
+  std::string out;
+  for (size_t i = 0; i < kept.size(); ++i) {
+    if (i > 0) out += kept.size() == 2 ? " or " : (i + 1 == kept.size() ? ", or " : ", ");
+    out += kept[i];
+  }
+  return out;
+}
+
+// More modes: the order search when it was not used, else a higher limit
+// (when the search reached it) or nothing (more modes were tried and lost).
+std::string MoreModesAdvice(const FitOptions& o, const FitResult& r) {
+  if (!o.auto_modes) return "more modes (FitOptions::auto_modes)";
+  return static_cast<int>(r.plant.modes.size()) >= o.max_modes ? "more modes (FitOptions::max_modes)" : "";
+}
+
 // The quality tests (see FitResult::quality).
 void JudgeQuality(const Fixed& fx, const ident::FrequencyResponse& sub, const FitOptions& o, FitResult* res) {
   auto add = [&](std::string code, std::string msg, std::string advice) {
@@ -80,18 +102,13 @@ void JudgeQuality(const Fixed& fx, const ident::FrequencyResponse& sub, const Fi
   };
   const double kappa = std::max(1.0, sub.bin_correlation);
   const double chi_limit = Chi2Limit(*res, sub.bin_correlation);
-  // More modes: the order search when it was not used, else a higher limit
-  // (when the search reached it) or nothing (more modes were tried and lost).
-  const bool at_limit = o.auto_modes && static_cast<int>(res->plant.modes.size()) >= o.max_modes;
-  const std::string more_modes = !o.auto_modes ? "more modes (FitOptions::auto_modes), "
-                                 : at_limit    ? "more modes (FitOptions::max_modes), "
-                                               : "";
+  const std::string more_modes = MoreModesAdvice(o, *res);
   if (res->chi2_per_dof > chi_limit) {
     add("chi2_per_dof", Fmt("chi2/dof %.3g is above %.3g: the model does not explain the response within its std",
                             res->chi2_per_dof, chi_limit),
-        "try " + more_modes + (o.auto_delay ? "" : "FitOptions::auto_delay, ") +
-            "a band where the device is linear (BandOptions::fmin_hz/BandOptions::fmax_hz), or check for a mode above "
-            "Nyquist or aliasing (eq. 1 cannot fit one)");
+        "try " + Alternatives({more_modes, o.auto_delay ? "" : "FitOptions::auto_delay",
+                               "a band where the device is linear (BandOptions::fmin_hz/BandOptions::fmax_hz)",
+                               "check for a mode above Nyquist or aliasing (eq. 1 cannot fit one)"}));
   }
   // Runs test on every 3rd bin (Hann bins 3 apart are uncorrelated), or past
   // the correlation the estimator reports (a local method's window).
@@ -117,8 +134,9 @@ void JudgeQuality(const Fixed& fx, const ident::FrequencyResponse& sub, const Fi
   res->runs_z = z_min;
   if (z_min < -4.0) {
     add("residual_runs", Fmt("the residual has long runs of one sign (runs test z = %.3g < -4): systematic misfit", z_min),
-        "the model misses a feature of the response: " + more_modes + (o.auto_delay ? "" : "a delay (FitOptions::auto_delay), ") +
-            "or a band that leaves it out (BandOptions::fmin_hz/BandOptions::fmax_hz)");
+        "the model misses a feature of the response: " +
+            Alternatives({more_modes, o.auto_delay ? "" : "a delay (FitOptions::auto_delay)",
+                          "a band that leaves it out (BandOptions::fmin_hz/BandOptions::fmax_hz)"}));
   }
   // Misfit concentrated in one octave.
   if (!fx.r.empty()) {

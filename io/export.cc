@@ -160,13 +160,22 @@ std::string Matlab(const ModelFile& mf, double T) {
        << "% appendix's call (f_CR = w_cr / (2 pi)). CAVEAT: margin() reports the -180 deg crossover whose\n"
        << "% gain is nearest 0 dB, which can be a high-frequency one (a lightly damped mode, the delay near\n"
        << "% Nyquist): then it is not the paper's K_CR, which is the smallest positive gain over all -180 deg\n"
-       << "% crossings (zwidth's exact K_CR). Check every crossing (allmargin, or the phase of freqresp on a\n"
-       << "% fine grid) or compare with `zwidth boundary`, which prints both.\n"
+       << "% crossings (zwidth's exact K_CR). zwidth_crossings(B, d) below lists every -180 deg crossing\n"
+       << "% (from freqresp on a log grid of 20000 frequencies up to Nyquist, interpolated) as rows\n"
+       << "% [K f_hz]; the paper's K_CR is the smallest positive K. `zwidth boundary` prints both.\n"
        << "% WARNING: a gain margin is a stability limit only while the loop with K = 0 is stable.\n"
        << "% Past B_max that loop is unstable and margin() still reports a positive K although no\n"
        << "% K is stable: eq. (4)'s margin is not the Z-width there (`zwidth boundary` gives both).\n"
        << "zwidth_z = tf('z', T);\n"
-       << "zwidth_loop = @(B, d) T / ((T * zwidth_z^d) / Gz + B * (zwidth_z - 1) / zwidth_z);\n";
+       << "zwidth_loop = @(B, d) T / ((T * zwidth_z^d) / Gz + B * (zwidth_z - 1) / zwidth_z);\n"
+       << "zwidth_w = logspace(log10(2 * pi * 0.01), log10(pi / T * (1 - 1e-9)), 20000);\n"
+       << "zwidth_h = @(B, d) reshape(freqresp(zwidth_loop(B, d), zwidth_w), 1, []);\n"
+       << "zwidth_at = @(h, i) [i; imag(h(i)) ./ (imag(h(i)) - imag(h(i + 1)))];  % bin and fraction of each sign change\n"
+       << "zwidth_interp = @(x, i) x(i(1, :)) + i(2, :) .* (x(i(1, :) + 1) - x(i(1, :)));\n"
+       << "zwidth_cross = @(h, i) [-1 ./ real(zwidth_interp(h, i)); zwidth_interp(zwidth_w, i) / (2 * pi)].';\n"
+       << "zwidth_sign_changes = @(h) find(imag(h(1:end-1)) .* imag(h(2:end)) <= 0);\n"
+       << "zwidth_crossings_of = @(h) zwidth_cross(h, zwidth_at(h, zwidth_sign_changes(h)));\n"
+       << "zwidth_crossings = @(B, d) zwidth_crossings_of(zwidth_h(B, d));\n";
   }
   return os.str();
 }

@@ -162,6 +162,9 @@ LogInfo StreamLog(const std::string& path, const LogSelect& select, const LogSin
     }
   }
   TimeScale(select.time_unit);  // validates the flag
+  for (const auto& [v, flag] : {std::pair{select.counts_per_rev, "LogSelect::counts_per_rev"}, std::pair{select.counts_per_m, "LogSelect::counts_per_m"}}) {
+    if (!std::isfinite(v) || v < 0.0) throw InputError(std::string(flag) + " = " + std::to_string(v) + ": must be finite and > 0");
+  }
   CheckInputFile(path, "log");
   size_t total = 0;
   internal::ConstantCheck output_constant;

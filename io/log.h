@@ -37,6 +37,18 @@ struct LogSelect {
   // Unit of the text time column: "s", "ms" or "us"; "" = s, and then an
   // implied rate outside [10 Hz, 1 MHz] is refused with a suggestion.
   std::string time_unit;
+  // Units of the input and output columns (io/log_units.h): "" reads them
+  // from the header (a bracketed unit, a known suffix such as _deg, or a units
+  // row under the header), else SI; "si" takes the column as SI; or a unit
+  // such as "mN m", "deg", "mm", "counts". The samples are converted to N m
+  // or N, and rad or m, before input_scale / output_scale multiply them.
+  std::string input_unit, output_unit;
+  // Encoder resolution for an output in counts: counts per turn (rotary, to
+  // rad) or per metre (linear, to m); 0 = not given.
+  double counts_per_rev = 0.0, counts_per_m = 0.0;
+  // Numbers of a text log use ',' as the decimal mark ("0,25"); without it a
+  // file whose first data line reads only that way is detected as such.
+  bool decimal_comma = false;
   std::string time_dataset = "/time";                 // HDF5
   std::string input_dataset = "/input/torque";        // HDF5
   std::string output_dataset = "/output/position";    // HDF5

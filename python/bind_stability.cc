@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 
+#include "analysis/scene_check.h"
 #include "io/stability_files.h"
 #include "model/error.h"
 #include "python/bind_common.h"
@@ -384,27 +385,33 @@ Raises ComputationError when the loop neither oscillates nor diverges.)doc");
 void BindCheck(py::module_& m) {
   m.def("check",
         [](const py::object& scene, const io::ModelFile& model, int delay_samples, std::optional<double> period_s,
-           std::optional<double> velocity_filter_hz, std::optional<std::tuple<double, double, double>> hand) {
+           std::optional<double> velocity_filter_hz, std::optional<std::tuple<double, double, double>> hand,
+           double marginal_sigmas) {
           CheckDelay(delay_samples, "delay_samples");
           const double T = ResolvePeriod(period_s, model);
           const stability::LoopOptions loop = LoopFrom(velocity_filter_hz, hand, T);
           const std::vector<io::SceneObject> objs = SceneFrom(scene);
-          nlohmann::json out = {{"delay_samples", delay_samples}, {"period_s", T},
-                                {"objects", nlohmann::json::array()}};
+          analysis::SceneCheckOptions o;
+          o.marginal_sigmas = marginal_sigmas;
+          nlohmann::json out;
           {
             py::gil_scoped_release release;
-            const stability::ZWidth z(model.plant, T, delay_samples, loop);
-            for (const auto& o : objs) out["objects"].push_back(io::CheckObject(z, o).ToJson(o));
+            const analysis::SceneCheck sc = analysis::CheckScene(model.plant, model.log_covariance, T, delay_samples,
+                                                                 {loop}, objs, o);
+            out = analysis::SceneCheckJson(sc, objs, delay_samples, T, o);
           }
           return JsonToPython(out);
         },
         py::arg("scene"), py::arg("model"), py::arg("delay_samples"), py::arg("period_s") = py::none(),
-        py::arg("velocity_filter_hz") = py::none(), py::arg("hand") = py::none(),
+        py::arg("velocity_filter_hz") = py::none(), py::arg("hand") = py::none(), py::arg("marginal_sigmas") = 2.0,
         R"doc(Is each object {name, K, B} of a haptic scene stable on this device?
 scene: a scene JSON path ({"objects": [...]}) or a list of dicts / (name, K, B)
 tuples; velocity_filter_hz and hand as for ZWidth. Returns the dict `zwidth
-check --json` prints (each object with its stable intervals); the CLI exits
-with status 3 when an object is unstable, this returns normally.)doc");
+check --json` prints (each object with its stable intervals, its status
+stable/marginal/unstable and, when the model has a covariance, its distance to
+the nearest boundary in std, marginal within marginal_sigmas); the CLI exits
+with status 3 when an object is unstable (4 when none is but some is marginal),
+this returns normally.)doc");
 }
 
 }  // namespace
