@@ -473,12 +473,13 @@ def test_docs_python_example(src, tmp_path, cli):
     """Runs the worked example of docs/python.md (its python code block) in an empty folder."""
     pytest.importorskip("matplotlib")
     text = open(os.path.join(src, "docs/python.md")).read()
-    code = text.split("```python\n", 1)[1].split("```", 1)[0]
+    code = "\n".join(b.split("```", 1)[0] for b in text.split("```python\n")[1:])  # every block, in order
     env = dict(os.environ, PYTHONPATH=os.path.dirname(os.path.dirname(zwidth.__file__)), MPLBACKEND="Agg")
     p = subprocess.run(["/usr/bin/python3", "-c", code], cwd=tmp_path, capture_output=True, text=True, env=env)
     assert p.returncode == 0, p.stderr
     assert open(tmp_path / "zwidth.png", "rb").read(8) == b"\x89PNG\r\n\x1a\n"
-    assert "fit converged" in p.stdout and "wall stable: True" in p.stdout
+    assert "<zwidth.FitResult good: converged" in p.stdout and "quality: good []" in p.stdout
+    assert "wall stable: True" in p.stdout
     # The printed Z-width figures are the CLI's on the model the example saved.
     cli("boundary", tmp_path / "model.json", "--delays", "2,4,8", "--b-step", "0.01", "-o", tmp_path / "b.csv",
         "--summary", tmp_path / "s.json")
