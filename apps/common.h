@@ -22,6 +22,11 @@ namespace zwidth::app {
 // (io::WithFlags; the one table of fields, flags and keywords is io/option_names.cc).
 std::string WithFlags(const std::string& message);
 
+// The command line as typed (main stores it), each argument quoted for a
+// POSIX shell where it needs it: the provenance of report.html.
+void SetCommandLine(int argc, char** argv);
+const std::string& CommandLine();
+
 struct EstimateFlags {
   io::LogSelect select;
   ident::WelchOptions welch;
@@ -95,5 +100,6 @@ void AddStabilityCommands(CLI::App& app);  // boundary, relay, check
 void AddExportCommand(CLI::App& app);
 void AddRunCommand(CLI::App& app);
 void AddExciteCommand(CLI::App& app);
+void AddValidateCommand(CLI::App& app);    // validate a model on a fresh log
 
 }  // namespace zwidth::app
