@@ -185,7 +185,7 @@ def test_every_type_pickles_compares_and_deep_copies(every_type):
 
 def test_every_type_crosses_a_two_process_pool(every_type):
     with multiprocessing.get_context("spawn").Pool(2) as pool:
-        back = pool.map(copy.copy, every_type)
+        back = pool.map_async(copy.copy, every_type).get(timeout=120)
     assert back == every_type
 
 
