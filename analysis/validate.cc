@@ -111,7 +111,7 @@ void FrequencyDomain(const model::StateSpace& sd, const io::Log& log, const Vali
   const ident::FrequencyResponse& frf = r->response;
   if (frf.num_averages < o.min_averages) {
     throw InputError(Fmt("the log gives %.0f Welch segments of %.0f samples; validate needs at least %.0f for a "
-                         "per-bin std: use a longer log or a shorter --window-length",
+                         "per-bin std: use a longer log or a shorter WelchOptions::window_length",
                          frf.num_averages, frf.window_length, o.min_averages));
   }
   r->band = ident::SelectExcitedBand(frf, o.band);

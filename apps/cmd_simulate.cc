@@ -2,6 +2,7 @@
 #include <cstdio>
 
 #include "apps/common.h"
+#include "io/printable.h"
 #include "io/atomic_file.h"
 #include "io/log.h"
 #include "io/model_json.h"
@@ -78,7 +79,7 @@ void AddSimulateCommand(CLI::App& app) {
       }
     }
     std::fprintf(stderr, "wrote %zu samples at %g Hz to %s\n", log.torque.size(),
-                 log.sample_rate_hz, f->out.c_str());
+                 log.sample_rate_hz, io::Printable(f->out).c_str());
   });
 }
 

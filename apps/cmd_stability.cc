@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "apps/common.h"
+#include "io/printable.h"
 #include "apps/loop_flags.h"
 #include "stability/haptic_loop.h"
 #include "io/atomic_file.h"
@@ -30,7 +31,7 @@ nlohmann::json LoopJson(const std::vector<stability::LoopOptions>& loops) {
 }
 
 void CheckDelay(int d, const char* flag) {
-  if (d < 0) throw InputError(std::string(flag) + " = " + std::to_string(d) + ": delays must be >= 0 samples");
+  if (const std::string why = io::LoopDelaysProblem({d}, flag); !why.empty()) throw InputError(why);
 }
 
 // The boundary table of every delay: one loop per hand, the region stable for
@@ -236,8 +237,7 @@ void AddBoundaryCommand(CLI::App& app) {
     }
     io::ModelFile mf = io::ReadModelJsonFor(bf->model, "boundary");  // not const: --period may convert its delay
     const double T = ResolvePeriod(bf->period, &mf);
-    if (bf->delays.empty()) throw InputError("--delays is empty");
-    for (int d : bf->delays) CheckDelay(d, "--delays");
+    if (const std::string why = io::LoopDelaysProblem(bf->delays, "--delays"); !why.empty()) throw InputError(why);
     std::string why;
     if (!bf->grid.IsValid(&why)) throw InputError(why);
     if (bf->monte_carlo < 0) throw InputError("--monte-carlo must be >= 0");
@@ -497,16 +497,14 @@ void AddCheckCommand(CLI::App& app) {
         } else {
           where = "no K > 0 is stable at this B";
         }
-        std::printf("%-20s K = %-10g B = %-8g %s  %s  K_cr = %-10.5g\n", o.name.c_str(), o.K, o.B,
+        std::printf("%-20s K = %-10g B = %-8g %s  %s  K_cr = %-10.5g\n", io::Printable(o.name).c_str(), o.K, o.B,
                     stable ? "stable  " : "UNSTABLE", where.c_str(), cp.K_cr);
       }
     }
     if (cf->json) std::cout << out.dump() << std::endl;
     if (unstable > 0) {
       if (!cf->json) std::printf("%d of %zu objects unstable (exit status 3)\n", unstable, objs.size());
-      std::cout.flush();
-      std::fflush(stdout);
-      std::exit(3);  // documented: some object is unstable (1 and 2 are errors)
+      throw ExitStatus{3};  // documented: some object is unstable (1 and 2 are errors)
     }
   });
 }

@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <sstream>
 
 #include "io/frf_file.h"
 #include "io/option_names.h"
+#include "io/printable.h"
 #include "model/error.h"
 
 namespace zwidth::app {
@@ -28,11 +30,21 @@ ident::WelchOptions EstimateFlags::Resolve() const {
   if (!ident::FromString(ResolvedDetrend(), &o.detrend)) {
     throw InputError("--detrend '" + detrend + "' is not one of none, mean, linear");
   }
-  if (!ident::FromString(estimator, &o.estimator)) {
-    throw InputError("--estimator '" + estimator + "' is not one of h1, h2");
+  if (!IsLocal() && !ident::FromString(estimator, &o.estimator)) {
+    throw InputError("--estimator '" + estimator + "' is not one of h1, h2, lpm, lrm");
   }
   std::string why;
   if (!o.IsValid(&why)) throw InputError(why);
+  return o;
+}
+
+ident::LocalModelOptions EstimateFlags::ResolveLocal() const {
+  ident::LocalModelOptions o = local;
+  ident::FromString(estimator, &o.method);
+  o.fmin_hz = welch.fmin_hz;
+  o.fmax_hz = welch.fmax_hz;
+  std::string why;
+  if (!o.IsValid(&why)) throw InputError(WithFlags(why));
   return o;
 }
 
@@ -58,7 +70,15 @@ void AddEstimateFlags(CLI::App* cmd, EstimateFlags* f) {
   cmd->add_option("--detrend", f->detrend,
                   "none | mean | linear, per segment (default linear; mean with --whole-record, where linear biases "
                   "the response)");
-  cmd->add_option("--estimator", f->estimator, "h1 | h2")->capture_default_str();
+  cmd->add_option("--estimator", f->estimator,
+                  "h1 | h2 (Welch) | lpm | lrm (local polynomial / rational method on the whole record, "
+                  "docs/estimators.md)")->capture_default_str();
+  cmd->add_option("--local-half-width", f->local.half_width,
+                  "lpm/lrm: bins either side of each estimate (0: 6 for lpm, 7 for lrm)")->capture_default_str();
+  cmd->add_option("--local-order", f->local.order, "lpm/lrm: order of the local polynomials (lrm: numerators)")->capture_default_str();
+  cmd->add_option("--local-denominator-order", f->local.denominator_order, "lrm: order of the local denominator")->capture_default_str();
+  cmd->add_option("--local-differences", f->local.differences,
+                  "lpm/lrm: times the output is differenced first (2: the rigid body's poles at z = 1 removed)")->capture_default_str();
   cmd->add_option("--fmin", f->welch.fmin_hz, "lowest frequency kept [Hz]")->capture_default_str();
   cmd->add_option("--fmax", f->welch.fmax_hz, "highest frequency kept [Hz], clipped below Nyquist")->capture_default_str();
   cmd->add_option("--reference-column", f->reference_column, "closed loop: column/variable of the logged excitation r (H = S_ry/S_ru)");
@@ -86,9 +106,12 @@ std::string JoinPaths(const std::vector<std::string>& paths) {
 namespace {
 
 void PrintRead(const io::LogInfo& info) {
-  std::fprintf(stderr, "%s: %zu samples at %g Hz; %s\n", info.source.c_str(), info.num_samples,
-               info.sample_rate_hz, info.layout.c_str());
-  for (const auto& w : info.warnings) std::fprintf(stderr, "warning: %s: %s\n", info.source.c_str(), WithFlags(w).c_str());
+  const std::string source = io::Printable(info.source);
+  std::fprintf(stderr, "%s: %zu samples at %g Hz; %s\n", source.c_str(), info.num_samples, info.sample_rate_hz,
+               io::Printable(info.layout).c_str());
+  for (const auto& w : info.warnings) {
+    std::fprintf(stderr, "warning: %s: %s\n", source.c_str(), io::Printable(WithFlags(w)).c_str());
+  }
 }
 
 // Samples after the last whole segment are not used: say so.
@@ -101,7 +124,7 @@ void WarnDropped(const std::string& path, size_t n_samples, const ident::WelchOp
   std::fprintf(stderr,
                "warning: %s: the last %zu samples (%.1f %% of the log) do not fill a %zu-sample segment and are "
                "not used; a --window-length that fits, or --whole-record for a sweep or periodic excitation, uses them\n",
-               path.c_str(), dropped, 100.0 * dropped / n_samples, n);
+               io::Printable(path).c_str(), dropped, 100.0 * dropped / n_samples, n);
 }
 
 }  // namespace
@@ -143,9 +166,14 @@ io::LogSelect ExcitationSelect(const std::string& path, const EstimateFlags& fla
 
 // Open loop in Welch segments: one streaming pass, memory for a few windows.
 ident::RunSpectra StreamedRun(const std::string& path, const EstimateFlags& flags, const ident::WelchOptions& options,
-                              io::LogInfo* info) {
+                              io::LogInfo* info, std::uint64_t* fingerprint) {
   ident::WelchEstimator est(options);
-  *info = io::StreamLog(path, flags.select, [&](const double* u, const double* y, size_t n) { est.Push(u, y, n); });
+  io::LogFingerprint fp;
+  *info = io::StreamLog(path, flags.select, [&](const double* u, const double* y, size_t n) {
+    est.Push(u, y, n);
+    fp.Add(u, y, n);
+  });
+  *fingerprint = fp.value();
   PrintRead(*info);
   WarnDropped(path, info->num_samples, options);
   ident::RunSpectra spectra;
@@ -178,9 +206,13 @@ std::vector<ident::RunSpectra> PeriodRuns(const std::string& path, const io::Log
 // The log in memory (closed loop, or --whole-record): its run, or one run per
 // period with --period-samples.
 std::vector<ident::RunSpectra> InMemoryRuns(const std::string& path, const EstimateFlags& flags, bool closed,
-                                            const io::LogSelect& rsel, ident::WelchOptions o, io::LogInfo* info) {
+                                            const io::LogSelect& rsel, ident::WelchOptions o, io::LogInfo* info,
+                                            std::uint64_t* fingerprint) {
   io::Log log = io::ReadLog(path, flags.select);
   *info = log.info;
+  io::LogFingerprint fp;
+  fp.Add(log.input.data(), log.output.data(), log.input.size());
+  *fingerprint = fp.value();
   PrintRead(*info);
   std::vector<double> r;
   if (closed) {
@@ -209,11 +241,12 @@ std::vector<ident::RunSpectra> InMemoryRuns(const std::string& path, const Estim
 
 // One log's runs; an InputError names the file first.
 std::vector<ident::RunSpectra> LogRuns(const std::string& path, const EstimateFlags& flags, bool closed,
-                                       const ident::WelchOptions& options, io::LogInfo* info) {
+                                       const ident::WelchOptions& options, io::LogInfo* info,
+                                       std::uint64_t* fingerprint) {
   const io::LogSelect rsel = closed ? ExcitationSelect(path, flags) : flags.select;
   try {
-    if (!closed && !flags.whole_record) return {StreamedRun(path, flags, options, info)};
-    return InMemoryRuns(path, flags, closed, rsel, options, info);
+    if (!closed && !flags.whole_record) return {StreamedRun(path, flags, options, info, fingerprint)};
+    return InMemoryRuns(path, flags, closed, rsel, options, info, fingerprint);
   } catch (const InputError& e) {
     const std::string what = e.what();
     throw InputError(what.rfind(path, 0) == 0 ? what : path + ": " + what);
@@ -235,9 +268,71 @@ void PrintCombined(const ident::CombinedResponse& r) {
   std::fprintf(stderr, "\n");
 }
 
+// The same samples twice (a file given twice, a copy, a link) are not two
+// runs: averaged, they shrink every per-bin std by 1/sqrt(2). Refused, since
+// no use of it is right; the message names both.
+void RefuseRepeatedLog(const std::vector<std::string>& paths, const std::vector<std::uint64_t>& seen,
+                       std::uint64_t fingerprint, const std::string& path) {
+  for (size_t i = 0; i < seen.size(); ++i) {
+    if (seen[i] != fingerprint) continue;
+    throw InputError(path + " holds the same samples as " + paths[i] +
+                     " (the same file, a copy or a link): runs are averaged as independent, and the same data twice "
+                     "would shrink every std by 1/sqrt(2) while adding nothing; give each run once");
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// --estimator lpm|lrm: every log read whole (with its excitation in closed
+// loop), one local estimate over all of them.
+LogsEstimate EstimateLocalFromLogs(const std::vector<std::string>& paths, const EstimateFlags& flags, bool closed) {
+  if (flags.whole_record || flags.period_samples != 0 || flags.welch.window_length != ident::WelchOptions{}.window_length ||
+      flags.welch.overlap != ident::WelchOptions{}.overlap) {
+    throw InputError("--estimator " + flags.estimator + " fits a local model on each whole log: drop --whole-record, "
+                     "--period-samples, --window-length and --overlap (Welch options)");
+  }
+  const ident::LocalModelOptions o = flags.ResolveLocal();
+  LogsEstimate out;
+  std::vector<ident::LocalRecord> runs;
+  double rate = 0.0;
+  for (const std::string& path : paths) {
+    try {
+      io::Log log = io::ReadLog(path, flags.select);
+      PrintRead(log.info);
+      ident::LocalRecord run{std::move(log.input), std::move(log.output), {}};
+      if (closed) run.r = std::move(io::ReadLog(path, ExcitationSelect(path, flags)).input);
+      if (rate == 0.0) rate = log.info.sample_rate_hz;
+      if (std::abs(log.info.sample_rate_hz - rate) > 1e-3 * rate) {
+        throw InputError("the log's rate differs from the first log's: runs of one estimate need one rate");
+      }
+      out.total_samples += log.info.num_samples;
+      out.infos.push_back(log.info);
+      runs.push_back(std::move(run));
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      throw InputError(what.rfind(path, 0) == 0 ? what : path + ": " + what);
+    }
+  }
+  ident::LocalEstimate est = ident::EstimateLocal(runs, rate, o);
+  for (const std::string& w : est.warnings) std::fprintf(stderr, "warning: %s\n", WithFlags(w).c_str());
+  out.response = ident::ToCombined(std::move(est), o.method, static_cast<int>(runs.size()));
+  std::fprintf(stderr, "%s (%s) from %zu run%s, %d bins per local window, %d residual degrees of freedom\n",
+               ident::ToString(out.response.method).c_str(), out.response.frf.estimator.c_str(), runs.size(),
+               runs.size() > 1 ? "s" : "", 2 * o.HalfWidth() + 1, out.response.frf.num_averages);
+  return out;
+}
+
 }  // namespace
 
 LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const EstimateFlags& flags, bool for_fit) {
+  if (flags.IsLocal()) {
+    LogsEstimate out = EstimateLocalFromLogs(paths, flags, !flags.reference_column.empty() || !flags.reference_dataset.empty());
+    io::CheckInputPower(out.response.frf, JoinPaths(paths));
+    io::CheckFiniteResponse(out.response.frf, JoinPaths(paths));
+    return out;
+  }
   ident::WelchOptions options = flags.Resolve();
   const bool closed = !flags.reference_column.empty() || !flags.reference_dataset.empty();
   CheckRecordFlags(flags);
@@ -253,9 +348,15 @@ LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const Estim
   if (flags.whole_record && flags.period_samples == 0 && paths.size() < 2) throw one_segment();  // before reading
   LogsEstimate out;
   std::vector<ident::RunSpectra> runs;
+  std::vector<std::uint64_t> seen;  // one fingerprint per log read
   for (const std::string& path : paths) {
     io::LogInfo info;
-    for (ident::RunSpectra& run : LogRuns(path, flags, closed, options, &info)) runs.push_back(std::move(run));
+    std::uint64_t fingerprint = 0;
+    for (ident::RunSpectra& run : LogRuns(path, flags, closed, options, &info, &fingerprint)) {
+      runs.push_back(std::move(run));
+    }
+    RefuseRepeatedLog(paths, seen, fingerprint, path);
+    seen.push_back(fingerprint);
     out.total_samples += info.num_samples;
     out.infos.push_back(info);
   }
@@ -280,16 +381,7 @@ double StageTimer::Lap(const std::string& stage) {
 
 double ResolvePeriod(double flag, io::ModelFile* mf) {
   if (std::isnan(flag)) return mf->sample_period_s ? *mf->sample_period_s : 0.001;
-  if (!(flag >= kMinPeriodS && flag <= kMaxPeriodS)) {
-    std::ostringstream os;
-    os.precision(6);
-    os << "--period = " << flag << " s: a sample period must lie in [1e-06, 0.1] s (a rate of 10 Hz..1 MHz); "
-       << "--period is the period T in seconds";
-    const bool rate = flag >= 10.0 && flag <= 1e6, ms = flag > 0.1 && flag <= 100.0;
-    if (rate) os << ", not the rate: for " << flag << " Hz pass --period " << 1.0 / flag;
-    if (ms) os << (rate ? "; " : ": ") << "for " << flag << " ms pass --period " << flag * 1e-3;
-    throw InputError(os.str());
-  }
+  if (const std::string why = io::SamplePeriodProblem(flag, "--period"); !why.empty()) throw InputError(why);
   app::ConvertDelayToPeriod(mf, flag, "the model");
   return flag;
 }

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "fit/fit_internal.h"
+#include "fit/friction_fit.h"
 
 namespace zwidth::fit {
 namespace internal {
@@ -39,6 +40,7 @@ double Chi2Limit(const FitResult& r, double kappa) {
 // the fit poor; a bias bound above 3 of its std errors is a warning.
 void LeakageChecks(const ident::FrequencyResponse& sub, FitResult* res) {
   if (!(sub.bin_correlation > 1.2) || sub.window_length <= 0 || !(sub.sample_rate_hz > 0)) return;
+  if (!sub.error_correlation.empty()) return;  // a local method: no window, its transient removed
   const double df = sub.sample_rate_hz / sub.window_length;
   const std::vector<model::Mode>& modes = res->plant.modes;
   for (size_t i = 0; i < modes.size(); ++i) {
@@ -57,12 +59,14 @@ void LeakageChecks(const ident::FrequencyResponse& sub, FitResult* res) {
              the + Fmt(" at %.4g Hz is %.3g Hz wide (half power), under 2 bins of the window (%.3g Hz): its leakage "
                        "widens it, and the fitted damping is too large (by up to about %.0f %%)",
                        f, bw, df, 100.0 * bias),
-             "a window " + std::to_string(longer) + " times longer (WelchOptions::window_length)"});
+             "a window " + std::to_string(longer) + " times longer (WelchOptions::window_length), or the local "
+             "rational method, which has no window (LocalModelOptions::method lrm)"});
       } else if (std::isfinite(sd) && sd > 0 && bias * c > 3.0 * sd) {
         res->warnings.push_back(
             "the damping of " + the +
             Fmt(" at %.4g Hz (%.3g Hz wide) may be biased up by the window's leakage by up to %.2g %%, %.2g times "
-                "its std error; a longer WelchOptions::window_length reduces it (4 times longer: 16 times less)",
+                "its std error; a longer WelchOptions::window_length reduces it (4 times longer: 16 times less), "
+                "the local rational method (LocalModelOptions::method lrm) removes it",
                 f, bw, 100.0 * bias, bias * c / sd));
       }
     }
@@ -89,8 +93,11 @@ void JudgeQuality(const Fixed& fx, const ident::FrequencyResponse& sub, const Fi
             "a band where the device is linear (BandOptions::fmin_hz/BandOptions::fmax_hz), or check for a mode above "
             "Nyquist or aliasing (eq. 1 cannot fit one)");
   }
-  // Runs test on every 3rd bin (Hann bins 3 apart are uncorrelated).
-  const int stride = kappa > 1.2 ? 3 : 1;
+  // Runs test on every 3rd bin (Hann bins 3 apart are uncorrelated), or past
+  // the correlation the estimator reports (a local method's window).
+  const int stride = !sub.error_correlation.empty() ? static_cast<int>(sub.error_correlation.size()) + 1
+                     : kappa > 1.2                  ? 3
+                                                    : 1;
   double z_min = 0;
   for (int part = 0; part < 2; ++part) {
     int n1 = 0, n2 = 0, runs = 0, last = 0;
@@ -220,6 +227,23 @@ std::vector<std::string> SpuriousSections(const FitResult& r, const FitOptions& 
     }
   }
   return out;
+}
+
+}  // namespace zwidth::fit
+
+namespace zwidth::fit {
+
+void AddFrictionReason(const FrictionFitResult& ff, FitResult* r) {
+  r->reasons.push_back(
+      {"friction",
+       internal::Fmt("the time-domain log shows Coulomb friction of %.3g +- %.2g (%.1f std; in the input's units): the "
+                     "linear fit's damping b = %.4g takes friction's amplitude-dependent damping (4 F_c / (pi w A) at "
+                     "amplitude A), so b and the Z-width depend on the drive level",
+                     ff.detection_coulomb, ff.detection_coulomb_std, ff.detection_coulomb / ff.detection_coulomb_std,
+                     r->plant.b),
+       "fit the friction with the linear model (FrictionFitOptions::model coulomb or auto); to test, record two "
+       "logs at drive levels 2-4 x apart: a linear device gives the same b at both"});
+  r->quality = FitQuality::kPoor;
 }
 
 }  // namespace zwidth::fit

@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -79,6 +80,20 @@ struct Log {
   std::vector<double> output;  // rad
 };
 Log ReadLog(const std::string& path, const LogSelect& select = {});
+
+// A 64-bit fingerprint (FNV-1a) of a log's samples as read, whatever the
+// format: two logs with the same fingerprint hold the same data (the same
+// file, a copy, a link, or the same samples saved as .h5 and .csv). Runs of one
+// device are averaged as independent; the same data twice would shrink every
+// per-bin std by 1/sqrt(2) while adding nothing, so the estimate refuses it.
+class LogFingerprint {
+ public:
+  void Add(const double* input, const double* output, size_t n);
+  std::uint64_t value() const { return hu_ ^ (hy_ * 31) ^ n_; }  // whatever the chunks were
+
+ private:
+  std::uint64_t hu_ = 14695981039346656037ull, hy_ = 14695981039346656037ull, n_ = 0;
+};
 
 // The HDF5 parsing that StreamLog runs in a child process (io/isolated.h),
 // callable in this process for the fuzzer (the isolation is tested on its own).

@@ -540,8 +540,16 @@ void WriteCsvLog(const std::string& tmp, double rate, const std::vector<double>&
   std::FILE* f = std::fopen(tmp.c_str(), "wb");
   if (!f) throw InputError("cannot create '" + tmp + "'");
   std::fputs("t,torque,position\n", f);
+  std::string line;  // to_chars: no decimal comma under the host's locale (Python's locale.setlocale)
   for (size_t k = 0; k < u.size(); ++k) {
-    std::fprintf(f, "%.17g,%.17g,%.17g\n", static_cast<double>(k) / rate, u[k], y[k]);
+    line.clear();
+    AppendG(&line, static_cast<double>(k) / rate, 17);
+    line += ',';
+    AppendG(&line, u[k], 17);
+    line += ',';
+    AppendG(&line, y[k], 17);
+    line += '\n';
+    std::fputs(line.c_str(), f);
   }
   const bool ok = std::ferror(f) == 0;
   if (std::fclose(f) != 0 || !ok) throw InputError("failed writing '" + tmp + "' (disk full?)");

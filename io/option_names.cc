@@ -82,6 +82,22 @@ const std::vector<OptionName>& OptionNames() {
       {"PassivityOptions::grid_points_per_delay", "", ""},
       {"PassivityOptions::theta_tolerance", "", ""},
       {"UncertaintyOptions::log_step", "", ""},
+      {"ValidateOptions::max_lag", "--max-lag", ""},
+      {"ValidateOptions::min_averages", "", ""},
+      {"ValidateOptions::relative_std_floor", "", ""},
+      {"LocalModelOptions::method", "--estimator", ""},
+      {"LocalModelOptions::half_width", "--local-half-width", ""},
+      {"LocalModelOptions::order", "--local-order", ""},
+      {"LocalModelOptions::denominator_order", "--local-denominator-order", ""},
+      {"LocalModelOptions::differences", "--local-differences", ""},
+      {"LocalModelOptions::fmin_hz", "--fmin", ""},
+      {"LocalModelOptions::fmax_hz", "--fmax", ""},
+      {"FrictionFitOptions::model", "--friction", ""},
+      {"FrictionFitOptions::cutoff_hz", "", ""},
+      {"FrictionFitOptions::min_speed_fraction", "", ""},
+      {"FrictionFitOptions::iterations", "", ""},
+      {"FrictionFitOptions::detection_z", "", ""},
+      {"FitOptions::local_relative_std_floor", "", ""},
   };
   return table;
 }

@@ -72,10 +72,51 @@ nlohmann::json SummaryToJson(const stability::DelaySummary& s, const stability::
   return j;
 }
 
+namespace {
+
+// '{' outside strings: at least the number of objects a scene holds, plus one.
+size_t CountJsonObjects(const std::string& text) {
+  size_t n = 0;
+  bool in_string = false;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\') ++i;
+      else if (c == '"') in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '{') {
+      ++n;
+    }
+  }
+  return n;
+}
+
+}  // namespace
+
+std::string LoopDelaysProblem(const std::vector<int>& delays, const std::string& name) {
+  if (delays.empty()) return name + " is empty: give at least one delay [samples]";
+  if (delays.size() > kMaxLoopDelays) {
+    return name + ": " + std::to_string(delays.size()) + " delays, more than the " + std::to_string(kMaxLoopDelays) +
+           " one command takes: run it again for the others";
+  }
+  for (int d : delays) {
+    if (d < 0 || d > kMaxLoopDelaySamples) {
+      return name + " = " + std::to_string(d) + ": a loop delay must lie in [0, " +
+             std::to_string(kMaxLoopDelaySamples) + "] samples (a delay counts samples of the period, not ms or us)";
+    }
+  }
+  return "";
+}
+
 std::vector<SceneObject> ReadScene(const std::string& path) {
-  const std::string text = ReadSmallFile(path, "scene file");  // a regular file, bounded size
+  const std::string text = ReadSmallFile(path, "scene file", kMaxSceneBytes);  // a regular file, bounded size
   CheckNotJsonOfAnotherKind(text, path, "scene", "check");
   CheckJsonDepth(text, path);
+  if (CountJsonObjects(text) > kMaxSceneObjects + 1) {
+    throw InputError(path + ": more than " + std::to_string(kMaxSceneObjects) +
+                     " objects (the most `check` takes in one scene): split the scene into several files");
+  }
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(text);

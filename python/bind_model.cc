@@ -209,7 +209,21 @@ void DefModelParameters(py::class_<io::ModelFile>& cls) {
                              "the covariance's rows: log m, log b, then log omega, log c, log v, log d per section")
       .def_property_readonly("fit_info", [](const io::ModelFile& mf) { return JsonToPython(mf.fit); },
                              "the fit metrics stored with a fitted model (dict), else None")
-      .def_property_readonly("num_states", [](const io::ModelFile& mf) { return mf.plant.num_states(); });
+      .def_property_readonly("num_states", [](const io::ModelFile& mf) { return mf.plant.num_states(); })
+      // The friction as model.json stores it (issue 32; fit/friction_fit.h).
+      .def_property_readonly("friction",
+                             [](const io::ModelFile& mf) {
+                               return mf.friction ? JsonToPython(io::ModelToJson(mf)["friction"]) : py::object(py::none());
+                             },
+                             "Coulomb friction and offset (dict of model.json's 'friction': coulomb_pos, coulomb_neg, "
+                             "offset, breakaway_pos, breakaway_neg; input units), else None")
+      .def_property_readonly("friction_std",
+                             [](const io::ModelFile& mf) {
+                               const nlohmann::json j = io::ModelToJson(mf);
+                               return j.contains("std") && j["std"].contains("friction")
+                                          ? JsonToPython(j["std"]["friction"]) : py::object(py::none());
+                             },
+                             "the friction's std (dict, None = unknown), else None");
 }
 
 // Model: validate, response, state_space, repr, pickling.

@@ -273,8 +273,12 @@ void FitSection(const analysis::RunAnalysis& a, const std::string& fit_report, s
   const ident::FrequencyResponse& frf = a.input.response.frf;
   h << "<h2>Fit</h2>\n<pre>" << Html(fit_report.empty() ? analysis::FitReport(fr) : fit_report) << "</pre>\n"
     << "<p>Log <code>" << Html(a.input.source) << "</code>: " << a.input.total_samples << " samples at "
-    << frf.sample_rate_hz << " Hz; Welch " << frf.num_averages << " averages of " << frf.window_length
-    << " samples; " << Html(ident::ToString(a.input.response.method)) << "; " << frf.f_hz.size() << " bins from "
+    << frf.sample_rate_hz << " Hz; "
+    << (frf.error_correlation.empty()
+            ? "Welch " + std::to_string(frf.num_averages) + " averages of " + std::to_string(frf.window_length) + " samples"
+            : "local model per bin, " + std::to_string(frf.num_averages) + " residual degrees of freedom")
+    << "; " << Html(ident::ToString(a.input.response.method)) << " (estimator " << Html(frf.estimator) << "); "
+    << frf.f_hz.size() << " bins from "
     << frf.f_hz.front() << " to " << frf.f_hz.back() << " Hz.</p>\n<h2>Fitted model (eq. 1)</h2>\n<pre>"
     << Html(analysis::ParameterTable(a.input.model, a.options.linear)) << "</pre>\n<p>" << Html(fr.BriefReport())
     << ". Residual: exact ZOH response weighted by the Welch per-bin std. "
