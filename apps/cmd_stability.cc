@@ -197,9 +197,7 @@ nlohmann::json BoundarySummaryJson(const BoundaryTable& t, const io::ModelFile& 
       std::fprintf(stderr, "Monte Carlo, d = %d: %d samples...\n", delays[i], monte_carlo);
       const stability::MonteCarloResult mc = stability::SummaryMonteCarlo(
           mf.plant, mf.log_covariance, T, delays[i], monte_carlo, seed, loops[0]);
-      e["monte_carlo"] = {{"samples", mc.samples}, {"seed", seed},
-                          {"std", io::SummaryToJson(stability::DelaySummary{}, &mc.std)["std"]},
-                          {"mean", io::SummaryToJson(stability::DelaySummary{}, &mc.mean)["std"]}};
+      e["monte_carlo"] = io::MonteCarloJson(mc, seed);
       std::printf("d = %d  std by delta method / Monte Carlo (%d samples): K_cr(0) %.4g / %.4g, B_t %.4g / %.4g, "
                   "K_cr^max %.4g / %.4g, B_max %.4g / %.4g\n",
                   delays[i], mc.samples, t.stds[i].K_cr_at_zero_B, mc.std.K_cr_at_zero_B, t.stds[i].B_t,
@@ -443,7 +441,7 @@ void AddRelayCommand(CLI::App& app) {
     if (loops.size() != 1) throw InputError("relay: give at most one --hand (the experiment runs one loop)");
     rf->o.loop = loops.front();
     std::string why;
-    if (!rf->o.IsValid(&why)) throw InputError(why);  // the fields' flags: FieldFlags() in common.cc
+    if (!rf->o.IsValid(&why)) throw InputError(why);  // the fields' flags: io/option_names.cc
     std::fprintf(stderr, "simulating %.3g s of relay feedback (d = %d, B = %g)...\n", rf->o.seconds,
                  rf->o.delay_samples, rf->o.damping);
     const stability::RelayResult res = stability::SimulateRelay(mf.plant, rf->o);

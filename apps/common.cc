@@ -8,135 +8,14 @@
 #include <sstream>
 
 #include "io/frf_file.h"
+#include "io/option_names.h"
 #include "io/printable.h"
 #include "model/error.h"
 
 namespace zwidth::app {
 
-const std::vector<FieldFlag>& FieldFlags() {
-  static const std::vector<FieldFlag> table = {
-      {"LogSelect::time_column", "--time-column"},
-      {"ValidateOptions::max_lag", "--max-lag"},
-      {"ValidateOptions::min_averages", ""},
-      {"ValidateOptions::relative_std_floor", ""},
-      {"LogSelect::input_column", "--input-column"},
-      {"LogSelect::output_column", "--output-column"},
-      {"LogSelect::delimiter", "--delimiter"},
-      {"LogSelect::input_scale", "--input-scale"},
-      {"LogSelect::output_scale", "--output-scale"},
-      {"LogSelect::time_unit", "--time-unit"},
-      {"LogSelect::input_unit", "--input-unit"},
-      {"LogSelect::output_unit", "--output-unit"},
-      {"LogSelect::counts_per_rev", "--counts-per-rev"},
-      {"LogSelect::counts_per_m", "--counts-per-m"},
-      {"LogSelect::decimal_comma", "--decimal-comma"},
-      {"LogSelect::time_dataset", "--time-dataset"},
-      {"LogSelect::input_dataset", "--input-dataset"},
-      {"LogSelect::output_dataset", "--output-dataset"},
-      {"LogSelect::sample_rate_hz", "--rate"},
-      {"ReadFrequencyResponse::sample_rate_hz", "--rate"},
-      {"OutputFolder::force", "--force"},
-      {"WelchOptions::window_length", "--window-length"},
-      {"LocalModelOptions::method", "--estimator"},
-      {"LocalModelOptions::half_width", "--local-half-width"},
-      {"LocalModelOptions::order", "--local-order"},
-      {"LocalModelOptions::denominator_order", "--local-denominator-order"},
-      {"LocalModelOptions::differences", "--local-differences"},
-      {"LocalModelOptions::fmin_hz", "--fmin"},
-      {"LocalModelOptions::fmax_hz", "--fmax"},
-      {"WelchOptions::overlap", "--overlap"},
-      {"WelchOptions::fmin_hz", "--fmin"},
-      {"WelchOptions::fmax_hz", "--fmax"},
-      {"BandOptions::fmin_hz", "--fmin"},
-      {"BandOptions::fmax_hz", "--fmax"},
-      {"BandOptions::min_input_power_ratio", "--min-input-power"},
-      {"BandOptions::min_coherence", "--min-coherence"},
-      {"ExcitationOptions::sample_rate_hz", "--rate"},
-      {"ExcitationOptions::seconds", "--seconds"},
-      {"ExcitationOptions::rms", "--rms"},
-      {"ExcitationOptions::fmin_hz", "--fmin"},
-      {"ExcitationOptions::fmax_hz", "--fmax"},
-      {"SimulateOptions::seconds", "--seconds"},
-      {"SimulateOptions::sample_rate_hz", "--rate"},
-      {"SimulateOptions::torque_rms", "--torque-rms"},
-      {"SimulateOptions::bandwidth_hz", "--bandwidth-hz"},
-      {"SimulateOptions::encoder_step_rad", "--encoder-step"},
-      {"SimulateOptions::noise_std_rad", "--noise-std"},
-      {"SimulateOptions::delay_samples", "--delay-samples"},
-      {"FrictionFitOptions::model", "--friction"},
-      {"FrictionFitOptions::cutoff_hz", ""},
-      {"FrictionFitOptions::min_speed_fraction", ""},
-      {"FrictionFitOptions::iterations", ""},
-      {"FrictionFitOptions::detection_z", ""},
-      {"FitOptions::num_modes", "--modes"},
-      {"FitOptions::auto_modes", "--modes auto"},
-      {"FitOptions::max_modes", "--max-modes"},
-      {"FitOptions::delay_samples", "--delay-samples"},
-      {"FitOptions::auto_delay", "--delay-samples auto"},
-      {"FitOptions::max_auto_delay", "--max-delay"},
-      {"FitOptions::allow_few_averages", "--allow-short"},
-      {"FitOptions::max_iterations", "--max-iterations"},
-      {"FitOptions::max_starts", "--starts"},
-      {"FitOptions::init", "--init"},
-      {"FitOptions::min_averages", ""},
-      {"FitOptions::min_damping_ratio", ""},
-      {"FitOptions::max_pole_damping_ratio", ""},
-      {"FitOptions::max_zero_damping_ratio", ""},
-      {"FitOptions::max_frequency_fraction", ""},
-      {"FitOptions::relative_std_floor", ""},
-      {"FitOptions::local_relative_std_floor", ""},
-      {"FitOptions::function_tolerance", ""},
-      {"FitOptions::max_converged_starts", ""},
-      {"FitOptions::runner_up_cost_ratio", ""},
-      {"BGridOptions::b_min", "--b-min"},
-      {"BGridOptions::b_max", "--b-max"},
-      {"BGridOptions::b_step", "--b-step"},
-      {"BGridOptions::b_points", "--b-points"},
-      {"SummaryMonteCarlo::samples", "--monte-carlo"},
-      {"SetLowPassFilter::cutoff_hz", "--velocity-filter-hz"},
-      {"LoopOptions::hand", "--hand"},
-      {"RunOptions::delays", "--delays"},
-      {"RunOptions::report_filter_hz", "--report-filter-hz"},
-      {"RelayOptions::period_s", "--period"},
-      {"RelayOptions::delay_samples", "--delay"},
-      {"RelayOptions::damping", "--damping"},
-      {"RelayOptions::amplitude", "--amplitude"},
-      {"RelayOptions::seconds", "--seconds"},
-      {"RelayOptions::settle_fraction", ""},
-      {"RelayOptions::loop", ""},
-      {"BoundaryOptions::min_grid_points", ""},
-      {"BoundaryOptions::grid_points_per_delay", ""},
-      {"BoundaryOptions::theta_tolerance", ""},
-      {"PassivityOptions::min_grid_points", ""},
-      {"PassivityOptions::grid_points_per_delay", ""},
-      {"PassivityOptions::theta_tolerance", ""},
-      {"UncertaintyOptions::log_step", ""},
-  };
-  return table;
-}
-
-std::string WithFlags(const std::string& message) {
-  std::string out;
-  size_t i = 0;
-  while (i < message.size()) {
-    // A field is Name::name: an upper-case identifier, "::", a lower-case one.
-    const size_t colon = message.find("::", i);
-    if (colon == std::string::npos) break;
-    size_t b = colon;
-    while (b > i && (std::isalnum(static_cast<unsigned char>(message[b - 1])) || message[b - 1] == '_')) --b;
-    size_t e = colon + 2;
-    while (e < message.size() && (std::isalnum(static_cast<unsigned char>(message[e])) || message[e] == '_')) ++e;
-    const std::string field = message.substr(b, e - b);
-    const char* flag = nullptr;
-    for (const FieldFlag& f : FieldFlags()) {
-      if (field == f.field && *f.flag) flag = f.flag;
-    }
-    out += message.substr(i, b - i);
-    out += flag ? std::string(flag) : field;
-    i = e;
-  }
-  return out + message.substr(std::min(i, message.size()));
-}
+// The table of fields, flags and keywords is io/option_names.cc (shared with the Python module).
+std::string WithFlags(const std::string& message) { return io::WithFlags(message); }
 
 std::string EstimateFlags::ResolvedDetrend() const {
   if (!detrend.empty()) return detrend;

@@ -19,14 +19,8 @@
 namespace zwidth::app {
 
 // The library's messages name option fields ("WelchOptions::window_length");
-// the CLI's name flags. The one table of field -> flag ("" = no flag: the CLI
-// leaves the field at its default), and the message with each field it names
-// replaced by its flag (a field not in the table is left as it is).
-struct FieldFlag {
-  const char* field;
-  const char* flag;
-};
-const std::vector<FieldFlag>& FieldFlags();
+// the CLI's name flags: the message with each field replaced by its flag
+// (io::WithFlags; the one table of fields, flags and keywords is io/option_names.cc).
 std::string WithFlags(const std::string& message);
 
 // The command line as typed (main stores it), each argument quoted for a

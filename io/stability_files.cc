@@ -216,6 +216,12 @@ double PassiveBMax(const stability::Passivity& pa, double b) {
   return lo;
 }
 
+nlohmann::json MonteCarloJson(const stability::MonteCarloResult& mc, std::uint64_t seed) {
+  return {{"samples", mc.samples}, {"seed", seed},
+          {"std", SummaryToJson(stability::DelaySummary{}, &mc.std)["std"]},
+          {"mean", SummaryToJson(stability::DelaySummary{}, &mc.mean)["std"]}};
+}
+
 nlohmann::json PassivitySummaryJson(const stability::Passivity& pa, double b) {
   return {{"K_P_at_zero_B", NumberOrNull(pa.At(0.0).K_hi)}, {"B_P_max", NumberOrNull(PassiveBMax(pa, b))},
           {"physical_damping_b", b},

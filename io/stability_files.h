@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "stability/haptic_loop.h"
+#include "stability/uncertainty.h"
 #include "stability/zwidth.h"
 
 namespace zwidth::io {
@@ -92,6 +93,8 @@ std::vector<SceneObject> ReadScene(const std::string& path);
 // "the passive set is empty", which grows with B), for physical damping b.
 double PassiveBMax(const stability::Passivity& pa, double b);
 // The summary's "passivity" object: K_P_at_zero_B, B_P_max, physical_damping_b, meaning.
+// A summary's "monte_carlo" entry: {"samples", "seed", "std", "mean"} (boundary --monte-carlo).
+nlohmann::json MonteCarloJson(const stability::MonteCarloResult& mc, std::uint64_t seed);
 nlohmann::json PassivitySummaryJson(const stability::Passivity& pa, double b);
 
 }  // namespace zwidth::io

@@ -8,6 +8,7 @@
 #include <optional>
 #include <utility>
 
+#include "model/cancel.h"
 #include "model/error.h"
 #include "model/state_space.h"
 #include "stability/haptic_loop.h"
@@ -212,6 +213,7 @@ void SimulateLoop(const model::StateSpace& ss, int d, const RelayOptions& o, dou
   VelocityFilter velocity(o.loop);
   double y_prev = 0.0, s_prev = 0.0;
   for (size_t k = 0; k < n; ++k) {
+    if ((k & 1023) == 0) PollCancel();  // model/cancel.h: a host's Ctrl-C
     const double y = ss.C.dot(x);
     const double s = filtered ? f2.Step(f1.Step(y)) : y;
     const double relay = RelayOutput(s_prev, s, o.amplitude);

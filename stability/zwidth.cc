@@ -8,6 +8,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "model/cancel.h"
 #include "model/error.h"
 #include "stability/closed_loop.h"
 #include "stability/haptic_loop.h"
@@ -584,6 +585,7 @@ std::vector<double> ZWidth::ZeroKBoundary(const CriticalPoint& c0, DelaySummary*
   std::vector<double> cand;
   auto Kof = [this](double t) { double b, k; Point(t, &b, &k); return k; };
   for (size_t i = 1; i < grid_theta_.size(); ++i) {
+    if ((i & 255) == 0) PollCancel();  // model/cancel.h: a host's Ctrl-C
     if ((grid_K_[i - 1] > 0) != (grid_K_[i] > 0)) {
       const double t = BrentRoot(Kof, grid_theta_[i - 1], grid_theta_[i], grid_K_[i - 1],
                                  grid_K_[i], options_.theta_tolerance);
