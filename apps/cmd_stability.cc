@@ -7,12 +7,14 @@
 #include <memory>
 
 #include "apps/common.h"
+#include "apps/friction_flags.h"
 #include "apps/loop_flags.h"
 #include "stability/haptic_loop.h"
 #include "io/atomic_file.h"
 #include "io/model_json.h"
 #include "io/stability_files.h"
 #include "model/error.h"
+#include "stability/friction_prediction.h"
 #include "stability/relay.h"
 #include "stability/uncertainty.h"
 #include "stability/zwidth.h"
@@ -366,7 +368,12 @@ nlohmann::json RelayJson(const stability::RelayResult& res, const stability::Cri
           {"K_cr_exact", io::NumberOrNull(cp.K_cr)},
           {"f_cr_exact_hz", io::NumberOrNull(cp.f_cr_hz)},
           {"delay_samples", o.delay_samples}, {"B", o.damping},
-          {"period_s", o.period_s}};
+          {"period_s", o.period_s},
+          {"nonlinear", o.Nonlinear()}, {"encoder_step", o.encoder_step},
+          {"friction", {{"coulomb_pos", o.friction.coulomb_pos}, {"coulomb_neg", o.friction.coulomb_neg},
+                        {"offset", o.friction.offset}, {"breakaway_pos", o.friction.StaticPos()},
+                        {"breakaway_neg", o.friction.StaticNeg()}}},
+          {"actuator", {{"saturation", o.actuator.saturation}, {"dac_step", o.actuator.dac_step}}}};
 }
 
 // Warnings on stderr: an unsettled estimate, a crossing below the record's band.
@@ -412,6 +419,7 @@ void AddRelayCommand(CLI::App& app) {
     double period = kNotGiven;
     bool json = false;
     LoopFlags loop;
+    FrictionFlags friction;
   };
   auto rf = std::make_shared<RelayFlags>();
   CLI::App* r = app.add_subcommand("relay", "simulate the relay experiment of section IV (Fig. 9)");
@@ -423,7 +431,9 @@ void AddRelayCommand(CLI::App& app) {
   r->add_option("--seconds", rf->o.seconds, "simulated time [s]")->capture_default_str();
   r->add_flag("--json", rf->json, "print only JSON on standard output");
   r->add_option("-o,--output", rf->trace, "trace CSV (t, relay, damping, command, position)");
+  r->add_option("--encoder-step", rf->o.encoder_step, "rad per encoder count (0: exact)")->capture_default_str();
   AddLoopFlags(r, &rf->loop);
+  AddFrictionFlags(r, &rf->friction);
   r->callback([rf] {
     if (!rf->trace.empty()) io::CheckOutputFolder(rf->trace, {rf->model});
     io::ModelFile mf = io::ReadModelJsonFor(rf->model, "relay");  // not const: --period may convert its delay
@@ -432,6 +442,8 @@ void AddRelayCommand(CLI::App& app) {
     const std::vector<stability::LoopOptions> loops = ResolveLoops(rf->loop, rf->o.period_s);
     if (loops.size() != 1) throw InputError("relay: give at most one --hand (the experiment runs one loop)");
     rf->o.loop = loops.front();
+    rf->o.friction = ResolveFriction(rf->friction, mf);
+    rf->o.actuator = ResolveActuator(rf->friction);
     std::string why;
     if (!rf->o.IsValid(&why)) throw InputError(why);  // the fields' flags: FieldFlags() in common.cc
     std::fprintf(stderr, "simulating %.3g s of relay feedback (d = %d, B = %g)...\n", rf->o.seconds,
@@ -457,6 +469,8 @@ void AddCheckCommand(CLI::App& app) {
     double period = kNotGiven;
     bool json = false;
     LoopFlags loop;
+    FrictionFlags friction;
+    double encoder_step = 0.0;
   };
   auto cf = std::make_shared<CheckFlags>();
   CLI::App* c = app.add_subcommand("check", "is each object of a haptic scene stable on this device?");
@@ -466,13 +480,22 @@ void AddCheckCommand(CLI::App& app) {
   c->add_option("--period", cf->period, "sample period T [s] (default: the model's, else 0.001)");
   c->add_flag("--json", cf->json, "print only JSON on standard output");
   AddLoopFlags(c, &cf->loop);
+  AddFrictionFlags(c, &cf->friction);
+  c->add_option("--encoder-step", cf->encoder_step,
+                "rad per encoder count, for the friction prediction's validity and rest point (0: exact)")
+      ->capture_default_str();
   c->callback([cf] {
     io::ModelFile mf = io::ReadModelJsonFor(cf->model, "check --model");  // not const: --period may convert its delay
     CheckDelay(cf->delay, "--delay");
     const double T = ResolvePeriod(cf->period, &mf);
     const std::vector<io::SceneObject> objs = io::ReadScene(cf->scene);
     std::vector<stability::ZWidth> zs;  // one per hand: stable means stable for every hand
-    for (const stability::LoopOptions& l : ResolveLoops(cf->loop, T)) zs.emplace_back(mf.plant, T, cf->delay, l);
+    const std::vector<stability::LoopOptions> loops = ResolveLoops(cf->loop, T);
+    for (const stability::LoopOptions& l : loops) zs.emplace_back(mf.plant, T, cf->delay, l);
+    const model::Friction friction = ResolveFriction(cf->friction, mf);
+    if (!(std::isfinite(cf->encoder_step) && cf->encoder_step >= 0)) {
+      throw InputError("--encoder-step " + std::to_string(cf->encoder_step) + ": must be finite and >= 0 (rad per count)");
+    }
     nlohmann::json out = {{"delay_samples", cf->delay}, {"period_s", T}, {"objects", nlohmann::json::array()}};
     int unstable = 0;
     for (const auto& o : objs) {
@@ -489,6 +512,21 @@ void AddCheckCommand(CLI::App& app) {
       const std::vector<stability::KInterval>& iv_ = v.intervals;
       if (!stable) ++unstable;
       out["objects"].push_back(v.ToJson(o));
+      // Friction (the first hand's loop): an unstable wall may still hold small oscillations.
+      std::string below;
+      if (!stable && friction.MeanCoulomb() > 0.0) {
+        const stability::FrictionPrediction p =
+            stability::PredictFriction(mf.plant, T, cf->delay, loops[0], o.K, o.B, friction, cf->encoder_step);
+        out["objects"].back()["friction"] = {
+            {"verdict", stability::ToString(p.verdict)}, {"stable_below_amplitude", io::NumberOrNull(p.amplitude)},
+            {"valid", p.valid}, {"invalid_reason", p.invalid_reason}, {"rest_point_ok", p.rest_point_ok}};
+        if (p.verdict == stability::FrictionVerdict::kStableBelow) {
+          char b[160];
+          std::snprintf(b, sizeof b, "  friction holds it below %.3g rad%s%s", p.amplitude, p.valid ? "" : " (outside validity: ",
+                        p.valid ? "" : (p.invalid_reason + ")").c_str());
+          below = b;
+        }
+      }
       if (!cf->json) {
         std::string where;
         char buf[160];
@@ -499,8 +537,8 @@ void AddCheckCommand(CLI::App& app) {
         } else {
           where = "no K > 0 is stable at this B";
         }
-        std::printf("%-20s K = %-10g B = %-8g %s  %s  K_cr = %-10.5g\n", o.name.c_str(), o.K, o.B,
-                    stable ? "stable  " : "UNSTABLE", where.c_str(), cp.K_cr);
+        std::printf("%-20s K = %-10g B = %-8g %s  %s  K_cr = %-10.5g%s\n", o.name.c_str(), o.K, o.B,
+                    stable ? "stable  " : "UNSTABLE", where.c_str(), cp.K_cr, below.c_str());
       }
     }
     if (cf->json) std::cout << out.dump() << std::endl;

@@ -81,6 +81,14 @@ const std::vector<FieldFlag>& FieldFlags() {
       {"RelayOptions::seconds", "--seconds"},
       {"RelayOptions::settle_fraction", ""},
       {"RelayOptions::loop", ""},
+      {"RelayOptions::encoder_step", "--encoder-step"},
+      {"WallOptions::period_s", "--period"},
+      {"WallOptions::delay_samples", "--delay"},
+      {"WallOptions::stiffness", "--stiffness"},
+      {"WallOptions::damping", "--damping"},
+      {"WallOptions::seconds", "--seconds"},
+      {"WallOptions::initial_position", "--initial-position"},
+      {"WallOptions::encoder_step", "--encoder-step"},
       {"BoundaryOptions::min_grid_points", ""},
       {"BoundaryOptions::grid_points_per_delay", ""},
       {"BoundaryOptions::theta_tolerance", ""},
@@ -90,6 +98,12 @@ const std::vector<FieldFlag>& FieldFlags() {
       {"UncertaintyOptions::log_step", ""},
   };
   return table;
+}
+
+std::string Num(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
 }
 
 std::string WithFlags(const std::string& message) {

@@ -94,6 +94,9 @@ double ResolvePeriod(double flag, io::ModelFile* mf);
 // else an InputError saying why and what to do. `what` names the model.
 void ConvertDelayToPeriod(io::ModelFile* mf, double T, const std::string& what);
 
+// %g of v, for messages.
+std::string Num(double v);
+
 void AddSimulateCommand(CLI::App& app);
 void AddEstimateCommand(CLI::App& app);
 void AddFitCommands(CLI::App& app);        // fit, compare
@@ -101,5 +104,6 @@ void AddStabilityCommands(CLI::App& app);  // boundary, relay, check
 void AddExportCommand(CLI::App& app);
 void AddRunCommand(CLI::App& app);
 void AddExciteCommand(CLI::App& app);
+void AddWallCommand(CLI::App& app);
 
 }  // namespace zwidth::app

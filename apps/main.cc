@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   zwidth::app::AddExportCommand(app);
   zwidth::app::AddRunCommand(app);
   zwidth::app::AddExciteCommand(app);
+  zwidth::app::AddWallCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
