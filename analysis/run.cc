@@ -1,6 +1,8 @@
 #include "analysis/run.h"
 
+#include <algorithm>
 #include <cmath>
+#include <complex>
 #include <cstdio>
 #include <numbers>
 #include <optional>
@@ -8,6 +10,7 @@
 #include <utility>
 
 #include "analysis/laps.h"
+#include "stability/uncertainty.h"
 #include "model/error.h"
 #include "model/parallel.h"
 
@@ -34,6 +37,44 @@ BodeData MakeBode(const ident::FrequencyResponse& frf, const stability::SampledP
     b.G_phase_deg.push_back(pm);
   }
   return b;
+}
+
+// The std of ln G per bin (real part: ln|G|, imaginary: phase in rad) by the
+// delta method: g_i = d ln G / d x_i by central differences in the log
+// parameters x (step h, as stability/uncertainty.h uses), var = g^T C g for
+// the real and the imaginary parts apart. The model is sampled (ZOH) as the fit
+// and the figure use it.
+void AddModelBand(const io::ModelFile& model, const ident::FrequencyResponse& frf, double T, BodeData* b) {
+  const size_t p = static_cast<size_t>(stability::NumLogParameters(model.plant));
+  if (model.log_covariance.size() != p * p) return;
+  constexpr double h = 1e-5;
+  const size_t n = frf.f_hz.size();
+  std::vector<std::vector<std::complex<double>>> g(p, std::vector<std::complex<double>>(n));
+  ParallelFor(p, [&](size_t i) {
+    std::vector<double> dx(p, 0.0);
+    dx[i] = h;
+    const stability::SampledPlant plus(stability::PerturbLog(model.plant, dx), T);
+    dx[i] = -h;
+    const stability::SampledPlant minus(stability::PerturbLog(model.plant, dx), T);
+    for (size_t k = 0; k < n; ++k) {
+      const double th = 2 * std::numbers::pi * frf.f_hz[k] * T;
+      g[i][k] = std::log(plus.AtTheta(th) / minus.AtTheta(th)) / (2 * h);
+    }
+  });
+  b->G_log_abs_std.assign(n, 0.0);
+  b->G_phase_std_deg.assign(n, 0.0);
+  for (size_t k = 0; k < n; ++k) {
+    double vr = 0.0, vi = 0.0;
+    for (size_t r = 0; r < p; ++r) {
+      for (size_t c = 0; c < p; ++c) {
+        const double cv = model.log_covariance[r * p + c];
+        vr += g[r][k].real() * cv * g[c][k].real();
+        vi += g[r][k].imag() * cv * g[c][k].imag();
+      }
+    }
+    b->G_log_abs_std[k] = std::sqrt(std::max(vr, 0.0));
+    b->G_phase_std_deg[k] = std::sqrt(std::max(vi, 0.0)) * 180 / std::numbers::pi;
+  }
 }
 
 // The loop figure's two loops of one delay: the raw backward difference (the
@@ -133,6 +174,7 @@ FigureData MakeFigures(const RunAnalysis& a, const std::vector<stability::ZWidth
   const bool plain_hand = a.options.loop.hand.IsNone();
   f.bode = plain_hand ? MakeBode(a.input.response.frf, a.stability.sampled, T)
                       : MakeBode(a.input.response.frf, stability::SampledPlant(a.input.model.plant, T), T);
+  AddModelBand(a.input.model, a.input.response.frf, T, &f.bode);
   model::Plant rigid = a.input.model.plant;
   rigid.modes.clear();
   const stability::SampledPlant rigid_sampled(rigid, T);

@@ -65,6 +65,11 @@ struct RunInput {
 struct BodeData {
   std::vector<double> H_abs, H_phase_deg;  // measured, per bin of response.frf
   std::vector<double> G_abs, G_phase_deg;  // model, per bin
+  // The model's std per bin from its parameter covariance (the delta method:
+  // the sensitivity of ln G to the log parameters, by central differences,
+  // times the covariance): of ln|G| (relative) and of its phase [deg]. Empty
+  // when the model has no covariance.
+  std::vector<double> G_log_abs_std, G_phase_std_deg;
 };
 
 // The loop figure of one delay: the region with the raw backward difference

@@ -77,7 +77,7 @@ void AddFitCommands(CLI::App& app) {
     io::ModelFile r = ReadReference(c->reference);
     for (int d : c->delays) if (d < 0) throw InputError("--delays must be >= 0");
     const double T = ResolvePeriod(c->period, &m);
-    ConvertDelayToPeriod(&r, T, "the reference");
+    app::ConvertDelayToPeriod(&r, T, "the reference");
     std::string text;
     const nlohmann::json j = CompareModels(m, r, c->delays, T, &text);
     if (c->json) std::cout << j.dump(2) << std::endl;

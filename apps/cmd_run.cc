@@ -52,7 +52,7 @@ analysis::RunInput EstimateAndFit(const RunFlags& f, const analysis::RunOptions&
   in.whole_record = f.est.whole_record;
   *t_total_ms = timer.Lap("estimate (read + Welch)");
   // The reference's delay is counted in its own period: in the log's (or refused).
-  if (in.reference) ConvertDelayToPeriod(&*in.reference, 1.0 / in.response.frf.sample_rate_hz, "the reference");
+  if (in.reference) app::ConvertDelayToPeriod(&*in.reference, 1.0 / in.response.frf.sample_rate_hz, "the reference");
   std::exception_ptr ref_error;
   std::optional<analysis::ReferenceStability> ref;
   {
@@ -108,7 +108,7 @@ void Run(RunFlags& f) {
   o.loop = ResolveLoops(f.loop, 1.0 / in.response.frf.sample_rate_hz)[0];
   const analysis::RunAnalysis a = analysis::Analyse(std::move(in), o);
   const std::string fit_report = FitReport(a.input.fit);  // the CLI's wording, for the terminal and report.html
-  const report::RunReport rep = report::WriteRunReport(a, folder, {.draw_figures = true, .png = f.png, .fit_report = fit_report});
+  const report::RunReport rep = report::WriteRunReport(a, folder, {.draw_figures = true, .png = f.png, .fit_report = fit_report, .command_line = CommandLine()});
   for (const analysis::RunStage& s : a.stages) {
     if (s.name.rfind("figure", 0) == 0) continue;
     PrintStage(s.name, s.ms);

@@ -461,6 +461,22 @@ void AddRelayCommand(CLI::App& app) {
   });
 }
 
+// check, an unstable object on a device with friction (the first hand's loop):
+// the amplitude below which friction still holds it, into *j and as a note.
+std::string FrictionNote(const model::Plant& plant, double T, int delay, const stability::LoopOptions& loop,
+                         const io::SceneObject& o, const model::Friction& friction, double encoder_step,
+                         nlohmann::json* j) {
+  if (!(friction.MeanCoulomb() > 0.0)) return "";
+  const stability::FrictionPrediction p =
+      stability::PredictFriction(plant, T, delay, loop, o.K, o.B, friction, encoder_step);
+  (*j)["friction"] = {{"verdict", stability::ToString(p.verdict)},
+                      {"stable_below_amplitude", io::NumberOrNull(p.amplitude)},
+                      {"valid", p.valid}, {"invalid_reason", p.invalid_reason}, {"rest_point_ok", p.rest_point_ok}};
+  if (p.verdict != stability::FrictionVerdict::kStableBelow) return "";
+  return "  friction holds it below " + Num(p.amplitude) + " rad" +
+         (p.valid ? "" : " (outside validity: " + p.invalid_reason + ")");
+}
+
 // zwidth check: is each object of a haptic scene stable on this device?
 void AddCheckCommand(CLI::App& app) {
   struct CheckFlags {
@@ -512,21 +528,8 @@ void AddCheckCommand(CLI::App& app) {
       const std::vector<stability::KInterval>& iv_ = v.intervals;
       if (!stable) ++unstable;
       out["objects"].push_back(v.ToJson(o));
-      // Friction (the first hand's loop): an unstable wall may still hold small oscillations.
-      std::string below;
-      if (!stable && friction.MeanCoulomb() > 0.0) {
-        const stability::FrictionPrediction p =
-            stability::PredictFriction(mf.plant, T, cf->delay, loops[0], o.K, o.B, friction, cf->encoder_step);
-        out["objects"].back()["friction"] = {
-            {"verdict", stability::ToString(p.verdict)}, {"stable_below_amplitude", io::NumberOrNull(p.amplitude)},
-            {"valid", p.valid}, {"invalid_reason", p.invalid_reason}, {"rest_point_ok", p.rest_point_ok}};
-        if (p.verdict == stability::FrictionVerdict::kStableBelow) {
-          char b[160];
-          std::snprintf(b, sizeof b, "  friction holds it below %.3g rad%s%s", p.amplitude, p.valid ? "" : " (outside validity: ",
-                        p.valid ? "" : (p.invalid_reason + ")").c_str());
-          below = b;
-        }
-      }
+      const std::string below = stable ? "" : FrictionNote(mf.plant, T, cf->delay, loops[0], o, friction,
+                                                        cf->encoder_step, &out["objects"].back());
       if (!cf->json) {
         std::string where;
         char buf[160];

@@ -404,38 +404,39 @@ double ResolvePeriod(double flag, io::ModelFile* mf) {
     if (ms) os << (rate ? "; " : ": ") << "for " << flag << " ms pass --period " << flag * 1e-3;
     throw InputError(os.str());
   }
-  ConvertDelayToPeriod(mf, flag, "the model");
+  app::ConvertDelayToPeriod(mf, flag, "the model");
   return flag;
 }
 
 void ConvertDelayToPeriod(io::ModelFile* mf, double T, const std::string& what) {
-  if (!mf->sample_period_s || mf->plant.delay_samples == 0) return;
-  const double Tm = *mf->sample_period_s;
-  if (std::abs(Tm - T) <= 1e-12 * T) return;
-  const int d = mf->plant.delay_samples;
-  const double q = d * Tm / T;
-  char buf[400];
-  const bool whole = std::abs(q - std::round(q)) <= 1e-9 * std::max(1.0, q);
-  if (whole && std::round(q) > io::kMaxDelaySamples) {
-    std::snprintf(buf, sizeof buf, "%s's input delay of %d samples of %g s is %.0f samples at the period %g s, more "
-                  "than %d", what.c_str(), d, Tm, q, T, io::kMaxDelaySamples);
-    throw InputError(buf);
-  }
-  if (whole) {
-    const int dn = static_cast<int>(std::round(q));
-    std::fprintf(stderr,
-                 "note: %s's input delay is %d samples of its sample_period_s %g s (%g s): %d samples at the "
-                 "period %g s used here\n", what.c_str(), d, Tm, d * Tm, dn, T);
-    mf->plant.delay_samples = dn;
-    mf->sample_period_s = T;
-    return;
-  }
-  std::snprintf(buf, sizeof buf,
-                "%s's input delay is %d samples of its sample_period_s %g s (%g s), which is %.6g samples at "
-                "the period %g s: a delay of a fraction of a sample cannot be kept; re-fit the model from a log "
-                "at that rate, or edit its delay_samples (and sample_period_s) if you mean another delay",
-                what.c_str(), d, Tm, d * Tm, q, T);
-  throw InputError(buf);
+  const std::string note = io::ConvertDelayToPeriod(mf, T, what);
+  if (!note.empty()) std::fprintf(stderr, "note: %s\n", note.c_str());
 }
+
+namespace {
+std::string& StoredCommandLine() {
+  static std::string line;
+  return line;
+}
+}  // namespace
+
+void SetCommandLine(int argc, char** argv) {
+  std::string& line = StoredCommandLine();
+  line.clear();
+  for (int i = 0; i < argc; ++i) {
+    const std::string a = i == 0 ? "zwidth" : argv[i];
+    const bool plain = !a.empty() && a.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                                         "0123456789-_./=:,+@%") == std::string::npos;
+    std::string q = a;
+    if (!plain) {
+      q = "'";
+      for (char c : a) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+      q += "'";
+    }
+    line += (i ? " " : "") + q;
+  }
+}
+
+const std::string& CommandLine() { return StoredCommandLine(); }
 
 }  // namespace zwidth::app

@@ -28,6 +28,11 @@ struct FieldFlag {
 const std::vector<FieldFlag>& FieldFlags();
 std::string WithFlags(const std::string& message);
 
+// The command line as typed (main stores it), each argument quoted for a
+// POSIX shell where it needs it: the provenance of report.html.
+void SetCommandLine(int argc, char** argv);
+const std::string& CommandLine();
+
 struct EstimateFlags {
   io::LogSelect select;
   ident::WelchOptions welch;
@@ -104,6 +109,7 @@ void AddStabilityCommands(CLI::App& app);  // boundary, relay, check
 void AddExportCommand(CLI::App& app);
 void AddRunCommand(CLI::App& app);
 void AddExciteCommand(CLI::App& app);
+void AddValidateCommand(CLI::App& app);    // validate a model on a fresh log
 void AddWallCommand(CLI::App& app);
 
 }  // namespace zwidth::app

@@ -13,6 +13,7 @@
 int main(int argc, char** argv) {
   CLI::App app{"zwidth: haptic device identification and Z-width (stable K, B) analysis"};
   app.require_subcommand(1);
+  zwidth::app::SetCommandLine(argc, argv);
   namespace bi = zwidth::build_info;
   app.set_version_flag("--version", std::string("zwidth ") + bi::kVersion + "\nbuilt with Ceres " + bi::kCeres +
                                         ", Eigen " + bi::kEigen + ", FFTW " + bi::kFftw + ", HDF5 " + bi::kHdf5 +
@@ -24,6 +25,7 @@ int main(int argc, char** argv) {
   zwidth::app::AddExportCommand(app);
   zwidth::app::AddRunCommand(app);
   zwidth::app::AddExciteCommand(app);
+  zwidth::app::AddValidateCommand(app);
   zwidth::app::AddWallCommand(app);
   try {
     app.parse(argc, argv);

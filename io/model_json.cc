@@ -350,6 +350,36 @@ ModelFile ReadModelJsonFor(const std::string& path, const std::string& command) 
   return ParseModelJson(text, path);
 }
 
+std::string ConvertDelayToPeriod(ModelFile* mf, double T, const std::string& what) {
+  if (!mf->sample_period_s || mf->plant.delay_samples == 0) return "";
+  const double Tm = *mf->sample_period_s;
+  if (std::abs(Tm - T) <= 1e-12 * T) return "";
+  const int d = mf->plant.delay_samples;
+  const double q = d * Tm / T;
+  char buf[400];
+  const bool whole = std::abs(q - std::round(q)) <= 1e-9 * std::max(1.0, q);
+  if (whole && std::round(q) > kMaxDelaySamples) {
+    std::snprintf(buf, sizeof buf, "%s's input delay of %d samples of %g s is %.0f samples at the period %g s, more "
+                  "than %d", what.c_str(), d, Tm, q, T, kMaxDelaySamples);
+    throw InputError(buf);
+  }
+  if (whole) {
+    const int dn = static_cast<int>(std::round(q));
+    std::snprintf(buf, sizeof buf,
+                  "%s's input delay is %d samples of its sample_period_s %g s (%g s): %d samples at the "
+                  "period %g s used here", what.c_str(), d, Tm, d * Tm, dn, T);
+    mf->plant.delay_samples = dn;
+    mf->sample_period_s = T;
+    return buf;
+  }
+  std::snprintf(buf, sizeof buf,
+                "%s's input delay is %d samples of its sample_period_s %g s (%g s), which is %.6g samples at "
+                "the period %g s: a delay of a fraction of a sample cannot be kept; re-fit the model from a log "
+                "at that rate, or edit its delay_samples (and sample_period_s) if you mean another delay",
+                what.c_str(), d, Tm, d * Tm, q, T);
+  throw InputError(buf);
+}
+
 json ModelToJson(const ModelFile& mf) {
   json j;
   if (!mf.plant.name.empty()) j["name"] = mf.plant.name;

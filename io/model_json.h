@@ -75,6 +75,16 @@ void CheckNotJsonOfAnotherKind(const std::string& text, const std::string& sourc
 // JSON) repeats a key, which a JSON parser resolves silently (the last wins).
 void CheckDuplicateKeys(const std::string& text, const std::string& source);
 
+// The model used at the sample period T (the one rule for a model's delay at
+// another period, used by the CLI, the C++ API and Python): its delay_samples
+// counts samples of its own sample_period_s T_m, so at T it is d T_m / T when
+// that is a whole number (to 1e-9), and the model's period becomes T; a model
+// without a period, without a delay or at T already is left as it is. Returns
+// a note saying what was converted ("" when nothing was); throws InputError
+// saying why and what to do when d T_m / T is not whole or exceeds
+// kMaxDelaySamples. `what` names the model in the texts ("the model").
+std::string ConvertDelayToPeriod(ModelFile* model, double T, const std::string& what);
+
 nlohmann::json ModelToJson(const ModelFile& model);
 void WriteModelJson(const std::string& path, const ModelFile& model);
 

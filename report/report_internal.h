@@ -4,6 +4,7 @@
 #include <sys/types.h>
 
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -62,7 +63,10 @@ class GnuplotProcess {
   int to_child_ = -1;  // the pipe's write end
 };
 
-// report.html; have_figures: figures/*.svg exist.
-std::string RunHtml(const analysis::RunAnalysis& a, bool have_figures, const std::string& fit_report);
+// report.html, one self-contained file; svgs: the drawn figures' SVG text by
+// name ("bode", "region", ...), empty when none was drawn; command_line: how
+// the run was asked for, shown in its provenance (may be empty).
+std::string RunHtml(const analysis::RunAnalysis& a, const std::map<std::string, std::string>& svgs,
+                    const std::string& fit_report, const std::string& command_line);
 
 }  // namespace zwidth::report

@@ -1,6 +1,9 @@
 #include "report/run_report.h"
 
 #include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
 #include <optional>
 
 #include <nlohmann/json.hpp>
@@ -52,6 +55,19 @@ void WriteDataFiles(const analysis::RunAnalysis& a, const fs::path& out) {
   io::WriteTextAtomically((out / "summary.json").string(), SummaryJson(a));
 }
 
+// The SVGs gnuplot drew, by name, for report.html to inline.
+std::map<std::string, std::string> DrawnSvgs(const fs::path& fig) {
+  std::map<std::string, std::string> svgs;
+  for (const char* name : {"bode", "coherence", "kcr", "region", "loop", "rigid"}) {
+    std::ifstream in(fig / (std::string(name) + ".svg"), std::ios::binary);
+    if (!in) continue;
+    std::ostringstream text;
+    text << in.rdbuf();
+    svgs[name] = text.str();
+  }
+  return svgs;
+}
+
 FiguresStatus StatusOf(int gnuplot_exit) {
   return gnuplot_exit == 0     ? FiguresStatus::kDrawn
          : gnuplot_exit == 127 ? FiguresStatus::kGnuplotMissing
@@ -83,7 +99,9 @@ RunReport WriteRunReport(const analysis::RunAnalysis& a, const io::OutputFolder&
       if (r.figures != FiguresStatus::kGnuplotMissing) r.stages.push_back({"figures (gnuplot)", laps.Lap()});
     }
   }
-  io::WriteTextAtomically((out / "report.html").string(), RunHtml(a, r.figures == FiguresStatus::kDrawn, options.fit_report));
+  const std::map<std::string, std::string> svgs =
+      r.figures == FiguresStatus::kDrawn ? DrawnSvgs(fig) : std::map<std::string, std::string>{};
+  io::WriteTextAtomically((out / "report.html").string(), RunHtml(a, svgs, options.fit_report, options.command_line));
   return r;
 }
 

@@ -1,5 +1,6 @@
 // `zwidth run`'s files from a RunAnalysis: model.json, frf.csv, boundary.csv,
-// summary.json, report.html and, with figure data, figures/ (the .dat files,
+// summary.json, report.html (one self-contained file: the figures inlined) and,
+// with figure data, figures/ (the .dat files,
 // figures.gp, and the SVG/PNG drawn by gnuplot when it is installed). Writes
 // only into the output folder's temporary path; the caller commits it.
 #pragma once
@@ -20,6 +21,9 @@ struct RunReportOptions {
   // The fit's report as the user reads it in report.html (the CLI gives its
   // flags where the library names option fields); analysis::FitReport when empty.
   std::string fit_report;
+  // How the run was asked for (the command line, or the Python call), shown
+  // in report.html's provenance; may be empty.
+  std::string command_line;
 };
 
 enum class FiguresStatus {

@@ -4,12 +4,15 @@
 #include <cmath>
 #include <complex>
 #include <numbers>
+#include <random>
 
+#include <Eigen/Cholesky>
 #include <gtest/gtest.h>
 
 #include "analysis/run.h"
 #include "model/error.h"
 #include "model/state_space.h"
+#include "stability/uncertainty.h"
 #include "tests/run_input.h"
 
 namespace zwidth {
@@ -118,6 +121,52 @@ TEST(RunAnalysis, AReferenceComputedBeforehandGivesTheSameComparison) {
       EXPECT_EQ(given.figures->kcr_reference[i][k].K_cr, plain.figures->kcr_reference[i][k].K_cr);
     }
   }
+}
+
+// The Bode figure's model band against a Monte Carlo written here: parameter
+// draws from the covariance (Cholesky of C, seeded), each plant's exact ZOH
+// response from model/ (not the SampledPlant the band uses), and the scatter
+// of ln|G| and of the phase at a few bins.
+TEST(RunAnalysis, ModelBandIsTheCovarianceSpreadOfTheResponse) {
+  analysis::RunInput in = TestInput(0.0);
+  const size_t p = static_cast<size_t>(stability::NumLogParameters(in.model.plant));
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(p, p);
+  for (size_t i = 0; i < p; ++i) C(i, i) = std::pow(1e-4 * (1.0 + i), 2);  // small: the delta method is linear
+  C(0, 1) = C(1, 0) = 0.5 * std::sqrt(C(0, 0) * C(1, 1));  // m and b correlated
+  in.model.log_covariance.assign(C.data(), C.data() + p * p);
+  const analysis::RunAnalysis a = analysis::Analyse(std::move(in), {});
+  ASSERT_TRUE(a.figures.has_value());
+  const analysis::BodeData& bd = a.figures->bode;
+  ASSERT_EQ(bd.G_log_abs_std.size(), a.input.response.frf.f_hz.size());
+  const Eigen::MatrixXd L = C.llt().matrixL();
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> n01;
+  const std::vector<size_t> bins = {4, 39, 59, 99, 299};  // 5, 40 (zero), 60 (pole), 100, 300 Hz
+  const model::Plant plant = TestPlant();
+  const model::DiscreteResponse g0(model::DiscretizeZoh(plant, kT));
+  std::vector<double> s_abs(bins.size()), s_ph(bins.size());
+  const int draws = 4000;
+  for (int k = 0; k < draws; ++k) {
+    Eigen::VectorXd z(p);
+    for (size_t i = 0; i < p; ++i) z(i) = n01(rng);
+    const Eigen::VectorXd x = L * z;
+    const model::DiscreteResponse g(
+        model::DiscretizeZoh(stability::PerturbLog(plant, std::vector<double>(x.data(), x.data() + p)), kT));
+    for (size_t j = 0; j < bins.size(); ++j) {
+      const double th = 2 * std::numbers::pi * a.input.response.frf.f_hz[bins[j]] * kT;
+      const std::complex<double> d = std::log(g.AtTheta(th) / g0.AtTheta(th));
+      s_abs[j] += d.real() * d.real() / draws;
+      s_ph[j] += d.imag() * d.imag() / draws;
+    }
+  }
+  for (size_t j = 0; j < bins.size(); ++j) {
+    SCOPED_TRACE(bins[j]);
+    // 4000 draws: the std of a std estimate is ~1.1 %; 5 % allows the curvature.
+    EXPECT_NEAR(bd.G_log_abs_std[bins[j]] / std::sqrt(s_abs[j]), 1.0, 0.05);
+    EXPECT_NEAR(bd.G_phase_std_deg[bins[j]] * std::numbers::pi / 180 / std::sqrt(s_ph[j]), 1.0, 0.05);
+  }
+  // Without a covariance: no band.
+  EXPECT_TRUE(analysis::Analyse(TestInput(0.0), {}).figures->bode.G_log_abs_std.empty());
 }
 
 }  // namespace
