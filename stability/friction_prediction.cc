@@ -31,7 +31,7 @@ bool FrictionPredictionOptions::IsValid(std::string* why) const {
 
 namespace {
 
-constexpr double kMinEncoderSteps = 4.0;
+constexpr double kMinEncoderSteps = 10.0;
 constexpr double kMinStaticMargin = 3.0;
 constexpr double kCrossingSeparation = 0.1;
 
@@ -114,7 +114,7 @@ FrictionPrediction PredictFriction(const model::Plant& plant, double T, int dela
   p.amplitude = 4.0 * fc / (std::numbers::pi * 2.0 * std::numbers::pi * p.frequency_hz * p.extra_damping);
   const double f_static = std::max(friction.StaticPos(), friction.StaticNeg());
   if (p.invalid_reason.empty() && q > 0.0 && p.amplitude < kMinEncoderSteps * q) {
-    p.invalid_reason = "amplitude_below_4_encoder_steps";
+    p.invalid_reason = "amplitude_below_10_encoder_steps";
   }
   if (p.invalid_reason.empty() && K * p.amplitude < kMinStaticMargin * f_static) {
     p.invalid_reason = "wall_force_below_3x_static_level";
