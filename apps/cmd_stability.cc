@@ -8,6 +8,7 @@
 
 #include "apps/common.h"
 #include "analysis/scene_check.h"
+#include "apps/friction_flags.h"
 #include "apps/loop_flags.h"
 #include "io/printable.h"
 #include "stability/haptic_loop.h"
@@ -15,6 +16,7 @@
 #include "io/model_json.h"
 #include "io/stability_files.h"
 #include "model/error.h"
+#include "stability/friction_prediction.h"
 #include "stability/relay.h"
 #include "stability/uncertainty.h"
 #include "stability/zwidth.h"
@@ -374,7 +376,12 @@ nlohmann::json RelayJson(const stability::RelayResult& res, const stability::Cri
           {"K_cr_exact", io::NumberOrNull(cp.K_cr)},
           {"f_cr_exact_hz", io::NumberOrNull(cp.f_cr_hz)},
           {"delay_samples", o.delay_samples}, {"B", o.damping},
-          {"period_s", o.period_s}};
+          {"period_s", o.period_s},
+          {"nonlinear", o.Nonlinear()}, {"encoder_step", o.encoder_step},
+          {"friction", {{"coulomb_pos", o.friction.coulomb_pos}, {"coulomb_neg", o.friction.coulomb_neg},
+                        {"offset", o.friction.offset}, {"breakaway_pos", o.friction.StaticPos()},
+                        {"breakaway_neg", o.friction.StaticNeg()}}},
+          {"actuator", {{"saturation", o.actuator.saturation}, {"dac_step", o.actuator.dac_step}}}};
 }
 
 // Warnings on stderr: an unsettled estimate, a crossing below the record's band.
@@ -420,6 +427,7 @@ void AddRelayCommand(CLI::App& app) {
     double period = kNotGiven;
     bool json = false;
     LoopFlags loop;
+    FrictionFlags friction;
   };
   auto rf = std::make_shared<RelayFlags>();
   CLI::App* r = app.add_subcommand("relay", "simulate the relay experiment of section IV (Fig. 9)");
@@ -431,7 +439,9 @@ void AddRelayCommand(CLI::App& app) {
   r->add_option("--seconds", rf->o.seconds, "simulated time [s]")->capture_default_str();
   r->add_flag("--json", rf->json, "print only JSON on standard output");
   r->add_option("-o,--output", rf->trace, "trace CSV (t, relay, damping, command, position)");
+  r->add_option("--encoder-step", rf->o.encoder_step, "rad per encoder count (0: exact)")->capture_default_str();
   AddLoopFlags(r, &rf->loop);
+  AddFrictionFlags(r, &rf->friction);
   r->callback([rf] {
     if (!rf->trace.empty()) io::CheckOutputFolder(rf->trace, {rf->model});
     io::ModelFile mf = io::ReadModelJsonFor(rf->model, "relay");  // not const: --period may convert its delay
@@ -440,6 +450,8 @@ void AddRelayCommand(CLI::App& app) {
     const std::vector<stability::LoopOptions> loops = ResolveLoops(rf->loop, rf->o.period_s);
     if (loops.size() != 1) throw InputError("relay: give at most one --hand (the experiment runs one loop)");
     rf->o.loop = loops.front();
+    rf->o.friction = ResolveFriction(rf->friction, mf);
+    rf->o.actuator = ResolveActuator(rf->friction);
     std::string why;
     if (!rf->o.IsValid(&why)) throw InputError(why);  // the fields' flags: io/option_names.cc
     std::fprintf(stderr, "simulating %.3g s of relay feedback (d = %d, B = %g)...\n", rf->o.seconds,
@@ -459,7 +471,7 @@ void AddRelayCommand(CLI::App& app) {
 
 // One line of `zwidth check`: the object, its status, the interval holding K
 // (or the nearest), K_cr and, with a std, the distance to the nearest boundary.
-void PrintObjectCheck(const analysis::ObjectCheck& c, const io::SceneObject& o) {
+void PrintObjectCheck(const analysis::ObjectCheck& c, const io::SceneObject& o, const std::string& note) {
   const io::ObjectVerdict& v = c.verdict;
   const int k = v.stable ? v.interval : v.nearest_interval;
   char buf[200];
@@ -478,9 +490,24 @@ void PrintObjectCheck(const analysis::ObjectCheck& c, const io::SceneObject& o) 
   const char* status = c.status == analysis::SceneStatus::kStable     ? "stable  "
                        : c.status == analysis::SceneStatus::kMarginal ? "marginal"
                                                                       : "UNSTABLE";
-  std::printf("%-20s K = %-10g B = %-8g %s  %s  K_cr = %-10.5g%s\n", io::Printable(o.name).c_str(), o.K, o.B, status,
-              where.c_str(),
-              v.critical.K_cr, sigma.c_str());
+  std::printf("%-20s K = %-10g B = %-8g %s  %s  K_cr = %-10.5g%s%s\n", io::Printable(o.name).c_str(), o.K, o.B,
+              status, where.c_str(), v.critical.K_cr, sigma.c_str(), note.c_str());
+}
+
+// check, an unstable object on a device with friction (the first hand's loop):
+// the amplitude below which friction still holds it, into *j and as a note.
+std::string FrictionNote(const model::Plant& plant, double T, int delay, const stability::LoopOptions& loop,
+                         const io::SceneObject& o, const model::Friction& friction, double encoder_step,
+                         nlohmann::json* j) {
+  if (!(friction.MeanCoulomb() > 0.0)) return "";
+  const stability::FrictionPrediction p =
+      stability::PredictFriction(plant, T, delay, loop, o.K, o.B, friction, encoder_step);
+  (*j)["friction"] = {{"verdict", stability::ToString(p.verdict)},
+                      {"stable_below_amplitude", io::NumberOrNull(p.amplitude)},
+                      {"valid", p.valid}, {"invalid_reason", p.invalid_reason}, {"rest_point_ok", p.rest_point_ok}};
+  if (p.verdict != stability::FrictionVerdict::kStableBelow) return "";
+  return "  friction holds it below " + Num(p.amplitude) + " rad" +
+         (p.valid ? "" : " (outside validity: " + p.invalid_reason + ")");
 }
 
 // zwidth check: is each object of a haptic scene stable on this device?
@@ -491,6 +518,10 @@ void AddCheckCommand(CLI::App& app) {
     double period = kNotGiven;
     bool json = false;
     LoopFlags loop;
+    FrictionFlags friction;
+    double encoder_step = 0.0;
+}
+
     analysis::SceneCheckOptions options;
   };
   auto cf = std::make_shared<CheckFlags>();
@@ -504,16 +535,33 @@ void AddCheckCommand(CLI::App& app) {
                 "with a model covariance: an object within this many std of the nearest boundary is 'marginal' "
                 "(exit 4 when none is unstable); 0: off (default 2)");
   AddLoopFlags(c, &cf->loop);
+  AddFrictionFlags(c, &cf->friction);
+  c->add_option("--encoder-step", cf->encoder_step,
+                "rad per encoder count, for the friction prediction's validity and rest point (0: exact)")
+      ->capture_default_str();
   c->callback([cf] {
     io::ModelFile mf = io::ReadModelJsonFor(cf->model, "check --model");  // not const: --period may convert its delay
     CheckDelay(cf->delay, "--delay");
     const double T = ResolvePeriod(cf->period, &mf);
     const std::vector<io::SceneObject> objs = io::ReadScene(cf->scene);
-    const analysis::SceneCheck sc =
-        analysis::CheckScene(mf.plant, mf.log_covariance, T, cf->delay, ResolveLoops(cf->loop, T), objs, cf->options);
+    const std::vector<stability::LoopOptions> loops = ResolveLoops(cf->loop, T);
+    const model::Friction friction = ResolveFriction(cf->friction, mf);
+    if (!(std::isfinite(cf->encoder_step) && cf->encoder_step >= 0)) {
+      throw InputError("--encoder-step " + std::to_string(cf->encoder_step) + ": must be finite and >= 0 (rad per count)");
+    }
+    const analysis::SceneCheck sc = analysis::CheckScene(mf.plant, mf.log_covariance, T, cf->delay, loops, objs, cf->options);
     if (!mf.log_covariance.empty() && !sc.has_std) std::fprintf(stderr, "note: no std (and no marginal status) with several hands\n");
-    for (size_t i = 0; i < objs.size() && !cf->json; ++i) PrintObjectCheck(sc.objects[i], objs[i]);
-    if (cf->json) std::cout << analysis::SceneCheckJson(sc, objs, cf->delay, T, cf->options).dump() << std::endl;
+    nlohmann::json out = analysis::SceneCheckJson(sc, objs, cf->delay, T, cf->options);
+    for (size_t i = 0; i < objs.size(); ++i) {
+      nlohmann::json scratch;
+      nlohmann::json* j = out.contains("objects") && i < out["objects"].size() ? &out["objects"][i] : &scratch;
+      // The friction prediction for an object the linear loop does not hold.
+      const std::string note = sc.objects[i].verdict.stable ? ""
+                                   : FrictionNote(mf.plant, T, cf->delay, loops[0], objs[i], friction,
+                                                  cf->encoder_step, j);
+      if (!cf->json) PrintObjectCheck(sc.objects[i], objs[i], note);
+    }
+    if (cf->json) std::cout << out.dump() << std::endl;
     const int code = sc.num_unstable > 0 ? 3 : sc.num_marginal > 0 ? 4 : 0;
     if (code != 0 && !cf->json) {
       std::printf("%d of %zu objects unstable, %d marginal (within %g std of a boundary) (exit status %d)\n",

@@ -17,6 +17,12 @@ namespace zwidth::app {
 // The table of fields, flags and keywords is io/option_names.cc (shared with the Python module).
 std::string WithFlags(const std::string& message) { return io::WithFlags(message); }
 
+std::string Num(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
+}
+
 std::string EstimateFlags::ResolvedDetrend() const {
   if (!detrend.empty()) return detrend;
   return whole_record ? "mean" : "linear";

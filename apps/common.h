@@ -108,6 +108,8 @@ void GuardNumericFlags(CLI::App* app);
 struct ExitStatus {
   int code;
 };
+// %g of v, for messages.
+std::string Num(double v);
 
 void AddSimulateCommand(CLI::App& app);
 void AddEstimateCommand(CLI::App& app);
@@ -117,5 +119,6 @@ void AddExportCommand(CLI::App& app);
 void AddRunCommand(CLI::App& app);
 void AddExciteCommand(CLI::App& app);
 void AddValidateCommand(CLI::App& app);    // validate a model on a fresh log
+void AddWallCommand(CLI::App& app);
 
 }  // namespace zwidth::app

@@ -55,6 +55,7 @@ int main(int argc, char** argv) {
   zwidth::app::AddRunCommand(app);
   zwidth::app::AddExciteCommand(app);
   zwidth::app::AddValidateCommand(app);
+  zwidth::app::AddWallCommand(app);
   zwidth::app::GuardNumericFlags(&app);
   zwidth::app::OrganizeHelp(app);  // after every command: topics, examples, --help-all, completion
   try {

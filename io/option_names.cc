@@ -103,6 +103,21 @@ const std::vector<OptionName>& OptionNames() {
       {"LogSelect::counts_per_rev", "--counts-per-rev", ""},
       {"LogSelect::counts_per_m", "--counts-per-m", ""},
       {"LogSelect::decimal_comma", "--decimal-comma", ""},
+      {"RelayOptions::encoder_step", "--encoder-step", ""},
+      {"RelayOptions::friction", "", ""},
+      {"RelayOptions::actuator", "", ""},
+      {"WallOptions::friction", "", ""},
+      {"WallOptions::actuator", "", ""},
+      {"WallOptions::loop", "", ""},
+      {"FrictionPredictionOptions::relative_tolerance", "", ""},
+      {"FrictionPredictionOptions::max_extra_damping_factor", "", ""},
+      {"WallOptions::period_s", "--period", ""},
+      {"WallOptions::delay_samples", "--delay", ""},
+      {"WallOptions::stiffness", "--stiffness", ""},
+      {"WallOptions::damping", "--damping", ""},
+      {"WallOptions::seconds", "--seconds", ""},
+      {"WallOptions::initial_position", "--initial-position", ""},
+      {"WallOptions::encoder_step", "--encoder-step", ""},
   };
   return table;
 }

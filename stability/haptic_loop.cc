@@ -142,23 +142,7 @@ model::StateSpace ContinuousStateSpaceWithHand(const model::Plant& plant, const 
 }
 
 model::StateSpace DiscretizeZohStateSpace(const model::StateSpace& c, double period_s) {
-  if (!std::isfinite(period_s) || period_s <= 0.0) {
-    throw InputError("sample period = " + std::to_string(period_s) + " s: must be finite and > 0");
-  }
-  const int n = static_cast<int>(c.A.rows());
-  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n + 1, n + 1);
-  M.topLeftCorner(n, n) = c.A * period_s;
-  M.topRightCorner(n, 1) = c.B * period_s;
-  const Eigen::VectorXd s = model::internal::BalancingScales(M);
-  const Eigen::MatrixXd Mb = s.cwiseInverse().asDiagonal() * M * s.asDiagonal();
-  const Eigen::MatrixXd E = s.asDiagonal() * Mb.exp() * s.cwiseInverse().asDiagonal();
-  model::StateSpace d;
-  d.A = E.topLeftCorner(n, n);
-  d.B = E.topRightCorner(n, 1);
-  d.C = c.C;
-  d.D = c.D;
-  d.period_s = period_s;
-  return d;
+  return model::DiscretizeZoh(c, period_s);
 }
 
 std::vector<KInterval> IntersectIntervals(const std::vector<KInterval>& a, const std::vector<KInterval>& b) {
