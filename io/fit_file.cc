@@ -2,8 +2,6 @@
 
 #include <vector>
 
-#include "io/printable.h"
-
 namespace zwidth::io {
 namespace {
 
@@ -30,13 +28,12 @@ ModelFile FittedModelFile(const fit::FitResult& r, const ident::FrequencyRespons
                           const fit::FitOptions& o, const std::string& source) {
   ModelFile mf;
   mf.plant = r.plant;
-  const std::string shown = Utf8ForJson(source);  // a Latin-1 file name is no valid JSON string
-  mf.plant.name = "fitted from " + shown;
+  mf.plant.name = "fitted from " + source;
   mf.std_errors = r.std_errors;
   mf.log_covariance = r.log_covariance;
   mf.sample_period_s = 1.0 / frf.sample_rate_hz;
   mf.fit = {{"status", fit::ToString(r.status)},
-            {"source", shown},
+            {"source", source},
             {"quality", fit::ToString(r.quality)},
             {"quality_reasons", QualityJson(r)},
             {"modes", r.plant.modes.size()},
@@ -62,7 +59,6 @@ ModelFile FittedModelFile(const fit::FitResult& r, const ident::FrequencyRespons
             {"covariance_ok", r.covariance_ok},
             {"num_bins", r.num_residuals / 2},
             {"num_averages", frf.num_averages},
-            {"estimator", frf.estimator.empty() ? std::string("unknown") : frf.estimator},
             {"sample_rate_hz", frf.sample_rate_hz},
             {"f_min_hz", r.band.f_lo_hz},
             {"f_max_hz", r.band.f_hi_hz},
