@@ -29,6 +29,49 @@ std::vector<Row> Rows(const model::Plant& p, const model::Plant* s, bool linear 
   return r;
 }
 
+// The friction's rows (model.json "friction", its std "std.friction"):
+// F_c+ and F_c- (one row F_c when equal) and the offset; none without friction.
+std::vector<Row> FrictionRows(const io::ModelFile& mf, bool linear) {
+  std::vector<Row> r;
+  if (!mf.friction) return r;
+  const double inf = std::numeric_limits<double>::infinity();
+  const model::Friction& f = *mf.friction;
+  const model::Friction* e = mf.friction_std ? &*mf.friction_std : nullptr;
+  const std::string unit = linear ? "N" : "N m";
+  if (f.coulomb_pos == f.coulomb_neg) {
+    r.push_back({"F_c", unit, f.coulomb_pos, e ? e->coulomb_pos : inf});
+  } else {
+    r.push_back({"F_c+", unit, f.coulomb_pos, e ? e->coulomb_pos : inf});
+    r.push_back({"F_c-", unit, f.coulomb_neg, e ? e->coulomb_neg : inf});
+  }
+  r.push_back({"offset", unit, f.offset, e ? e->offset : inf});
+  return r;
+}
+
+// compare's friction lines: the model's friction beside the reference's (0
+// when the reference has none).
+void CompareFriction(const io::ModelFile& model, const io::ModelFile& ref, bool linear, std::ostringstream& os,
+                     nlohmann::json& j) {
+  const std::vector<Row> a = FrictionRows(model, linear), b = FrictionRows(ref, linear);
+  if (a.empty() && b.empty()) return;
+  char line[200];
+  os << "friction (model.json 'friction'):\n";
+  auto value = [](const std::vector<Row>& rows, const std::string& name) {
+    for (const Row& r : rows) if (r.name == name) return r.value;
+    return 0.0;
+  };
+  j["friction"] = nlohmann::json::array();
+  for (const Row& r : a.empty() ? b : a) {
+    const double mine = value(a, r.name), theirs = value(b, r.name);
+    const double sd = a.empty() ? std::numeric_limits<double>::infinity() : r.std;
+    std::snprintf(line, sizeof line, "%-8s %12.6g +- %-9.3g %12.6g  %s\n", r.name.c_str(), mine, sd, theirs,
+                  r.unit.c_str());
+    os << line;
+    j["friction"].push_back({{"name", r.name}, {"value", mine}, {"std", io::NumberOrNull(sd)}, {"reference", theirs},
+                             {"unit", r.unit}});
+  }
+}
+
 }  // namespace
 
 std::string ParameterTable(const io::ModelFile& mf, bool linear) {
@@ -36,7 +79,9 @@ std::string ParameterTable(const io::ModelFile& mf, bool linear) {
   char line[160];
   std::snprintf(line, sizeof line, "%-8s %14s %12s  %s\n", "param", "value", "std", "unit");
   os << line;
-  for (const Row& r : Rows(mf.plant, mf.std_errors ? &*mf.std_errors : nullptr, linear)) {
+  std::vector<Row> rows = Rows(mf.plant, mf.std_errors ? &*mf.std_errors : nullptr, linear);
+  for (const Row& f : FrictionRows(mf, linear)) rows.push_back(f);
+  for (const Row& r : rows) {
     std::snprintf(line, sizeof line, "%-8s %14.6g %12.3g  %s\n", r.name.c_str(), r.value, r.std, r.unit.c_str());
     os << line;
   }
@@ -95,6 +140,7 @@ ModelComparison CompareModels(const io::ModelFile& model, const io::ModelFile& r
     os << "the models have different numbers of modes (" << model.plant.modes.size() << " vs "
        << ref.plant.modes.size() << "): no per-parameter comparison\n";
   }
+  CompareFriction(model, ref, linear, os, j);
   j["stability"] = nlohmann::json::array();
   std::snprintf(line, sizeof line, "\n%-6s %-10s %12s %10s %12s %10s\n", "delay", "model", "K_cr(B=0)", "B_t",
                 "K_cr^max", "B_max");

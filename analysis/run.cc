@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "analysis/laps.h"
+#include "io/stability_files.h"
 #include "stability/uncertainty.h"
 #include "model/error.h"
 #include "model/parallel.h"
@@ -202,8 +203,8 @@ bool RunOptions::IsValid(std::string* why) const {
     if (why) *why = m;
     return false;
   };
-  for (int d : delays) {
-    if (d < 0) return fail("RunOptions::delays must be >= 0");
+  if (const std::string problem = io::LoopDelaysProblem(delays, "RunOptions::delays"); !problem.empty()) {
+    return fail(problem);
   }
   if (figures && !(std::isfinite(report_filter_hz) && report_filter_hz > 0))
     return fail("RunOptions::report_filter_hz must be > 0 and finite");

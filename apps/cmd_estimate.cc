@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "apps/common.h"
+#include "io/printable.h"
 #include "io/atomic_file.h"
 #include "io/frf_file.h"
 #include "model/error.h"
@@ -53,7 +54,7 @@ void AddEstimateCommand(CLI::App& app) {
     }
     std::fprintf(stderr, "%zu samples at %g Hz, %d averages, %zu bins from %.3f to %.3f Hz -> %s\n",
                  e.total_samples, r.sample_rate_hz, r.num_averages, r.f_hz.size(),
-                 r.f_hz.front(), r.f_hz.back(), f->out.c_str());
+                 r.f_hz.front(), r.f_hz.back(), io::Printable(f->out).c_str());
   });
 }
 

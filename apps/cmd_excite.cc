@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "apps/common.h"
+#include "io/printable.h"
 #include "ident/excitation.h"
 #include "io/atomic_file.h"
 #include "model/error.h"
@@ -49,7 +50,7 @@ void AddExciteCommand(CLI::App& app) {
       std::printf("; %d lines every %.6g Hz, %d periods of %d samples", e.num_lines, e.line_spacing_hz,
                   e.num_periods, e.period_samples);
     }
-    std::printf(" -> %s\n", f->out.c_str());
+    std::printf(" -> %s\n", io::Printable(f->out).c_str());
   });
 }
 

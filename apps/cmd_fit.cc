@@ -5,6 +5,8 @@
 #include "apps/fit_support.h"
 #include "io/atomic_file.h"
 #include "io/frf_file.h"
+#include "io/printable.h"
+#include "io/stability_files.h"
 #include "model/error.h"
 
 namespace zwidth::app {
@@ -12,7 +14,7 @@ namespace zwidth::app {
 void AddFitCommands(CLI::App& app) {
   struct Flags {
     std::vector<std::string> inputs;
-    std::string out, init, units = "rotary";
+    std::string out, init, units = "rotary", friction = "auto";
     EstimateFlags est;
     FitFlags fit;
   };
@@ -26,11 +28,13 @@ void AddFitCommands(CLI::App& app) {
   cmd->add_option("--max-iterations", f->fit.o.max_iterations, "solver iterations per start")->capture_default_str();
   AddEstimateFlags(cmd, &f->est);
   AddUnitsFlag(cmd, &f->units);
+  AddFrictionFlag(cmd, &f->friction);
   cmd->callback([f] {
     std::vector<std::string> read = f->inputs;
     if (!f->init.empty()) read.push_back(f->init);
     io::CheckOutputFolder(f->out, read);
     f->fit.Resolve(f->est.welch.fmin_hz, f->est.welch.fmax_hz);
+    const fit::FrictionModel friction_model = ResolveFrictionFlag(f->friction);
     const bool linear = LinearUnits(f->units);
     const std::string source = JoinPaths(f->inputs);
     if (!f->init.empty()) f->fit.o.init = io::ReadModelJsonFor(f->init, "fit --init").plant;
@@ -44,16 +48,19 @@ void AddFitCommands(CLI::App& app) {
         }
       }
     }
+    const std::optional<FrictionInput> fin = FrictionInputFor(f->inputs, frf_file, f->est, friction_model);
     const ident::FrequencyResponse frf = frf_file
         ? io::ReadFrequencyResponse(f->inputs[0], f->est.select.sample_rate_hz)
         : EstimateFromLogs(f->inputs, f->est, true).response.frf;
     fit::FitResult r;
-    const io::ModelFile mf = FitToModelFile(frf, f->fit.o, source, &r);
+    fit::FrictionFitResult ff;
+    const io::ModelFile mf = FitToModelFile(frf, f->fit.o, source, &r, fin ? &*fin : nullptr, &ff);
     io::WriteModelJson(f->out, mf);
-    std::printf("%s", ParameterTable(mf, linear).c_str());
+    std::printf("%s", io::PrintableLines(ParameterTable(mf, linear)).c_str());
     std::printf("%s (%.1f ms)\n", r.BriefReport().c_str(), timer.Lap("fit"));
     std::printf("order: pole pairs sorted by omega, zero pairs by v (G is unchanged); sections numbered from 1\n");
-    std::printf("%s", FitReport(r).c_str());
+    std::printf("%s", FrictionLine(ff).c_str());
+    std::printf("%s", io::PrintableLines(FitReport(r)).c_str());
   });
 
   struct CompareFlags {
@@ -75,13 +82,13 @@ void AddFitCommands(CLI::App& app) {
       throw InputError("compare needs a reference: --reference table1 (Table I, the paper's PHANToM) or --reference MODEL.json");
     }
     io::ModelFile r = ReadReference(c->reference);
-    for (int d : c->delays) if (d < 0) throw InputError("--delays must be >= 0");
+    if (const std::string why = io::LoopDelaysProblem(c->delays, "--delays"); !why.empty()) throw InputError(why);
     const double T = ResolvePeriod(c->period, &m);
     app::ConvertDelayToPeriod(&r, T, "the reference");
     std::string text;
     const nlohmann::json j = CompareModels(m, r, c->delays, T, &text);
     if (c->json) std::cout << j.dump(2) << std::endl;
-    else std::printf("%s", text.c_str());
+    else std::printf("%s", io::PrintableLines(text).c_str());
   });
 }
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "analysis/run.h"
+#include "io/printable.h"
 #include "apps/common.h"
 #include "apps/fit_support.h"
 #include "apps/loop_flags.h"
@@ -101,7 +102,7 @@ void Run(RunFlags& f) {
   // at the end (io::OutputFolder): a failure or a signal leaves nothing, and
   // two runs into one folder cannot mix.
   io::OutputFolder folder(f.outdir, f.force);
-  std::fprintf(stderr, "zwidth run %s -> %s\n", in.source.c_str(), f.outdir.c_str());
+  std::fprintf(stderr, "zwidth run %s -> %s\n", io::Printable(in.source).c_str(), io::Printable(f.outdir).c_str());
   double t_total = 0.0;
   in = EstimateAndFit(f, o, std::move(in), &t_total);
   if (f.loop.hands.size() > 1) throw InputError("run takes one --hand (boundary takes several)");
@@ -121,11 +122,12 @@ void Run(RunFlags& f) {
   folder.Commit();
   const std::string params = analysis::ParameterTable(a.input.model, o.linear);
   const std::string cmp = a.comparison ? a.comparison->text : "";
-  std::printf("fit quality: %s\n%s\n%s", fit::ToString(a.input.fit.quality).c_str(), params.c_str(), cmp.c_str());
-  std::fprintf(stderr, "%s", fit_report.c_str());
+  std::printf("fit quality: %s\n%s\n%s", fit::ToString(a.input.fit.quality).c_str(), io::PrintableLines(params).c_str(),
+              io::PrintableLines(cmp).c_str());
+  std::fprintf(stderr, "%s", io::PrintableLines(fit_report).c_str());
   const std::filesystem::path final_out(folder.path());
   std::printf("\nboundary: %s (%d of %zu rows where margin() and the exact K_CR disagree)\nreport: %s\n",
-              (final_out / "boundary.csv").c_str(), a.stability.margin_disagreements, a.stability.rows.size(),
+              io::Printable((final_out / "boundary.csv").string()).c_str(), a.stability.margin_disagreements, a.stability.rows.size(),
               (final_out / "report.html").c_str());
 }
 

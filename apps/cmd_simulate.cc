@@ -2,10 +2,13 @@
 #include <cstdio>
 
 #include "apps/common.h"
+#include "io/printable.h"
+#include "apps/friction_flags.h"
 #include "io/atomic_file.h"
 #include "io/log.h"
 #include "io/model_json.h"
 #include "model/error.h"
+#include "model/nonlinear_simulate.h"
 #include "model/simulate.h"
 
 namespace zwidth::app {
@@ -13,17 +16,13 @@ namespace {
 // Fewer encoder steps than this over the whole output: warned about.
 constexpr double kFewEncoderSteps = 50.0;
 
-std::string Num(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%g", v);
-  return b;
-}
 }  // namespace
 
 void AddSimulateCommand(CLI::App& app) {
   struct Flags {
     std::string model, out;
     model::SimulateOptions o;
+    FrictionFlags friction;
   };
   auto f = std::make_shared<Flags>();
   CLI::App* cmd = app.add_subcommand("simulate", "simulate a white-noise torque log from a model");
@@ -37,6 +36,7 @@ void AddSimulateCommand(CLI::App& app) {
   cmd->add_option("--noise-std", f->o.noise_std_rad, "sensor noise std [rad]")->capture_default_str();
   cmd->add_option("--delay-samples", f->o.delay_samples, "extra input delay [samples]")->capture_default_str();
   cmd->add_option("--seed", f->o.seed, "random seed")->capture_default_str();
+  AddFrictionFlags(cmd, &f->friction);
   cmd->callback([f] {
     io::CheckOutputFolder(f->out, {f->model});
     // At most kMaxSimulateSamples (1e8, 28 h at 1 kHz: 1.6 GB of samples in memory).
@@ -63,7 +63,11 @@ void AddSimulateCommand(CLI::App& app) {
                        std::to_string(io::kMaxDelaySamples));
     }
     const io::ModelFile mf = io::ReadModelJsonFor(f->model, "simulate --model");
-    const model::SimulatedLog log = model::SimulateLog(mf.plant, f->o);
+    const model::Friction friction = ResolveFriction(f->friction, mf);
+    const model::Actuator actuator = ResolveActuator(f->friction);
+    const bool nonlinear = !friction.IsZero() || !actuator.IsZero();
+    const model::SimulatedLog log = nonlinear ? model::SimulateNonlinearLog(mf.plant, f->o, friction, actuator)
+                                              : model::SimulateLog(mf.plant, f->o);
     io::WriteLog(f->out, log.sample_rate_hz, log.torque, log.position);
     // A device heavier or stiffer than the defaults (PHANToM values) barely
     // moves: an output of a few encoder counts identifies nothing.
@@ -77,8 +81,16 @@ void AddSimulateCommand(CLI::App& app) {
                      steps, *hi - *lo, f->o.encoder_step_rad, f->o.torque_rms);
       }
     }
+    if (nonlinear) {
+      std::fprintf(stderr, "friction: Coulomb %g / %g, offset %g, breakaway %g / %g%s; actuator: saturation %g, "
+                   "DAC step %g (0: none)\n", friction.coulomb_pos, friction.coulomb_neg, friction.offset,
+                   friction.StaticPos(), friction.StaticNeg(),
+                   (mf.friction && friction.coulomb_pos == mf.friction->coulomb_pos &&
+                    friction.coulomb_neg == mf.friction->coulomb_neg) ? " (the model's)" : "",
+                   actuator.saturation, actuator.dac_step);
+    }
     std::fprintf(stderr, "wrote %zu samples at %g Hz to %s\n", log.torque.size(),
-                 log.sample_rate_hz, f->out.c_str());
+                 log.sample_rate_hz, io::Printable(f->out).c_str());
   });
 }
 

@@ -7,12 +7,16 @@
 #include <memory>
 
 #include "apps/common.h"
+#include "analysis/scene_check.h"
+#include "apps/friction_flags.h"
 #include "apps/loop_flags.h"
+#include "io/printable.h"
 #include "stability/haptic_loop.h"
 #include "io/atomic_file.h"
 #include "io/model_json.h"
 #include "io/stability_files.h"
 #include "model/error.h"
+#include "stability/friction_prediction.h"
 #include "stability/relay.h"
 #include "stability/uncertainty.h"
 #include "stability/zwidth.h"
@@ -30,7 +34,7 @@ nlohmann::json LoopJson(const std::vector<stability::LoopOptions>& loops) {
 }
 
 void CheckDelay(int d, const char* flag) {
-  if (d < 0) throw InputError(std::string(flag) + " = " + std::to_string(d) + ": delays must be >= 0 samples");
+  if (const std::string why = io::LoopDelaysProblem({d}, flag); !why.empty()) throw InputError(why);
 }
 
 // The boundary table of every delay: one loop per hand, the region stable for
@@ -135,6 +139,15 @@ void PrintBoundarySummary(const BoundaryTable& t, const io::ModelFile& mf, const
     for (const auto& band : s.reopened_bands) {
       std::printf("  reopened band: B in (%.6g, %.6g), largest stable K %.6g\n", band.B_lo, band.B_hi, band.K_max);
     }
+    for (const auto& j : s.frequency_jumps) {
+      std::printf("  f_CR jumps at B = %.6g: K_CR %.6g -> %.6g, f_CR %.5g -> %.5g Hz%s\n", j.B, j.K_before, j.K_after,
+                  j.f_before_hz, j.f_after_hz, j.B == s.B_t ? " (B_t)" : "");
+    }
+    if (!s.polynomial_test) {
+      std::printf("  stability from the closed loop's eigenvalues: the characteristic polynomial cannot place its "
+                  "roots here (rounding moves D(z)'s poles by %.3g of their distance to the unit circle)\n",
+                  s.pole_shift);
+    }
   }
   std::printf("B_max_0: where the interval from K = 0+ closes; B_max: the largest B with some stable K > 0\n");
   if (loops.size() > 1) {
@@ -186,9 +199,7 @@ nlohmann::json BoundarySummaryJson(const BoundaryTable& t, const io::ModelFile& 
       std::fprintf(stderr, "Monte Carlo, d = %d: %d samples...\n", delays[i], monte_carlo);
       const stability::MonteCarloResult mc = stability::SummaryMonteCarlo(
           mf.plant, mf.log_covariance, T, delays[i], monte_carlo, seed, loops[0]);
-      e["monte_carlo"] = {{"samples", mc.samples}, {"seed", seed},
-                          {"std", io::SummaryToJson(stability::DelaySummary{}, &mc.std)["std"]},
-                          {"mean", io::SummaryToJson(stability::DelaySummary{}, &mc.mean)["std"]}};
+      e["monte_carlo"] = io::MonteCarloJson(mc, seed);
       std::printf("d = %d  std by delta method / Monte Carlo (%d samples): K_cr(0) %.4g / %.4g, B_t %.4g / %.4g, "
                   "K_cr^max %.4g / %.4g, B_max %.4g / %.4g\n",
                   delays[i], mc.samples, t.stds[i].K_cr_at_zero_B, mc.std.K_cr_at_zero_B, t.stds[i].B_t,
@@ -238,8 +249,7 @@ void AddBoundaryCommand(CLI::App& app) {
     }
     io::ModelFile mf = io::ReadModelJsonFor(bf->model, "boundary");  // not const: --period may convert its delay
     const double T = ResolvePeriod(bf->period, &mf);
-    if (bf->delays.empty()) throw InputError("--delays is empty");
-    for (int d : bf->delays) CheckDelay(d, "--delays");
+    if (const std::string why = io::LoopDelaysProblem(bf->delays, "--delays"); !why.empty()) throw InputError(why);
     std::string why;
     if (!bf->grid.IsValid(&why)) throw InputError(why);
     if (bf->monte_carlo < 0) throw InputError("--monte-carlo must be >= 0");
@@ -366,7 +376,12 @@ nlohmann::json RelayJson(const stability::RelayResult& res, const stability::Cri
           {"K_cr_exact", io::NumberOrNull(cp.K_cr)},
           {"f_cr_exact_hz", io::NumberOrNull(cp.f_cr_hz)},
           {"delay_samples", o.delay_samples}, {"B", o.damping},
-          {"period_s", o.period_s}};
+          {"period_s", o.period_s},
+          {"nonlinear", o.Nonlinear()}, {"encoder_step", o.encoder_step},
+          {"friction", {{"coulomb_pos", o.friction.coulomb_pos}, {"coulomb_neg", o.friction.coulomb_neg},
+                        {"offset", o.friction.offset}, {"breakaway_pos", o.friction.StaticPos()},
+                        {"breakaway_neg", o.friction.StaticNeg()}}},
+          {"actuator", {{"saturation", o.actuator.saturation}, {"dac_step", o.actuator.dac_step}}}};
 }
 
 // Warnings on stderr: an unsettled estimate, a crossing below the record's band.
@@ -412,6 +427,7 @@ void AddRelayCommand(CLI::App& app) {
     double period = kNotGiven;
     bool json = false;
     LoopFlags loop;
+    FrictionFlags friction;
   };
   auto rf = std::make_shared<RelayFlags>();
   CLI::App* r = app.add_subcommand("relay", "simulate the relay experiment of section IV (Fig. 9)");
@@ -423,7 +439,9 @@ void AddRelayCommand(CLI::App& app) {
   r->add_option("--seconds", rf->o.seconds, "simulated time [s]")->capture_default_str();
   r->add_flag("--json", rf->json, "print only JSON on standard output");
   r->add_option("-o,--output", rf->trace, "trace CSV (t, relay, damping, command, position)");
+  r->add_option("--encoder-step", rf->o.encoder_step, "rad per encoder count (0: exact)")->capture_default_str();
   AddLoopFlags(r, &rf->loop);
+  AddFrictionFlags(r, &rf->friction);
   r->callback([rf] {
     if (!rf->trace.empty()) io::CheckOutputFolder(rf->trace, {rf->model});
     io::ModelFile mf = io::ReadModelJsonFor(rf->model, "relay");  // not const: --period may convert its delay
@@ -432,8 +450,10 @@ void AddRelayCommand(CLI::App& app) {
     const std::vector<stability::LoopOptions> loops = ResolveLoops(rf->loop, rf->o.period_s);
     if (loops.size() != 1) throw InputError("relay: give at most one --hand (the experiment runs one loop)");
     rf->o.loop = loops.front();
+    rf->o.friction = ResolveFriction(rf->friction, mf);
+    rf->o.actuator = ResolveActuator(rf->friction);
     std::string why;
-    if (!rf->o.IsValid(&why)) throw InputError(why);  // the fields' flags: FieldFlags() in common.cc
+    if (!rf->o.IsValid(&why)) throw InputError(why);  // the fields' flags: io/option_names.cc
     std::fprintf(stderr, "simulating %.3g s of relay feedback (d = %d, B = %g)...\n", rf->o.seconds,
                  rf->o.delay_samples, rf->o.damping);
     const stability::RelayResult res = stability::SimulateRelay(mf.plant, rf->o);
@@ -449,6 +469,47 @@ void AddRelayCommand(CLI::App& app) {
   });
 }
 
+// One line of `zwidth check`: the object, its status, the interval holding K
+// (or the nearest), K_cr and, with a std, the distance to the nearest boundary.
+void PrintObjectCheck(const analysis::ObjectCheck& c, const io::SceneObject& o, const std::string& note) {
+  const io::ObjectVerdict& v = c.verdict;
+  const int k = v.stable ? v.interval : v.nearest_interval;
+  char buf[200];
+  std::string where = "no K > 0 is stable at this B";
+  if (k >= 0) {
+    std::snprintf(buf, sizeof buf, "%s (%.6g, %.6g)", v.stable ? "in" : "nearest stable K", v.intervals[k].K_lo,
+                  v.intervals[k].K_hi);
+    where = buf;
+  }
+  std::string sigma;
+  if (std::isfinite(c.sigmas_to_boundary)) {
+    std::snprintf(buf, sizeof buf, "  %+.3g std from the boundary K = %.6g +- %.3g (%s)", c.sigmas_to_boundary,
+                  c.boundary_K, c.boundary_K_std, v.stable ? "nominally stable" : "nominally unstable");
+    sigma = buf;
+  }
+  const char* status = c.status == analysis::SceneStatus::kStable     ? "stable  "
+                       : c.status == analysis::SceneStatus::kMarginal ? "marginal"
+                                                                      : "UNSTABLE";
+  std::printf("%-20s K = %-10g B = %-8g %s  %s  K_cr = %-10.5g%s%s\n", io::Printable(o.name).c_str(), o.K, o.B,
+              status, where.c_str(), v.critical.K_cr, sigma.c_str(), note.c_str());
+}
+
+// check, an unstable object on a device with friction (the first hand's loop):
+// the amplitude below which friction still holds it, into *j and as a note.
+std::string FrictionNote(const model::Plant& plant, double T, int delay, const stability::LoopOptions& loop,
+                         const io::SceneObject& o, const model::Friction& friction, double encoder_step,
+                         nlohmann::json* j) {
+  if (!(friction.MeanCoulomb() > 0.0)) return "";
+  const stability::FrictionPrediction p =
+      stability::PredictFriction(plant, T, delay, loop, o.K, o.B, friction, encoder_step);
+  (*j)["friction"] = {{"verdict", stability::ToString(p.verdict)},
+                      {"stable_below_amplitude", io::NumberOrNull(p.amplitude)},
+                      {"valid", p.valid}, {"invalid_reason", p.invalid_reason}, {"rest_point_ok", p.rest_point_ok}};
+  if (p.verdict != stability::FrictionVerdict::kStableBelow) return "";
+  return "  friction holds it below " + Num(p.amplitude) + " rad" +
+         (p.valid ? "" : " (outside validity: " + p.invalid_reason + ")");
+}
+
 // zwidth check: is each object of a haptic scene stable on this device?
 void AddCheckCommand(CLI::App& app) {
   struct CheckFlags {
@@ -457,6 +518,11 @@ void AddCheckCommand(CLI::App& app) {
     double period = kNotGiven;
     bool json = false;
     LoopFlags loop;
+    FrictionFlags friction;
+    double encoder_step = 0.0;
+}
+
+    analysis::SceneCheckOptions options;
   };
   auto cf = std::make_shared<CheckFlags>();
   CLI::App* c = app.add_subcommand("check", "is each object of a haptic scene stable on this device?");
@@ -465,51 +531,43 @@ void AddCheckCommand(CLI::App& app) {
   c->add_option("--delay", cf->delay, "loop delay [samples]")->required();
   c->add_option("--period", cf->period, "sample period T [s] (default: the model's, else 0.001)");
   c->add_flag("--json", cf->json, "print only JSON on standard output");
+  c->add_option("--marginal-sigmas", cf->options.marginal_sigmas,
+                "with a model covariance: an object within this many std of the nearest boundary is 'marginal' "
+                "(exit 4 when none is unstable); 0: off (default 2)");
   AddLoopFlags(c, &cf->loop);
+  AddFrictionFlags(c, &cf->friction);
+  c->add_option("--encoder-step", cf->encoder_step,
+                "rad per encoder count, for the friction prediction's validity and rest point (0: exact)")
+      ->capture_default_str();
   c->callback([cf] {
     io::ModelFile mf = io::ReadModelJsonFor(cf->model, "check --model");  // not const: --period may convert its delay
     CheckDelay(cf->delay, "--delay");
     const double T = ResolvePeriod(cf->period, &mf);
     const std::vector<io::SceneObject> objs = io::ReadScene(cf->scene);
-    std::vector<stability::ZWidth> zs;  // one per hand: stable means stable for every hand
-    for (const stability::LoopOptions& l : ResolveLoops(cf->loop, T)) zs.emplace_back(mf.plant, T, cf->delay, l);
-    nlohmann::json out = {{"delay_samples", cf->delay}, {"period_s", T}, {"objects", nlohmann::json::array()}};
-    int unstable = 0;
-    for (const auto& o : objs) {
-      stability::CriticalPoint cp = zs[0].At(o.B);
-      std::vector<stability::KInterval> iv = zs[0].StableIntervals(o.B);
-      for (size_t h = 1; h < zs.size(); ++h) {  // several hands: the region stable for all
-        iv = stability::IntersectIntervals(iv, zs[h].StableIntervals(o.B));
-        const stability::CriticalPoint c = zs[h].At(o.B);
-        if (c.K_cr < cp.K_cr) cp = c;
-      }
-      const io::ObjectVerdict v = io::Classify(o, cp, std::move(iv));
-      const bool stable = v.stable;
-      const int inside = v.interval, nearest = v.nearest_interval;
-      const std::vector<stability::KInterval>& iv_ = v.intervals;
-      if (!stable) ++unstable;
-      out["objects"].push_back(v.ToJson(o));
-      if (!cf->json) {
-        std::string where;
-        char buf[160];
-        const int k = stable ? inside : nearest;
-        if (k >= 0) {
-          std::snprintf(buf, sizeof buf, "%s (%.6g, %.6g)", stable ? "in" : "nearest stable K", iv_[k].K_lo, iv_[k].K_hi);
-          where = buf;
-        } else {
-          where = "no K > 0 is stable at this B";
-        }
-        std::printf("%-20s K = %-10g B = %-8g %s  %s  K_cr = %-10.5g\n", o.name.c_str(), o.K, o.B,
-                    stable ? "stable  " : "UNSTABLE", where.c_str(), cp.K_cr);
-      }
+    const std::vector<stability::LoopOptions> loops = ResolveLoops(cf->loop, T);
+    const model::Friction friction = ResolveFriction(cf->friction, mf);
+    if (!(std::isfinite(cf->encoder_step) && cf->encoder_step >= 0)) {
+      throw InputError("--encoder-step " + std::to_string(cf->encoder_step) + ": must be finite and >= 0 (rad per count)");
+    }
+    const analysis::SceneCheck sc = analysis::CheckScene(mf.plant, mf.log_covariance, T, cf->delay, loops, objs, cf->options);
+    if (!mf.log_covariance.empty() && !sc.has_std) std::fprintf(stderr, "note: no std (and no marginal status) with several hands\n");
+    nlohmann::json out = analysis::SceneCheckJson(sc, objs, cf->delay, T, cf->options);
+    for (size_t i = 0; i < objs.size(); ++i) {
+      nlohmann::json scratch;
+      nlohmann::json* j = out.contains("objects") && i < out["objects"].size() ? &out["objects"][i] : &scratch;
+      // The friction prediction for an object the linear loop does not hold.
+      const std::string note = sc.objects[i].verdict.stable ? ""
+                                   : FrictionNote(mf.plant, T, cf->delay, loops[0], objs[i], friction,
+                                                  cf->encoder_step, j);
+      if (!cf->json) PrintObjectCheck(sc.objects[i], objs[i], note);
     }
     if (cf->json) std::cout << out.dump() << std::endl;
-    if (unstable > 0) {
-      if (!cf->json) std::printf("%d of %zu objects unstable (exit status 3)\n", unstable, objs.size());
-      std::cout.flush();
-      std::fflush(stdout);
-      std::exit(3);  // documented: some object is unstable (1 and 2 are errors)
+    const int code = sc.num_unstable > 0 ? 3 : sc.num_marginal > 0 ? 4 : 0;
+    if (code != 0 && !cf->json) {
+      std::printf("%d of %zu objects unstable, %d marginal (within %g std of a boundary) (exit status %d)\n",
+                  sc.num_unstable, objs.size(), sc.num_marginal, cf->options.marginal_sigmas, code);
     }
+    if (code != 0) throw ExitStatus{code};  // documented: 3 some object unstable, 4 none unstable but some marginal
   });
 }
 

@@ -4,6 +4,7 @@
 
 #include "analysis/validate.h"
 #include "apps/common.h"
+#include "io/printable.h"
 #include "io/atomic_file.h"
 #include "io/model_json.h"
 #include "model/error.h"
@@ -18,7 +19,8 @@ struct ValidateFlags {
 };
 
 void Print(const ValidateFlags& f, const io::Log& log, const analysis::ValidationResult& r) {
-  std::printf("validate: %s on %s (%zu samples at %g Hz)\n", f.model.c_str(), f.log.c_str(), log.input.size(),
+  std::printf("validate: %s on %s (%zu samples at %g Hz)\n", io::Printable(f.model).c_str(),
+              io::Printable(f.log).c_str(), log.input.size(),
               log.info.sample_rate_hz);
   std::printf("  simulation (compare): fit %.4g %% (NRMSE), with the initial state and an input offset of %.4g "
               "estimated\n", r.fit_percent, r.input_offset);
@@ -29,7 +31,7 @@ void Print(const ValidateFlags& f, const io::Log& log, const analysis::Validatio
               r.band.Describe().c_str());
   std::printf("quality: %s\n", r.good ? "good" : "poor");
   for (const auto& w : r.reasons) std::printf("  reason: %s\n", w.c_str());
-  for (const auto& w : r.warnings) std::printf("  warning: %s\n", w.c_str());
+  for (const auto& w : r.warnings) std::printf("  warning: %s\n", io::Printable(w).c_str());
 }
 
 }  // namespace

@@ -3,119 +3,24 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <sstream>
 
 #include "io/frf_file.h"
+#include "io/option_names.h"
+#include "io/printable.h"
 #include "model/error.h"
 
 namespace zwidth::app {
 
-const std::vector<FieldFlag>& FieldFlags() {
-  static const std::vector<FieldFlag> table = {
-      {"LogSelect::time_column", "--time-column"},
-      {"ValidateOptions::max_lag", "--max-lag"},
-      {"ValidateOptions::min_averages", ""},
-      {"ValidateOptions::relative_std_floor", ""},
-      {"LogSelect::input_column", "--input-column"},
-      {"LogSelect::output_column", "--output-column"},
-      {"LogSelect::delimiter", "--delimiter"},
-      {"LogSelect::input_scale", "--input-scale"},
-      {"LogSelect::output_scale", "--output-scale"},
-      {"LogSelect::time_unit", "--time-unit"},
-      {"LogSelect::time_dataset", "--time-dataset"},
-      {"LogSelect::input_dataset", "--input-dataset"},
-      {"LogSelect::output_dataset", "--output-dataset"},
-      {"LogSelect::sample_rate_hz", "--rate"},
-      {"ReadFrequencyResponse::sample_rate_hz", "--rate"},
-      {"OutputFolder::force", "--force"},
-      {"WelchOptions::window_length", "--window-length"},
-      {"WelchOptions::overlap", "--overlap"},
-      {"WelchOptions::fmin_hz", "--fmin"},
-      {"WelchOptions::fmax_hz", "--fmax"},
-      {"BandOptions::fmin_hz", "--fmin"},
-      {"BandOptions::fmax_hz", "--fmax"},
-      {"BandOptions::min_input_power_ratio", "--min-input-power"},
-      {"BandOptions::min_coherence", "--min-coherence"},
-      {"ExcitationOptions::sample_rate_hz", "--rate"},
-      {"ExcitationOptions::seconds", "--seconds"},
-      {"ExcitationOptions::rms", "--rms"},
-      {"ExcitationOptions::fmin_hz", "--fmin"},
-      {"ExcitationOptions::fmax_hz", "--fmax"},
-      {"SimulateOptions::seconds", "--seconds"},
-      {"SimulateOptions::sample_rate_hz", "--rate"},
-      {"SimulateOptions::torque_rms", "--torque-rms"},
-      {"SimulateOptions::bandwidth_hz", "--bandwidth-hz"},
-      {"SimulateOptions::encoder_step_rad", "--encoder-step"},
-      {"SimulateOptions::noise_std_rad", "--noise-std"},
-      {"SimulateOptions::delay_samples", "--delay-samples"},
-      {"FitOptions::num_modes", "--modes"},
-      {"FitOptions::auto_modes", "--modes auto"},
-      {"FitOptions::max_modes", "--max-modes"},
-      {"FitOptions::delay_samples", "--delay-samples"},
-      {"FitOptions::auto_delay", "--delay-samples auto"},
-      {"FitOptions::max_auto_delay", "--max-delay"},
-      {"FitOptions::allow_few_averages", "--allow-short"},
-      {"FitOptions::max_iterations", "--max-iterations"},
-      {"FitOptions::max_starts", "--starts"},
-      {"FitOptions::init", "--init"},
-      {"FitOptions::min_averages", ""},
-      {"FitOptions::min_damping_ratio", ""},
-      {"FitOptions::max_pole_damping_ratio", ""},
-      {"FitOptions::max_zero_damping_ratio", ""},
-      {"FitOptions::max_frequency_fraction", ""},
-      {"FitOptions::relative_std_floor", ""},
-      {"FitOptions::function_tolerance", ""},
-      {"FitOptions::max_converged_starts", ""},
-      {"FitOptions::runner_up_cost_ratio", ""},
-      {"BGridOptions::b_min", "--b-min"},
-      {"BGridOptions::b_max", "--b-max"},
-      {"BGridOptions::b_step", "--b-step"},
-      {"BGridOptions::b_points", "--b-points"},
-      {"SummaryMonteCarlo::samples", "--monte-carlo"},
-      {"SetLowPassFilter::cutoff_hz", "--velocity-filter-hz"},
-      {"LoopOptions::hand", "--hand"},
-      {"RunOptions::delays", "--delays"},
-      {"RunOptions::report_filter_hz", "--report-filter-hz"},
-      {"RelayOptions::period_s", "--period"},
-      {"RelayOptions::delay_samples", "--delay"},
-      {"RelayOptions::damping", "--damping"},
-      {"RelayOptions::amplitude", "--amplitude"},
-      {"RelayOptions::seconds", "--seconds"},
-      {"RelayOptions::settle_fraction", ""},
-      {"RelayOptions::loop", ""},
-      {"BoundaryOptions::min_grid_points", ""},
-      {"BoundaryOptions::grid_points_per_delay", ""},
-      {"BoundaryOptions::theta_tolerance", ""},
-      {"PassivityOptions::min_grid_points", ""},
-      {"PassivityOptions::grid_points_per_delay", ""},
-      {"PassivityOptions::theta_tolerance", ""},
-      {"UncertaintyOptions::log_step", ""},
-  };
-  return table;
-}
+// The table of fields, flags and keywords is io/option_names.cc (shared with the Python module).
+std::string WithFlags(const std::string& message) { return io::WithFlags(message); }
 
-std::string WithFlags(const std::string& message) {
-  std::string out;
-  size_t i = 0;
-  while (i < message.size()) {
-    // A field is Name::name: an upper-case identifier, "::", a lower-case one.
-    const size_t colon = message.find("::", i);
-    if (colon == std::string::npos) break;
-    size_t b = colon;
-    while (b > i && (std::isalnum(static_cast<unsigned char>(message[b - 1])) || message[b - 1] == '_')) --b;
-    size_t e = colon + 2;
-    while (e < message.size() && (std::isalnum(static_cast<unsigned char>(message[e])) || message[e] == '_')) ++e;
-    const std::string field = message.substr(b, e - b);
-    const char* flag = nullptr;
-    for (const FieldFlag& f : FieldFlags()) {
-      if (field == f.field && *f.flag) flag = f.flag;
-    }
-    out += message.substr(i, b - i);
-    out += flag ? std::string(flag) : field;
-    i = e;
-  }
-  return out + message.substr(std::min(i, message.size()));
+std::string Num(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
 }
 
 std::string EstimateFlags::ResolvedDetrend() const {
@@ -131,11 +36,21 @@ ident::WelchOptions EstimateFlags::Resolve() const {
   if (!ident::FromString(ResolvedDetrend(), &o.detrend)) {
     throw InputError("--detrend '" + detrend + "' is not one of none, mean, linear");
   }
-  if (!ident::FromString(estimator, &o.estimator)) {
-    throw InputError("--estimator '" + estimator + "' is not one of h1, h2");
+  if (!IsLocal() && !ident::FromString(estimator, &o.estimator)) {
+    throw InputError("--estimator '" + estimator + "' is not one of h1, h2, lpm, lrm");
   }
   std::string why;
   if (!o.IsValid(&why)) throw InputError(why);
+  return o;
+}
+
+ident::LocalModelOptions EstimateFlags::ResolveLocal() const {
+  ident::LocalModelOptions o = local;
+  ident::FromString(estimator, &o.method);
+  o.fmin_hz = welch.fmin_hz;
+  o.fmax_hz = welch.fmax_hz;
+  std::string why;
+  if (!o.IsValid(&why)) throw InputError(WithFlags(why));
   return o;
 }
 
@@ -147,6 +62,11 @@ void AddLogFlags(CLI::App* cmd, io::LogSelect* s) {
   cmd->add_option("--input-scale", s->input_scale, "factor applied to the input (e.g. volts -> N m)")->capture_default_str();
   cmd->add_option("--output-scale", s->output_scale, "factor applied to the output (e.g. counts -> rad)")->capture_default_str();
   cmd->add_option("--time-unit", s->time_unit, "unit of the text time column: s | ms | us (default s)");
+  cmd->add_option("--input-unit", s->input_unit, "unit of the text input column (mN m, N mm, N, ...; si: as is; default: from the header, else N m)");
+  cmd->add_option("--output-unit", s->output_unit, "unit of the text output column (deg, rad, mm, um, m, counts, ...; si: as is; default: from the header, else rad)");
+  cmd->add_option("--counts-per-rev", s->counts_per_rev, "encoder counts per turn, for an output in counts (to rad)");
+  cmd->add_option("--counts-per-m", s->counts_per_m, "encoder counts per metre, for an output in counts (to m)");
+  cmd->add_flag("--decimal-comma", s->decimal_comma, "text numbers use ',' as the decimal mark (detected when the first data line reads only so)");
   cmd->add_option("--input-dataset", s->input_dataset, "HDF5 dataset of the input")->capture_default_str();
   cmd->add_option("--output-dataset", s->output_dataset, "HDF5 dataset of the output")->capture_default_str();
   cmd->add_option("--time-dataset", s->time_dataset, "HDF5 dataset of the time stamps")->capture_default_str();
@@ -161,7 +81,15 @@ void AddEstimateFlags(CLI::App* cmd, EstimateFlags* f) {
   cmd->add_option("--detrend", f->detrend,
                   "none | mean | linear, per segment (default linear; mean with --whole-record, where linear biases "
                   "the response)");
-  cmd->add_option("--estimator", f->estimator, "h1 | h2")->capture_default_str();
+  cmd->add_option("--estimator", f->estimator,
+                  "h1 | h2 (Welch) | lpm | lrm (local polynomial / rational method on the whole record, "
+                  "docs/estimators.md)")->capture_default_str();
+  cmd->add_option("--local-half-width", f->local.half_width,
+                  "lpm/lrm: bins either side of each estimate (0: 6 for lpm, 7 for lrm)")->capture_default_str();
+  cmd->add_option("--local-order", f->local.order, "lpm/lrm: order of the local polynomials (lrm: numerators)")->capture_default_str();
+  cmd->add_option("--local-denominator-order", f->local.denominator_order, "lrm: order of the local denominator")->capture_default_str();
+  cmd->add_option("--local-differences", f->local.differences,
+                  "lpm/lrm: times the output is differenced first (2: the rigid body's poles at z = 1 removed)")->capture_default_str();
   cmd->add_option("--fmin", f->welch.fmin_hz, "lowest frequency kept [Hz]")->capture_default_str();
   cmd->add_option("--fmax", f->welch.fmax_hz, "highest frequency kept [Hz], clipped below Nyquist")->capture_default_str();
   cmd->add_option("--reference-column", f->reference_column, "closed loop: column/variable of the logged excitation r (H = S_ry/S_ru)");
@@ -189,9 +117,12 @@ std::string JoinPaths(const std::vector<std::string>& paths) {
 namespace {
 
 void PrintRead(const io::LogInfo& info) {
-  std::fprintf(stderr, "%s: %zu samples at %g Hz; %s\n", info.source.c_str(), info.num_samples,
-               info.sample_rate_hz, info.layout.c_str());
-  for (const auto& w : info.warnings) std::fprintf(stderr, "warning: %s: %s\n", info.source.c_str(), WithFlags(w).c_str());
+  const std::string source = io::Printable(info.source);
+  std::fprintf(stderr, "%s: %zu samples at %g Hz; %s\n", source.c_str(), info.num_samples, info.sample_rate_hz,
+               io::Printable(info.layout).c_str());
+  for (const auto& w : info.warnings) {
+    std::fprintf(stderr, "warning: %s: %s\n", source.c_str(), io::Printable(WithFlags(w)).c_str());
+  }
 }
 
 // Samples after the last whole segment are not used: say so.
@@ -204,7 +135,7 @@ void WarnDropped(const std::string& path, size_t n_samples, const ident::WelchOp
   std::fprintf(stderr,
                "warning: %s: the last %zu samples (%.1f %% of the log) do not fill a %zu-sample segment and are "
                "not used; a --window-length that fits, or --whole-record for a sweep or periodic excitation, uses them\n",
-               path.c_str(), dropped, 100.0 * dropped / n_samples, n);
+               io::Printable(path).c_str(), dropped, 100.0 * dropped / n_samples, n);
 }
 
 }  // namespace
@@ -246,9 +177,14 @@ io::LogSelect ExcitationSelect(const std::string& path, const EstimateFlags& fla
 
 // Open loop in Welch segments: one streaming pass, memory for a few windows.
 ident::RunSpectra StreamedRun(const std::string& path, const EstimateFlags& flags, const ident::WelchOptions& options,
-                              io::LogInfo* info) {
+                              io::LogInfo* info, std::uint64_t* fingerprint) {
   ident::WelchEstimator est(options);
-  *info = io::StreamLog(path, flags.select, [&](const double* u, const double* y, size_t n) { est.Push(u, y, n); });
+  io::LogFingerprint fp;
+  *info = io::StreamLog(path, flags.select, [&](const double* u, const double* y, size_t n) {
+    est.Push(u, y, n);
+    fp.Add(u, y, n);
+  });
+  *fingerprint = fp.value();
   PrintRead(*info);
   WarnDropped(path, info->num_samples, options);
   ident::RunSpectra spectra;
@@ -281,9 +217,13 @@ std::vector<ident::RunSpectra> PeriodRuns(const std::string& path, const io::Log
 // The log in memory (closed loop, or --whole-record): its run, or one run per
 // period with --period-samples.
 std::vector<ident::RunSpectra> InMemoryRuns(const std::string& path, const EstimateFlags& flags, bool closed,
-                                            const io::LogSelect& rsel, ident::WelchOptions o, io::LogInfo* info) {
+                                            const io::LogSelect& rsel, ident::WelchOptions o, io::LogInfo* info,
+                                            std::uint64_t* fingerprint) {
   io::Log log = io::ReadLog(path, flags.select);
   *info = log.info;
+  io::LogFingerprint fp;
+  fp.Add(log.input.data(), log.output.data(), log.input.size());
+  *fingerprint = fp.value();
   PrintRead(*info);
   std::vector<double> r;
   if (closed) {
@@ -312,11 +252,12 @@ std::vector<ident::RunSpectra> InMemoryRuns(const std::string& path, const Estim
 
 // One log's runs; an InputError names the file first.
 std::vector<ident::RunSpectra> LogRuns(const std::string& path, const EstimateFlags& flags, bool closed,
-                                       const ident::WelchOptions& options, io::LogInfo* info) {
+                                       const ident::WelchOptions& options, io::LogInfo* info,
+                                       std::uint64_t* fingerprint) {
   const io::LogSelect rsel = closed ? ExcitationSelect(path, flags) : flags.select;
   try {
-    if (!closed && !flags.whole_record) return {StreamedRun(path, flags, options, info)};
-    return InMemoryRuns(path, flags, closed, rsel, options, info);
+    if (!closed && !flags.whole_record) return {StreamedRun(path, flags, options, info, fingerprint)};
+    return InMemoryRuns(path, flags, closed, rsel, options, info, fingerprint);
   } catch (const InputError& e) {
     const std::string what = e.what();
     throw InputError(what.rfind(path, 0) == 0 ? what : path + ": " + what);
@@ -338,9 +279,71 @@ void PrintCombined(const ident::CombinedResponse& r) {
   std::fprintf(stderr, "\n");
 }
 
+// The same samples twice (a file given twice, a copy, a link) are not two
+// runs: averaged, they shrink every per-bin std by 1/sqrt(2). Refused, since
+// no use of it is right; the message names both.
+void RefuseRepeatedLog(const std::vector<std::string>& paths, const std::vector<std::uint64_t>& seen,
+                       std::uint64_t fingerprint, const std::string& path) {
+  for (size_t i = 0; i < seen.size(); ++i) {
+    if (seen[i] != fingerprint) continue;
+    throw InputError(path + " holds the same samples as " + paths[i] +
+                     " (the same file, a copy or a link): runs are averaged as independent, and the same data twice "
+                     "would shrink every std by 1/sqrt(2) while adding nothing; give each run once");
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// --estimator lpm|lrm: every log read whole (with its excitation in closed
+// loop), one local estimate over all of them.
+LogsEstimate EstimateLocalFromLogs(const std::vector<std::string>& paths, const EstimateFlags& flags, bool closed) {
+  if (flags.whole_record || flags.period_samples != 0 || flags.welch.window_length != ident::WelchOptions{}.window_length ||
+      flags.welch.overlap != ident::WelchOptions{}.overlap) {
+    throw InputError("--estimator " + flags.estimator + " fits a local model on each whole log: drop --whole-record, "
+                     "--period-samples, --window-length and --overlap (Welch options)");
+  }
+  const ident::LocalModelOptions o = flags.ResolveLocal();
+  LogsEstimate out;
+  std::vector<ident::LocalRecord> runs;
+  double rate = 0.0;
+  for (const std::string& path : paths) {
+    try {
+      io::Log log = io::ReadLog(path, flags.select);
+      PrintRead(log.info);
+      ident::LocalRecord run{std::move(log.input), std::move(log.output), {}};
+      if (closed) run.r = std::move(io::ReadLog(path, ExcitationSelect(path, flags)).input);
+      if (rate == 0.0) rate = log.info.sample_rate_hz;
+      if (std::abs(log.info.sample_rate_hz - rate) > 1e-3 * rate) {
+        throw InputError("the log's rate differs from the first log's: runs of one estimate need one rate");
+      }
+      out.total_samples += log.info.num_samples;
+      out.infos.push_back(log.info);
+      runs.push_back(std::move(run));
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      throw InputError(what.rfind(path, 0) == 0 ? what : path + ": " + what);
+    }
+  }
+  ident::LocalEstimate est = ident::EstimateLocal(runs, rate, o);
+  for (const std::string& w : est.warnings) std::fprintf(stderr, "warning: %s\n", WithFlags(w).c_str());
+  out.response = ident::ToCombined(std::move(est), o.method, static_cast<int>(runs.size()));
+  std::fprintf(stderr, "%s (%s) from %zu run%s, %d bins per local window, %d residual degrees of freedom\n",
+               ident::ToString(out.response.method).c_str(), out.response.frf.estimator.c_str(), runs.size(),
+               runs.size() > 1 ? "s" : "", 2 * o.HalfWidth() + 1, out.response.frf.num_averages);
+  return out;
+}
+
 }  // namespace
 
 LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const EstimateFlags& flags, bool for_fit) {
+  if (flags.IsLocal()) {
+    LogsEstimate out = EstimateLocalFromLogs(paths, flags, !flags.reference_column.empty() || !flags.reference_dataset.empty());
+    io::CheckInputPower(out.response.frf, JoinPaths(paths));
+    io::CheckFiniteResponse(out.response.frf, JoinPaths(paths));
+    return out;
+  }
   ident::WelchOptions options = flags.Resolve();
   const bool closed = !flags.reference_column.empty() || !flags.reference_dataset.empty();
   CheckRecordFlags(flags);
@@ -356,9 +359,15 @@ LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const Estim
   if (flags.whole_record && flags.period_samples == 0 && paths.size() < 2) throw one_segment();  // before reading
   LogsEstimate out;
   std::vector<ident::RunSpectra> runs;
+  std::vector<std::uint64_t> seen;  // one fingerprint per log read
   for (const std::string& path : paths) {
     io::LogInfo info;
-    for (ident::RunSpectra& run : LogRuns(path, flags, closed, options, &info)) runs.push_back(std::move(run));
+    std::uint64_t fingerprint = 0;
+    for (ident::RunSpectra& run : LogRuns(path, flags, closed, options, &info, &fingerprint)) {
+      runs.push_back(std::move(run));
+    }
+    RefuseRepeatedLog(paths, seen, fingerprint, path);
+    seen.push_back(fingerprint);
     out.total_samples += info.num_samples;
     out.infos.push_back(info);
   }
@@ -383,16 +392,7 @@ double StageTimer::Lap(const std::string& stage) {
 
 double ResolvePeriod(double flag, io::ModelFile* mf) {
   if (std::isnan(flag)) return mf->sample_period_s ? *mf->sample_period_s : 0.001;
-  if (!(flag >= kMinPeriodS && flag <= kMaxPeriodS)) {
-    std::ostringstream os;
-    os.precision(6);
-    os << "--period = " << flag << " s: a sample period must lie in [1e-06, 0.1] s (a rate of 10 Hz..1 MHz); "
-       << "--period is the period T in seconds";
-    const bool rate = flag >= 10.0 && flag <= 1e6, ms = flag > 0.1 && flag <= 100.0;
-    if (rate) os << ", not the rate: for " << flag << " Hz pass --period " << 1.0 / flag;
-    if (ms) os << (rate ? "; " : ": ") << "for " << flag << " ms pass --period " << flag * 1e-3;
-    throw InputError(os.str());
-  }
+  if (const std::string why = io::SamplePeriodProblem(flag, "--period"); !why.empty()) throw InputError(why);
   app::ConvertDelayToPeriod(mf, flag, "the model");
   return flag;
 }

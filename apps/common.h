@@ -9,6 +9,7 @@
 #include <CLI/CLI.hpp>
 
 #include "ident/joint.h"
+#include "ident/local_models.h"
 #include "ident/welch.h"
 #include "io/log.h"
 #include "io/model_json.h"
@@ -18,14 +19,8 @@
 namespace zwidth::app {
 
 // The library's messages name option fields ("WelchOptions::window_length");
-// the CLI's name flags. The one table of field -> flag ("" = no flag: the CLI
-// leaves the field at its default), and the message with each field it names
-// replaced by its flag (a field not in the table is left as it is).
-struct FieldFlag {
-  const char* field;
-  const char* flag;
-};
-const std::vector<FieldFlag>& FieldFlags();
+// the CLI's name flags: the message with each field replaced by its flag
+// (io::WithFlags; the one table of fields, flags and keywords is io/option_names.cc).
 std::string WithFlags(const std::string& message);
 
 // The command line as typed (main stores it), each argument quoted for a
@@ -49,8 +44,13 @@ struct EstimateFlags {
   // With whole_record: one segment per period of this many samples (a
   // periodic excitation's period) instead of one per log; 0 = the whole log.
   int period_samples = 0;
+  // --estimator lpm|lrm: the local methods' options (ident/local_models.h);
+  // the band comes from welch.fmin_hz/fmax_hz.
+  ident::LocalModelOptions local;
+  bool IsLocal() const { return estimator == "lpm" || estimator == "lrm"; }
   // Parses the enum names; throws InputError naming the flag.
   ident::WelchOptions Resolve() const;
+  ident::LocalModelOptions ResolveLocal() const;  // with IsLocal()
   std::string ResolvedDetrend() const;  // detrend, or its default when not given
 };
 
@@ -88,16 +88,28 @@ class StageTimer {
 // Flags whose absence means "use the model's value".
 inline constexpr double kNotGiven = std::numeric_limits<double>::quiet_NaN();
 // --period when given, else the model's sample_period_s, else 1 ms. A given
-// --period must lie in [kMinPeriodS, kMaxPeriodS] (the rates a log may have,
-// 10 Hz..1 MHz). When T differs from the model's sample_period_s the model's
-// delay_samples (counted in its own period) is converted to samples of T
-// (ConvertDelayToPeriod).
-inline constexpr double kMinPeriodS = 1e-6, kMaxPeriodS = 0.1;
+// --period must lie in [io::kMinPeriodS, io::kMaxPeriodS] (the rates a log may
+// have, 10 Hz..1 MHz; the same rule as a model's sample_period_s). When T
+// differs from the model's sample_period_s the model's delay_samples (counted
+// in its own period) is converted to samples of T (ConvertDelayToPeriod).
 double ResolvePeriod(double flag, io::ModelFile* mf);
 // delay_samples of a model with sample_period_s T_m, counted in samples of T:
 // d T_m / T when that is a whole number (to 1e-9; a note on stderr says so),
 // else an InputError saying why and what to do. `what` names the model.
 void ConvertDelayToPeriod(io::ModelFile* mf, double T, const std::string& what);
+
+// Adds to every numeric option of `app` and its subcommands (after they are
+// declared) the one check of a typed number: an empty value, NaN or an
+// infinity is refused naming the flag (exit 2), as are non-numbers.
+void GuardNumericFlags(CLI::App* app);
+
+// Thrown by a subcommand to end with a documented exit status other than 0
+// (check: 3 when an object is unstable) once its output is complete.
+struct ExitStatus {
+  int code;
+};
+// %g of v, for messages.
+std::string Num(double v);
 
 void AddSimulateCommand(CLI::App& app);
 void AddEstimateCommand(CLI::App& app);
@@ -107,5 +119,6 @@ void AddExportCommand(CLI::App& app);
 void AddRunCommand(CLI::App& app);
 void AddExciteCommand(CLI::App& app);
 void AddValidateCommand(CLI::App& app);    // validate a model on a fresh log
+void AddWallCommand(CLI::App& app);
 
 }  // namespace zwidth::app

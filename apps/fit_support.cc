@@ -18,6 +18,7 @@
 
 #include "fit/fit_api.h"
 #include "io/fit_file.h"
+#include "io/printable.h"
 #include "io/stability_files.h"
 #include "model/error.h"
 #include "stability/uncertainty.h"
@@ -139,8 +140,72 @@ std::optional<fit::QualityReason> SignOrSwap(const ident::FrequencyResponse& frf
 
 }  // namespace
 
+void AddFrictionFlag(CLI::App* cmd, std::string* flag) {
+  cmd->add_option("--friction", *flag,
+                  "Coulomb friction: auto (fitted when the log shows it), coulomb (always fitted) or none (the linear "
+                  "fit; friction only detected); needs one time-domain log")
+      ->capture_default_str();
+}
+
+fit::FrictionModel ResolveFrictionFlag(const std::string& flag) {
+  fit::FrictionModel m;
+  if (!fit::FrictionModelFromString(flag, &m)) {
+    throw InputError("--friction '" + flag + "': expected none, auto or coulomb");
+  }
+  return m;
+}
+
+std::optional<FrictionInput> FrictionInputFor(const std::vector<std::string>& inputs, bool frf_file,
+                                              const EstimateFlags& est, fit::FrictionModel model) {
+  if (model == fit::FrictionModel::kNone && (frf_file || inputs.size() != 1)) return std::nullopt;
+  if (frf_file || inputs.size() != 1) {
+    if (model == fit::FrictionModel::kCoulomb) {
+      throw InputError(std::string("--friction coulomb needs one time-domain log, not ") +
+                       (frf_file ? "a saved frequency response" : "several logs") +
+                       ": fit one log with --friction coulomb, or the runs with --friction none");
+    }
+    std::fprintf(stderr, "warning: friction not checked (--friction auto needs one time-domain log); the fit is "
+                         "linear-only\n");
+    return std::nullopt;
+  }
+  FrictionInput in{inputs[0], est.select, {}};
+  in.options.model = model;
+  in.options.welch = est.Resolve();
+  return in;
+}
+
+std::string FrictionLine(const fit::FrictionFitResult& ff) {
+  if (ff.status == fit::FrictionFitStatus::kFitted) return "friction: " + ff.message + "\n";
+  if (ff.status != fit::FrictionFitStatus::kNotDetected || ff.detected) return "";
+  char s[200];
+  std::snprintf(s, sizeof s, "friction: none detected (F_c %.3g +- %.2g); the fit is linear\n", ff.detection_coulomb,
+                ff.detection_coulomb_std);
+  return s;
+}
+
+namespace {
+
+// The friction fit's record in model.json's "fit" (the linear-only b beside).
+nlohmann::json FrictionRecord(const fit::FrictionFitResult& ff) {
+  return {{"status", fit::ToString(ff.status)},
+          {"detected", ff.detected},
+          {"detection_coulomb", ff.detection_coulomb},
+          {"detection_coulomb_std", ff.detection_coulomb_std},
+          {"idim_b", ff.idim_b},
+          {"idim_b_std", ff.idim_b_std},
+          {"linear_only_b", ff.linear_b},
+          {"linear_only_b_std", ff.linear_b_std},
+          {"cutoff_hz", ff.cutoff_hz},
+          {"rows_used", ff.rows_used},
+          {"iterations", ff.iterations},
+          {"message", ff.message}};
+}
+
+}  // namespace
+
 io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::FitOptions& o,
-                             const std::string& source, fit::FitResult* out) {
+                             const std::string& source, fit::FitResult* out, const FrictionInput* friction,
+                             fit::FrictionFitResult* friction_out) {
   // Too few segments at the shortest window: the library's advice (a shorter
   // window) cannot apply; the log is too short.
   constexpr int kShortestWindow = 16;  // WelchOptions::window_length >= 16
@@ -158,10 +223,31 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
   if (r.quality == fit::FitQuality::kPoor) {  // the likeliest cause first, before "more modes"
     if (auto reason = SignOrSwap(frf, r)) r.reasons.insert(r.reasons.begin(), *reason);
   }
+  fit::FrictionFitResult ff;
+  // Not on a log whose sign or columns look wrong: its friction would mean nothing.
+  const bool broken = !r.reasons.empty() && (r.reasons.front().code == "sign_reversed" ||
+                                             r.reasons.front().code == "columns_swapped");
+  if (friction && r.status == fit::FitStatus::kConverged && !broken) {
+    const io::Log log = io::ReadLog(friction->path, friction->select);
+    try {
+      ff = fit::FitLibrary().fit_friction_quiet(log.input, log.output, log.info.sample_rate_hz, r, o, friction->options);
+    } catch (const InputError& e) {  // e.g. too few usable samples: auto goes on linear-only
+      if (friction->options.model == fit::FrictionModel::kCoulomb) throw;
+      r.warnings.push_back(std::string("friction not checked: ") + e.what());
+    }
+    if (ff.status == fit::FrictionFitStatus::kFailed) throw ComputationError(ff.message);
+    if (ff.status != fit::FrictionFitStatus::kNotRun) r = ff.fit;
+  }
   if (out) *out = r;
-  for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", WithFlags(w).c_str());
+  if (friction_out) *friction_out = ff;
+  for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", io::Printable(WithFlags(w)).c_str());
   if (r.status != fit::FitStatus::kConverged) throw ComputationError(r.message);
   io::ModelFile mf = io::FittedModelFile(r, frf, o, source);
+  if (ff.status == fit::FrictionFitStatus::kFitted) {
+    mf.friction = ff.friction;
+    mf.friction_std = ff.friction_std;
+  }
+  if (ff.status != fit::FrictionFitStatus::kNotRun && mf.fit.is_object()) mf.fit["friction"] = FrictionRecord(ff);
   // The files the CLI writes (model JSON, run's summary.json) give its flags:
   // every text of the fit's record (reasons, warnings, order and delay choices).
   std::function<void(nlohmann::json&)> flags = [&](nlohmann::json& j) {

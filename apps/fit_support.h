@@ -1,13 +1,17 @@
 // Wiring shared by `fit`, `compare` and `run`.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "apps/common.h"
 #include "fit/fit.h"
+#include "fit/friction_fit.h"
+#include "io/log.h"
 #include "io/model_json.h"
 #include "stability/zwidth.h"
 
@@ -33,10 +37,34 @@ void AddFitFlags(CLI::App* cmd, FitFlags* flags);
 // choices, and the stabilisation table, as printed by `fit` and `run`.
 std::string FitReport(const fit::FitResult& r);
 
+// --friction none|auto|coulomb (fit::FrictionModel), for `fit`.
+void AddFrictionFlag(CLI::App* cmd, std::string* flag);
+fit::FrictionModel ResolveFrictionFlag(const std::string& flag);  // InputError naming the flag
+
+// The time-domain log that the friction fit reads again (the estimate streams
+// it), with the estimate's column selection and Welch options.
+struct FrictionInput {
+  std::string path;
+  io::LogSelect select;
+  fit::FrictionFitOptions options;
+};
+
+// The friction fit's input for `fit`: the one time-domain log with the
+// estimate's selection and Welch options; none (with a warning for auto) for
+// several logs or a saved response, which --friction coulomb refuses.
+std::optional<FrictionInput> FrictionInputFor(const std::vector<std::string>& inputs, bool frf_file,
+                                              const EstimateFlags& est, fit::FrictionModel model);
+
+// "friction: ..." (fitted, or none detected) for `fit`; "" otherwise (the
+// verdict's `friction` reason speaks for a detection that was not fitted).
+std::string FrictionLine(const fit::FrictionFitResult& ff);
+
 // Fits and packs the model file (std, fit metrics); throws ComputationError
-// when the fit does not converge.
+// when the fit does not converge. With `friction`, the friction fit
+// (fit::FitFriction) follows: its linear part and friction go into the file.
 io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::FitOptions& o,
-                             const std::string& source, fit::FitResult* result = nullptr);
+                             const std::string& source, fit::FitResult* result = nullptr,
+                             const FrictionInput* friction = nullptr, fit::FrictionFitResult* friction_result = nullptr);
 
 // "parameter value std unit" table; linear: kg and N s/m labels.
 std::string ParameterTable(const io::ModelFile& mf, bool linear = false);

@@ -1,17 +1,45 @@
 // zwidth: from a haptic device's logs to a validated model and its Z-width.
 // Exit codes: 0 success; 2 bad request or bad file (nothing written);
 // 1 a computation that failed (e.g. a fit that did not converge).
+#include <cerrno>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <exception>
+#include <iostream>
 
 #include <CLI/CLI.hpp>
 
 #include "apps/common.h"
 #include "apps/help.h"
 #include "build_info.h"
+#include "io/atomic_file.h"
+#include "io/printable.h"
 #include "model/error.h"
 
+namespace {
+
+// Results printed on standard output must have arrived: a full disk or a
+// closed file behind stdout (> /dev/full) is an error (exit 2), not success.
+int CheckStdout(int code) {
+  std::cout.flush();
+  errno = 0;
+  const bool failed = !std::cout || std::fflush(stdout) != 0 || std::ferror(stdout);
+  if (!failed) return code;
+  std::fprintf(stderr, "zwidth: error: writing the results to standard output failed (%s): the output is "
+               "incomplete; free space or write to a file with -o\n", errno ? std::strerror(errno) : "write error");
+  return code == 0 ? 2 : code;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
+  // A signal that ends the command removes its temporary files first.
+  zwidth::io::InstallCleanupSignalHandlers();
+  // One OpenBLAS thread (unless the user chose): the fit's matrices are small,
+  // and OpenBLAS's pool, created when the fit plugin loads, could not start
+  // its threads under a tight `ulimit -v` and then waited for them at exit.
+  ::setenv("OPENBLAS_NUM_THREADS", "1", 0);
   CLI::App app{"zwidth: haptic device identification and Z-width (stable K, B) analysis"};
   app.require_subcommand(1);
   zwidth::app::SetCommandLine(argc, argv);
@@ -27,21 +55,25 @@ int main(int argc, char** argv) {
   zwidth::app::AddRunCommand(app);
   zwidth::app::AddExciteCommand(app);
   zwidth::app::AddValidateCommand(app);
+  zwidth::app::AddWallCommand(app);
+  zwidth::app::GuardNumericFlags(&app);
   zwidth::app::OrganizeHelp(app);  // after every command: topics, examples, --help-all, completion
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);
     return code == 0 ? 0 : 2;
+  } catch (const zwidth::app::ExitStatus& e) {
+    return CheckStdout(e.code);
   } catch (const zwidth::InputError& e) {
-    std::fprintf(stderr, "zwidth: error: %s\n", zwidth::app::WithFlags(e.what()).c_str());
+    std::fprintf(stderr, "zwidth: error: %s\n", zwidth::io::Printable(zwidth::app::WithFlags(e.what())).c_str());
     return 2;
   } catch (const zwidth::ComputationError& e) {
-    std::fprintf(stderr, "zwidth: computation failed: %s\n", zwidth::app::WithFlags(e.what()).c_str());
+    std::fprintf(stderr, "zwidth: computation failed: %s\n", zwidth::io::Printable(zwidth::app::WithFlags(e.what())).c_str());
     return 1;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "zwidth: internal error: %s\n", e.what());
+    std::fprintf(stderr, "zwidth: internal error: %s\n", zwidth::io::Printable(e.what()).c_str());
     return 1;
   }
-  return 0;
+  return CheckStdout(0);
 }

@@ -314,6 +314,42 @@ void BM_PassivityRows(benchmark::State& state) {
 }
 BENCHMARK(BM_PassivityRows)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);  // At(B).K_hi, KHi(B)
 
+// Issue 31: K_CR(B) of the 64-section family of the issue (omega_i = 300 *
+// 1.08^i rad/s, damping ratio 0.025, v_i = 0.93 omega_i, Table I's m and b,
+// T = 1 ms, d = 2), 8 B values from 0 to 0.056, construction included; the
+// eigenvalue test decides (the polynomial's poles move by far more than their
+// distance to the circle). Error: the largest relative difference of K_CR
+// from a 60-step bisection of the brute force's closed-loop eigenvalues
+// (tests/brute_force.h, MakeBrute: its own unbalanced ZOH).
+void BM_ManyModeBoundary(benchmark::State& state) {
+  model::Plant p = model::PhantomTable1();
+  p.modes.clear();
+  for (int i = 0; i < state.range(0); ++i) {
+    const double w = 300.0 * std::pow(1.08, i), v = 0.93 * w;
+    p.modes.push_back({w, 0.05 * w, v, 0.05 * v});
+  }
+  std::vector<double> K(8);
+  for (auto _ : state) {
+    const stability::ZWidth z(p, 1e-3, 2);
+    for (int i = 0; i < 8; ++i) K[i] = z.At(0.008 * i).K_cr;
+    benchmark::DoNotOptimize(K.data());
+  }
+  const stability::LoopBruteForce bf = stability::MakeBrute(p, {}, 2, 1e-3);
+  double err = 0;
+  for (int i = 0; i < 8; ++i) {
+    if (!(K[i] > 0 && std::isfinite(K[i]))) { err = 1.0; continue; }
+    double lo = 0.9 * K[i], hi = 1.1 * K[i];
+    for (int it = 0; it < 60; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (bf.MaxRoot(mid, 0.008 * i) < 1 ? lo : hi) = mid;
+    }
+    err = std::max(err, std::abs(0.5 * (lo + hi) / K[i] - 1));
+  }
+  state.counters["max_rel_err_K_cr_vs_brute_force"] = err;
+  state.counters["K_cr_at_zero_B"] = K[0];
+}
+BENCHMARK(BM_ManyModeBoundary)->Arg(8)->Arg(64)->Unit(benchmark::kMillisecond);
+
 // `zwidth run`'s boundary stage (analysis::AnalysePlantStability): Table I
 // with the seeded covariance of BM_DeltaMethodStd, delays 2, 4, 8, 1000 B
 // values each: summaries and their std, intervals, K_CR and its std, passive

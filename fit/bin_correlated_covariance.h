@@ -26,6 +26,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <cstdlib>
 #include <vector>
 
@@ -80,6 +81,35 @@ inline Eigen::MatrixXd BinCorrelatedCovariance(const Eigen::MatrixXd& J, const E
   if (!M.allFinite() ||
       !(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(M, Eigen::EigenvaluesOnly).eigenvalues().minCoeff() >= 0.0)) {
     M = J.transpose() * J;  // the measured correlations do not make a covariance: none assumed
+  }
+  return s2 * A_inv * M * A_inv;
+}
+
+// The same sandwich with the correlation the estimator reports
+// (ident::FrequencyResponse::error_correlation, rho_l complex for lags l =
+// 1..L, as the local methods compute it from their overlapping windows):
+// between the (real, imaginary) rows of bins k and k + l the correlation is
+// [[Re rho, -Im rho], [Im rho, Re rho]] for circular errors, so
+//   M = A + sum_{k, l} (J_k^T P_l J_{k+l} + its transpose).
+// Where M is not positive definite no correlation is assumed (M = A).
+inline Eigen::MatrixXd KnownCorrelationCovariance(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
+                                                  const std::vector<long>& position, const Eigen::MatrixXd& A_inv,
+                                                  const std::vector<std::complex<double>>& rho) {
+  const long nb = static_cast<long>(position.size()), L = static_cast<long>(rho.size());
+  const double s2 = r.squaredNorm() / std::max(1.0, static_cast<double>(r.size() - J.cols()));
+  Eigen::MatrixXd M = J.transpose() * J;
+  for (long k = 0; k < nb; ++k) {
+    for (long j = k + 1; j < nb && position[j] - position[k] <= L; ++j) {
+      const std::complex<double> c = rho[position[j] - position[k] - 1];
+      Eigen::Matrix2d P;
+      P << c.real(), -c.imag(), c.imag(), c.real();
+      const Eigen::MatrixXd x = J.middleRows(2 * k, 2).transpose() * P * J.middleRows(2 * j, 2);
+      M += x + x.transpose();
+    }
+  }
+  if (!M.allFinite() ||
+      !(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(M, Eigen::EigenvaluesOnly).eigenvalues().minCoeff() >= 0.0)) {
+    M = J.transpose() * J;
   }
   return s2 * A_inv * M * A_inv;
 }

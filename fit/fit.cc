@@ -188,8 +188,8 @@ std::vector<long> BinPositions(const Bins& bins) {
 // correlates neighbouring bins: bin_correlation > 1; none otherwise), then the
 // delta method to (m, b, w, c, v, d). Returns that covariance in the solver's
 // log space (empty when it could not be computed).
-std::vector<double> StdErrors(const Bins& bins, int n, const std::vector<double>& x, double bin_correlation,
-                              FitResult* res) {
+std::vector<double> StdErrors(const Bins& bins, int n, const std::vector<double>& x,
+                              const ident::FrequencyResponse& sub, FitResult* res) {
   const int p = 2 + 4 * n;
   res->std_errors = res->plant;
   const double inf = std::numeric_limits<double>::infinity();
@@ -203,9 +203,12 @@ std::vector<double> StdErrors(const Bins& bins, int n, const std::vector<double>
                             "some parameters are not identifiable from this response; std set to inf");
     return {};
   }
-  const int max_lag = bin_correlation > 1.0 + 1e-9 ? 2 : 0;
-  const Eigen::MatrixXd C = BinCorrelatedCovariance(J, r, BinPositions(bins),
-                                                    Eigen::Map<const Eigen::MatrixXd>(A_inv.data(), p, p), max_lag);
+  const int max_lag = sub.bin_correlation > 1.0 + 1e-9 ? 2 : 0;
+  const Eigen::Map<const Eigen::MatrixXd> A(A_inv.data(), p, p);
+  // The estimator's own correlation when it knows it (the local methods), else measured.
+  const Eigen::MatrixXd C = sub.error_correlation.empty()
+                                ? BinCorrelatedCovariance(J, r, BinPositions(bins), A, max_lag)
+                                : KnownCorrelationCovariance(J, r, BinPositions(bins), A, sub.error_correlation);
   std::vector<double> S(C.data(), C.data() + p * p);  // symmetric: row- = column-major
   auto s = [&](int i, int j) { return S[i * p + j]; };
   res->covariance_ok = true;
@@ -311,7 +314,7 @@ Fixed FitFixed(const ident::FrequencyResponse& sub, const FitOptions& o, int n, 
   res.plant.delay_samples = delay;
   res.chi2_per_dof = 2.0 * res.cost / (res.num_residuals - p);
   res.std_scale = res.chi2_per_dof * std::max(1.0, sub.bin_correlation);
-  const std::vector<double> fit_cov = StdErrors(bins, n, fin.x, sub.bin_correlation, &res);
+  const std::vector<double> fit_cov = StdErrors(bins, n, fin.x, sub, &res);
   Diagnostics(bins, &out);
   const model::Plant as_solved = res.plant;
   CanonicalOrder(&res.plant, &res.std_errors);
@@ -430,8 +433,10 @@ void Verdict(const Fixed& chosen, const ident::FrequencyResponse& sub, const Fit
 
 }  // namespace
 
-FitResult FitModel(const ident::FrequencyResponse& frf, const FitOptions& o) {
-  CheckInput(frf, o);
+FitResult FitModel(const ident::FrequencyResponse& frf, const FitOptions& options) {
+  CheckInput(frf, options);
+  FitOptions o = options;
+  if (!frf.error_correlation.empty()) o.relative_std_floor = options.local_relative_std_floor;
   const ident::ExcitedBand band = ident::SelectExcitedBand(frf, o.band);
   const ident::FrequencyResponse sub = Restrict(frf, band.used);
   const Fixed chosen = o.auto_modes ? FitOrders(sub, band, frf.sample_rate_hz, o)
@@ -439,6 +444,7 @@ FitResult FitModel(const ident::FrequencyResponse& frf, const FitOptions& o) {
   FitResult res = chosen.res;
   res.band = band;
   res.band_sample_rate_hz = frf.sample_rate_hz;
+  res.estimator = frf.estimator;
   ResponseWarnings(frf, sub, &res);
   if (res.status == FitStatus::kConverged) Verdict(chosen, sub, o, &res);
   return res;

@@ -43,6 +43,12 @@ struct FitOptions {
   double max_zero_damping_ratio = 2.0;   // upper bound of zeta_d
   double max_frequency_fraction = 0.98;  // w, v below this fraction of Nyquist, (0, 1)
   double relative_std_floor = 1e-3;      // per-bin std floor relative to |H|, >= 0
+  // The floor for a response whose estimator reports its error correlation
+  // (the local methods: their std includes the transient, which Welch's
+  // leaves out; at 1e-3 the floor would set the weights of the bins below
+  // 10 Hz of a Table I log, where the LRM's std is 1e-5..1e-3 of |H|, and
+  // the std of m and b came out 2-3x their scatter). >= 0.
+  double local_relative_std_floor = 0.0;
   int max_iterations = 200;              // per start, >= 1
   double function_tolerance = 1e-8;      // Ceres relative cost change, > 0
   int max_starts = 6;                    // automatic starts tried, >= 1
@@ -129,6 +135,7 @@ struct FitResult {
   double runs_z = 0.0;                  // runs test statistic (min over real, imaginary parts)
   std::vector<double> misfit_band_hz;   // {lo, hi} of the flagged octave, else empty
   double band_sample_rate_hz = 0.0;     // of the response fitted
+  std::string estimator;                // ident::FrequencyResponse::estimator of the response fitted
   std::vector<OrderTrial> order_table;  // filled when auto_modes
   std::string order_choice;             // why this order (auto_modes)
   std::string delay_choice;             // why this delay (auto_delay)

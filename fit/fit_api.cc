@@ -13,6 +13,11 @@ const FitApi& FitLibrary() {
       FLAGS_minloglevel = google::GLOG_FATAL;
       return FitModel(frf, options);
     };
+    a.fit_friction_quiet = [](const std::vector<double>& input, const std::vector<double>& output, double fs,
+                              const FitResult& linear, const FitOptions& options, const FrictionFitOptions& friction) {
+      FLAGS_minloglevel = google::GLOG_FATAL;
+      return FitFriction(input, output, fs, linear, options, friction);
+    };
     return a;
   }();
   return api;

@@ -8,6 +8,7 @@
 #pragma once
 
 #include "fit/fit.h"
+#include "fit/friction_fit.h"
 
 namespace zwidth::fit {
 
@@ -15,12 +16,16 @@ struct FitApi {
   // fit::FitModel with Ceres' glog output off the terminal (only fatal
   // messages): what matters reaches the fit's warnings and quality reasons.
   FitResult (*fit_model_quiet)(const ident::FrequencyResponse& frf, const FitOptions& options) = nullptr;
+  // fit::FitFriction, glog quiet alike.
+  FrictionFitResult (*fit_friction_quiet)(const std::vector<double>& input, const std::vector<double>& output,
+                                          double sample_rate_hz, const FitResult& linear, const FitOptions& options,
+                                          const FrictionFitOptions& friction) = nullptr;
 };
 
 // Changes whenever a type crossing the table changes size (a stale plugin is refused).
 inline constexpr unsigned long long kFitApiKey = (2ull << 56) ^ (sizeof(FitApi) << 40) ^
                                                  (sizeof(FitOptions) << 24) ^ (sizeof(FitResult) << 8) ^
-                                                 sizeof(ident::FrequencyResponse);
+                                                 sizeof(ident::FrequencyResponse) ^ (sizeof(FrictionFitResult) << 32);
 
 // The table: the real functions (zwidth_fit), or the plugin's, loaded on
 // first call (the zwidth executable; a missing or broken plugin is a

@@ -1,10 +1,13 @@
 // The fit's option checks and result wording: what the zwidth executable
 // uses of zwidth_fit without the fit itself (kept apart from fit.cc so that
 // linking them does not pull in Ceres; the fit comes from a plugin, fit/fit_api.h).
+#include <cmath>
+#include <cstdio>
 #include <sstream>
 #include <string>
 
 #include "fit/fit.h"
+#include "fit/friction_fit.h"
 
 namespace zwidth::fit {
 
@@ -18,6 +21,7 @@ bool FitOptions::IsValid(std::string* why) const {
   if (!(max_zero_damping_ratio > min_damping_ratio)) return bad("FitOptions::max_zero_damping_ratio must be > FitOptions::min_damping_ratio");
   if (!(max_frequency_fraction > 0 && max_frequency_fraction < 1)) return bad("FitOptions::max_frequency_fraction must be in (0, 1)");
   if (!(relative_std_floor >= 0)) return bad("FitOptions::relative_std_floor must be >= 0");
+  if (!(local_relative_std_floor >= 0)) return bad("FitOptions::local_relative_std_floor must be >= 0");
   if (max_iterations < 1) return bad("FitOptions::max_iterations must be >= 1");
   if (!(function_tolerance > 0)) return bad("FitOptions::function_tolerance must be > 0");
   if (max_starts < 1) return bad("FitOptions::max_starts must be >= 1");
@@ -47,6 +51,51 @@ std::string FitResult::BriefReport() const {
      << "% (NRMSE of H; unweighted, so a large misfit where |H| is small hardly shows), worst misfit at "
      << worst_misfit_hz << " Hz, " << starts_tried << " starts, " << iterations << " iterations";
   return os.str();
+}
+
+namespace {
+std::string FrictionNum(const char* fmt, double a) {
+  char s[200];
+  std::snprintf(s, sizeof s, fmt, a);
+  return s;
+}
+}  // namespace
+
+// The friction fit's names and option checks (fit/friction_fit.h), here for
+// the same reason.
+std::string ToString(FrictionModel f) {
+  switch (f) {
+    case FrictionModel::kNone: return "none";
+    case FrictionModel::kAuto: return "auto";
+    case FrictionModel::kCoulomb: return "coulomb";
+  }
+  return "?";
+}
+
+bool FrictionModelFromString(const std::string& s, FrictionModel* f) {
+  for (FrictionModel c : {FrictionModel::kNone, FrictionModel::kAuto, FrictionModel::kCoulomb}) {
+    if (s == ToString(c)) { *f = c; return true; }
+  }
+  return false;
+}
+
+std::string ToString(FrictionFitStatus s) {
+  switch (s) {
+    case FrictionFitStatus::kNotRun: return "not run";
+    case FrictionFitStatus::kFitted: return "fitted";
+    case FrictionFitStatus::kNotDetected: return "not detected";
+    case FrictionFitStatus::kFailed: return "failed";
+  }
+  return "?";
+}
+
+bool FrictionFitOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) { if (why) *why = m; return false; };
+  if (!(cutoff_hz >= 0.0) || !std::isfinite(cutoff_hz)) return fail(FrictionNum("FrictionFitOptions::cutoff_hz = %g: must be 0 (automatic) or > 0 [Hz]", cutoff_hz));
+  if (!(min_speed_fraction >= 0.0 && min_speed_fraction < 1.0)) return fail(FrictionNum("FrictionFitOptions::min_speed_fraction = %g: must be in [0, 1)", min_speed_fraction));
+  if (iterations < 1 || iterations > 20) return fail(FrictionNum("FrictionFitOptions::iterations = %.0f: must be in [1, 20]", iterations));
+  if (!(detection_z > 0.0) || !std::isfinite(detection_z)) return fail(FrictionNum("FrictionFitOptions::detection_z = %g: must be > 0", detection_z));
+  return true;
 }
 
 }  // namespace zwidth::fit

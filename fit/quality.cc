@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "fit/fit_internal.h"
+#include "fit/friction_fit.h"
 
 namespace zwidth::fit {
 namespace internal {
@@ -39,6 +40,7 @@ double Chi2Limit(const FitResult& r, double kappa) {
 // the fit poor; a bias bound above 3 of its std errors is a warning.
 void LeakageChecks(const ident::FrequencyResponse& sub, FitResult* res) {
   if (!(sub.bin_correlation > 1.2) || sub.window_length <= 0 || !(sub.sample_rate_hz > 0)) return;
+  if (!sub.error_correlation.empty()) return;  // a local method: no window, its transient removed
   const double df = sub.sample_rate_hz / sub.window_length;
   const std::vector<model::Mode>& modes = res->plant.modes;
   for (size_t i = 0; i < modes.size(); ++i) {
@@ -57,16 +59,40 @@ void LeakageChecks(const ident::FrequencyResponse& sub, FitResult* res) {
              the + Fmt(" at %.4g Hz is %.3g Hz wide (half power), under 2 bins of the window (%.3g Hz): its leakage "
                        "widens it, and the fitted damping is too large (by up to about %.0f %%)",
                        f, bw, df, 100.0 * bias),
-             "a window " + std::to_string(longer) + " times longer (WelchOptions::window_length)"});
+             "a window " + std::to_string(longer) + " times longer (WelchOptions::window_length), or the local "
+             "rational method, which has no window (LocalModelOptions::method lrm)"});
       } else if (std::isfinite(sd) && sd > 0 && bias * c > 3.0 * sd) {
         res->warnings.push_back(
             "the damping of " + the +
             Fmt(" at %.4g Hz (%.3g Hz wide) may be biased up by the window's leakage by up to %.2g %%, %.2g times "
-                "its std error; a longer WelchOptions::window_length reduces it (4 times longer: 16 times less)",
+                "its std error; a longer WelchOptions::window_length reduces it (4 times longer: 16 times less), "
+                "the local rational method (LocalModelOptions::method lrm) removes it",
                 f, bw, 100.0 * bias, bias * c / sd));
       }
     }
   }
+}
+
+// "a", "a or b", "a, b, or c": the non-empty items as alternatives of one
+// advice sentence (an empty list gives "").
+std::string Alternatives(const std::vector<std::string>& items) {
+  std::vector<std::string> kept;
+  for (const std::string& s : items) {
+    if (!s.empty()) kept.push_back(s);
+  }
+  std::string out;
+  for (size_t i = 0; i < kept.size(); ++i) {
+    if (i > 0) out += kept.size() == 2 ? " or " : (i + 1 == kept.size() ? ", or " : ", ");
+    out += kept[i];
+  }
+  return out;
+}
+
+// More modes: the order search when it was not used, else a higher limit
+// (when the search reached it) or nothing (more modes were tried and lost).
+std::string MoreModesAdvice(const FitOptions& o, const FitResult& r) {
+  if (!o.auto_modes) return "more modes (FitOptions::auto_modes)";
+  return static_cast<int>(r.plant.modes.size()) >= o.max_modes ? "more modes (FitOptions::max_modes)" : "";
 }
 
 // The quality tests (see FitResult::quality).
@@ -76,21 +102,19 @@ void JudgeQuality(const Fixed& fx, const ident::FrequencyResponse& sub, const Fi
   };
   const double kappa = std::max(1.0, sub.bin_correlation);
   const double chi_limit = Chi2Limit(*res, sub.bin_correlation);
-  // More modes: the order search when it was not used, else a higher limit
-  // (when the search reached it) or nothing (more modes were tried and lost).
-  const bool at_limit = o.auto_modes && static_cast<int>(res->plant.modes.size()) >= o.max_modes;
-  const std::string more_modes = !o.auto_modes ? "more modes (FitOptions::auto_modes), "
-                                 : at_limit    ? "more modes (FitOptions::max_modes), "
-                                               : "";
+  const std::string more_modes = MoreModesAdvice(o, *res);
   if (res->chi2_per_dof > chi_limit) {
     add("chi2_per_dof", Fmt("chi2/dof %.3g is above %.3g: the model does not explain the response within its std",
                             res->chi2_per_dof, chi_limit),
-        "try " + more_modes + (o.auto_delay ? "" : "FitOptions::auto_delay, ") +
-            "a band where the device is linear (BandOptions::fmin_hz/BandOptions::fmax_hz), or check for a mode above "
-            "Nyquist or aliasing (eq. 1 cannot fit one)");
+        "try " + Alternatives({more_modes, o.auto_delay ? "" : "FitOptions::auto_delay",
+                               "a band where the device is linear (BandOptions::fmin_hz/BandOptions::fmax_hz)",
+                               "check for a mode above Nyquist or aliasing (eq. 1 cannot fit one)"}));
   }
-  // Runs test on every 3rd bin (Hann bins 3 apart are uncorrelated).
-  const int stride = kappa > 1.2 ? 3 : 1;
+  // Runs test on every 3rd bin (Hann bins 3 apart are uncorrelated), or past
+  // the correlation the estimator reports (a local method's window).
+  const int stride = !sub.error_correlation.empty() ? static_cast<int>(sub.error_correlation.size()) + 1
+                     : kappa > 1.2                  ? 3
+                                                    : 1;
   double z_min = 0;
   for (int part = 0; part < 2; ++part) {
     int n1 = 0, n2 = 0, runs = 0, last = 0;
@@ -110,8 +134,9 @@ void JudgeQuality(const Fixed& fx, const ident::FrequencyResponse& sub, const Fi
   res->runs_z = z_min;
   if (z_min < -4.0) {
     add("residual_runs", Fmt("the residual has long runs of one sign (runs test z = %.3g < -4): systematic misfit", z_min),
-        "the model misses a feature of the response: " + more_modes + (o.auto_delay ? "" : "a delay (FitOptions::auto_delay), ") +
-            "or a band that leaves it out (BandOptions::fmin_hz/BandOptions::fmax_hz)");
+        "the model misses a feature of the response: " +
+            Alternatives({more_modes, o.auto_delay ? "" : "a delay (FitOptions::auto_delay)",
+                          "a band that leaves it out (BandOptions::fmin_hz/BandOptions::fmax_hz)"}));
   }
   // Misfit concentrated in one octave.
   if (!fx.r.empty()) {
@@ -220,6 +245,23 @@ std::vector<std::string> SpuriousSections(const FitResult& r, const FitOptions& 
     }
   }
   return out;
+}
+
+}  // namespace zwidth::fit
+
+namespace zwidth::fit {
+
+void AddFrictionReason(const FrictionFitResult& ff, FitResult* r) {
+  r->reasons.push_back(
+      {"friction",
+       internal::Fmt("the time-domain log shows Coulomb friction of %.3g +- %.2g (%.1f std; in the input's units): the "
+                     "linear fit's damping b = %.4g takes friction's amplitude-dependent damping (4 F_c / (pi w A) at "
+                     "amplitude A), so b and the Z-width depend on the drive level",
+                     ff.detection_coulomb, ff.detection_coulomb_std, ff.detection_coulomb / ff.detection_coulomb_std,
+                     r->plant.b),
+       "fit the friction with the linear model (FrictionFitOptions::model coulomb or auto); to test, record two "
+       "logs at drive levels 2-4 x apart: a linear device gives the same b at both"});
+  r->quality = FitQuality::kPoor;
 }
 
 }  // namespace zwidth::fit

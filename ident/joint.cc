@@ -14,6 +14,8 @@ std::string ToString(CombinedMethod m) {
     case CombinedMethod::kH1: return "H1 = S_uy/S_uu";
     case CombinedMethod::kH2: return "H2 = S_yy/S_yu";
     case CombinedMethod::kJoint: return "joint G = S_ry/S_ru";
+    case CombinedMethod::kLpm: return "local polynomial method (LPM)";
+    case CombinedMethod::kLrm: return "local rational method (LRM)";
   }
   return "?";
 }
@@ -189,6 +191,7 @@ CombinedResponse CombineRuns(const std::vector<RunSpectra>& runs, Estimator esti
   out.num_runs = static_cast<int>(runs.size());
   const ExcitationSpectra x = AverageSpectra(runs, joint, &out.frf);
   EvaluateBins(x, joint, &out);
+  out.frf.estimator = joint ? "welch-joint" : (estimator == Estimator::kH1 ? "welch-h1" : "welch-h2");
   if (std_source == StdSource::kRunScatter) StdFromRunScatter(runs, joint, &out);
   return out;
 }

@@ -51,7 +51,9 @@ enum class StdSource {
   kCoherence,   // Bendat & Piersol / the delta-method formula above, n_d averages
   kRunScatter,  // scatter of the per-run estimates (whole records)
 };
-enum class CombinedMethod { kH1, kH2, kJoint };
+// kLpm, kLrm: the local methods of ident/local_models.h (open or closed loop:
+// frf.estimator says which).
+enum class CombinedMethod { kH1, kH2, kJoint, kLpm, kLrm };
 std::string ToString(CombinedMethod m);
 
 struct CombinedResponse {

@@ -11,33 +11,11 @@
 
 #include <fftw3.h>
 
+#include "ident/fft_internal.h"
 #include "model/error.h"
 
 namespace zwidth::ident {
 namespace internal {
-
-// One r2c plan per window length, made once and shared (FFTW's planner is not
-// thread-safe, hence the mutex; executing a plan on new arrays is).
-struct PlanCache {
-  std::mutex mu;
-  std::map<int, fftw_plan> plans;
-  ~PlanCache() {
-    for (auto& [n, plan] : plans) fftw_destroy_plan(plan);
-    fftw_cleanup();
-  }
-  static PlanCache& Get() {
-    static PlanCache cache;
-    return cache;
-  }
-  fftw_plan For(int n, double* in, fftw_complex* out) {
-    std::lock_guard<std::mutex> lock(mu);
-    auto it = plans.find(n);
-    if (it != plans.end()) return it->second;
-    fftw_plan p = fftw_plan_dft_r2c_1d(n, in, out, FFTW_ESTIMATE);
-    plans[n] = p;
-    return p;
-  }
-};
 
 // out = w .* (x - trend), in two passes over x.
 void DetrendAndWindow(Detrend d, const double* x, const double* w, double* out, int n) {
@@ -251,6 +229,7 @@ FrequencyResponse WelchEstimator::Finish(double fs) const {
   r.sample_rate_hz = fs;
   r.window_length = n;
   r.num_averages = segments_;
+  r.estimator = options_.estimator == Estimator::kH1 ? "welch-h1" : "welch-h2";
   // Welch (1967): equivalent independent averages for overlapped segments.
   {
     double denom = 1.0;

@@ -63,6 +63,15 @@ struct FrequencyResponse {
   std::vector<double> H_std;
   std::vector<double> S_uu, S_yy;       // one-sided PSDs [unit^2/Hz]
   std::vector<std::complex<double>> S_uy;
+  // Which estimator made H: "welch-h1", "welch-h2", "welch-joint" (ident/joint.h),
+  // "lpm", "lrm" (ident/local_models.h, "-joint" appended in closed loop);
+  // empty when unknown (a response file read back).
+  std::string estimator;
+  // The correlation of the errors of H at bins k and k + l, l = 1..L (index
+  // l - 1): E[e_k conj(e_{k+l})] / sqrt(E|e_k|^2 E|e_{k+l}|^2), averaged over
+  // the bins, as the estimator knows it (the local methods: their windows
+  // overlap). Empty: unknown, the fit measures it from its residuals.
+  std::vector<std::complex<double>> error_correlation;
   // Per bin, 1 where a fit used it (FitResult::band.used), set by the caller
   // before writing the response; empty when no fit was made.
   std::vector<char> used_by_fit;

@@ -1,6 +1,7 @@
 #include "io/atomic_file.h"
 
 #include <atomic>
+#include <cctype>
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
@@ -13,11 +14,13 @@
 #include <utility>
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/syscall.h>
 #include <unistd.h>
 
 #include "io/hdf5_api.h"
+#include "io/isolated.h"
 #include "model/error.h"
 
 namespace zwidth::io {
@@ -165,13 +168,18 @@ void OnSignal(int sig) {
   ::raise(sig);  // SA_NODEFER: delivered now, with the default action
 }
 
+// The signals that end a process by default and that a user or the system
+// sends to a CLI run: ^C, kill, a closed terminal, a closed pipe (`-o - |
+// head`), a file size limit (`ulimit -f`).
+constexpr int kCleanupSignals[] = {SIGINT, SIGTERM, SIGHUP, SIGPIPE, SIGXFSZ};
+
 void InstallHandlers() {
   struct sigaction sa;
   std::memset(&sa, 0, sizeof sa);
   sa.sa_handler = OnSignal;
   sa.sa_flags = SA_NODEFER;
   sigemptyset(&sa.sa_mask);
-  for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+  for (int sig : kCleanupSignals) {
     struct sigaction old;
     // A signal the caller chose to ignore (nohup) stays ignored.
     if (::sigaction(sig, nullptr, &old) == 0 && old.sa_handler == SIG_IGN) continue;
@@ -246,6 +254,48 @@ struct TempGuard {
   }
 };
 
+// The permission bits of an existing `dest` given to `tmp` before it replaces
+// it (a 0600 file stays 0600; a new file keeps 0666 less the umask).
+void KeepMode(const std::string& tmp, const std::string& dest) {
+  struct stat ds;
+  if (::stat(dest.c_str(), &ds) == 0) ::chmod(tmp.c_str(), ds.st_mode & 07777);
+}
+
+// ---- stale temporary folders of OutputFolder
+//
+// Each temporary folder holds kLockName, open and flock()ed by the process
+// that made it for as long as it lives (the kernel drops the lock when the
+// process ends, even by SIGKILL). A sibling ".NAME.tmp-XXXXXX" folder holding
+// that file which can be locked belongs to no live process: a run killed by
+// SIGKILL (or a power cut), which left it. Only such folders are removed: a
+// folder without the lock file is not zwidth's, one whose lock is held is a
+// live run's.
+constexpr const char* kLockName = ".zwidth-run.lock";
+
+bool IsTempName(const std::string& name, const std::string& prefix) {
+  if (name.size() != prefix.size() + 6 || name.compare(0, prefix.size(), prefix) != 0) return false;
+  for (size_t i = prefix.size(); i < name.size(); ++i) {
+    if (!std::isalnum(static_cast<unsigned char>(name[i]))) return false;
+  }
+  return true;
+}
+
+// Removes the stale ".NAME.tmp-XXXXXX" siblings of `base` (= folder/.NAME).
+void RemoveStaleTemps(const std::string& base) {
+  const fs::path b(base);
+  const std::string prefix = b.filename().string() + ".tmp-";
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(b.parent_path(), ec)) {
+    const std::string name = e.path().filename().string();
+    if (!IsTempName(name, prefix) || !e.is_directory(ec) || e.is_symlink(ec)) continue;
+    const std::string lock = (e.path() / kLockName).string();
+    const int fd = ::open(lock.c_str(), O_RDWR | O_NOFOLLOW | O_CLOEXEC);
+    if (fd < 0) continue;
+    if (::flock(fd, LOCK_EX | LOCK_NB) == 0) fs::remove_all(e.path(), ec);
+    ::close(fd);
+  }
+}
+
 }  // namespace
 
 void CheckInputFile(const std::string& path, const std::string& what) {
@@ -277,7 +327,10 @@ void WriteAtomically(const std::string& path, const std::function<void(const std
   if (path == "-") {
     const char* dir = std::getenv("TMPDIR");
     TempGuard tmp(CreateTemp(std::string(dir && *dir ? dir : "/tmp") + "/zwidth-stdout"));
-    write(tmp.path);
+    {
+      std::lock_guard<std::recursive_mutex> hold(LibraryForkMutex());  // write() may call libhdf5
+      write(tmp.path);
+    }
     std::ifstream in(tmp.path, std::ios::binary);
     std::fflush(stdout);
     char buf[1 << 16];
@@ -292,12 +345,15 @@ void WriteAtomically(const std::string& path, const std::function<void(const std
   const std::string dest = Destination(path);
   CheckNotAnInput(path, dest, {});
   TempGuard tmp(CreateTemp(dest));
+  std::unique_lock<std::recursive_mutex> hold(LibraryForkMutex());  // write() may call libhdf5
   const long h5_open_before = internal::Hdf5OpenObjects();
   write(tmp.path);
   // An HDF5 writer whose file or objects failed to close (a full disk at the
   // final flush: the C++ API swallows that error in its destructors) leaves
   // them open. Such a file is corrupt: it is never renamed into place.
-  if (internal::Hdf5OpenObjects() > h5_open_before) {
+  const bool left_open = internal::Hdf5OpenObjects() > h5_open_before;
+  hold.unlock();
+  if (left_open) {
     static std::once_flag once;
     std::call_once(once, [] { std::atexit(ExitBeforeHdf5Cleanup); });
     throw InputError("failed writing '" + path + "': the HDF5 library could not close the file "
@@ -308,6 +364,7 @@ void WriteAtomically(const std::string& path, const std::function<void(const std
   // (another process) during the work.
   if (Destination(path) != dest) throw InputError("output '" + path + "' changed while writing; nothing was written");
   CheckNotAnInput(path, dest, {});
+  KeepMode(tmp.path, dest);
   if (::rename(tmp.path.c_str(), dest.c_str()) != 0) {
     throw InputError("cannot write '" + path + "': " + std::strerror(errno));
   }
@@ -323,8 +380,9 @@ void WriteTextAtomically(const std::string& path, const std::string& content) {
   });
 }
 
+void InstallCleanupSignalHandlers() { std::call_once(g_handlers_once, InstallHandlers); }
+
 void RegisterTempPath(const std::string& path) {
-  std::call_once(g_handlers_once, InstallHandlers);
   if (path.size() + 1 > sizeof(g_slots[0].path)) return;
   std::lock_guard<std::mutex> lock(g_slots_mutex);
   for (Slot& s : g_slots) {
@@ -390,6 +448,7 @@ OutputFolder::OutputFolder(const std::string& path_given, bool force) : path_(pa
   const fs::path fp(p);
   const std::string base = (fp.parent_path().empty() ? fs::path(".") : fp.parent_path()).string() + "/." +
                            fp.filename().string();
+  RemoveStaleTemps(base);
   temp_ = CreateRegistered(base, [&](const std::string& name) {
     if (::mkdir(name.c_str(), 0777) == 0) return true;
     if (errno == EEXIST) return false;
@@ -397,9 +456,20 @@ OutputFolder::OutputFolder(const std::string& path_given, bool force) : path_(pa
                      " (is the parent folder writable?)");
   });
   path_ = p;
+  const std::string lock = temp_ + "/" + kLockName;
+  lock_fd_ = ::open(lock.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  if (lock_fd_ >= 0) ::flock(lock_fd_, LOCK_EX);
+}
+
+void OutputFolder::DropLock() {
+  if (lock_fd_ < 0) return;
+  ::unlink((temp_ + "/" + kLockName).c_str());
+  ::close(lock_fd_);
+  lock_fd_ = -1;
 }
 
 OutputFolder::~OutputFolder() {
+  DropLock();
   if (!committed_) {
     std::error_code ec;
     fs::remove_all(temp_, ec);
@@ -408,6 +478,7 @@ OutputFolder::~OutputFolder() {
 }
 
 void OutputFolder::Commit() {
+  DropLock();  // not an output; the folder is ours until renamed (a rename keeps no lock anyway)
   std::error_code ec;
   const bool exists = fs::exists(path_, ec);
   if (!exists || !force_ || fs::is_empty(path_, ec)) {
@@ -448,6 +519,7 @@ void OutputFolder::Commit() {
   }
   for (const auto& [from, to] : moves) {
     fs::create_directories(to.parent_path(), ec);
+    KeepMode(from.string(), to.string());
     if (::rename(from.c_str(), to.c_str()) != 0) {
       throw InputError("cannot write '" + to.string() + "': " + std::strerror(errno));
     }

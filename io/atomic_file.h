@@ -7,7 +7,11 @@
 // file (st_dev, st_ino) as an input of the command. A symlink to a regular file
 // is followed: the file it names is replaced, the link stays. "-" writes to
 // standard output. Temporary files and folders are registered, so that SIGINT,
-// SIGTERM and SIGHUP remove them before the process dies of the signal.
+// SIGTERM, SIGHUP, SIGPIPE and SIGXFSZ remove them before the process dies of
+// the signal, once the program installed the handlers
+// (InstallCleanupSignalHandlers: the zwidth command does; a library never
+// replaces its host's handlers, e.g. Python's SIGINT -> KeyboardInterrupt,
+// where the temporary files are removed as the exception unwinds instead).
 //
 // Inputs must be regular files (checked with stat before opening, so a FIFO
 // cannot block and /dev/zero cannot be read forever); each one read is noted so
@@ -49,11 +53,15 @@ void ForgetNotedInputs();
 // Convenience: the whole content as text.
 void WriteTextAtomically(const std::string& path, const std::string& content);
 
-// Registry of live temporary paths, removed by the SIGINT/SIGTERM/SIGHUP
-// handler (installed on the first registration) with unlink/rmdir only, which
-// are async-signal-safe; a folder is emptied first (two levels deep). At most
-// kMaxTempPaths at a time (then the path is simply not protected).
+// Registry of live temporary paths, removed by the signal handler (see above)
+// with unlink/rmdir only, which are async-signal-safe; a folder is emptied
+// first (two levels deep). At most kMaxTempPaths at a time (then the path is
+// simply not protected).
 inline constexpr int kMaxTempPaths = 64;
+// Installs that handler for SIGINT, SIGTERM, SIGHUP, SIGPIPE and SIGXFSZ (a
+// signal the caller set to SIG_IGN, e.g. under nohup, stays ignored); then it
+// re-raises the signal with its default action. For a program's main only.
+void InstallCleanupSignalHandlers();
 void RegisterTempPath(const std::string& path);
 void UnregisterTempPath(const std::string& path);
 
@@ -78,8 +86,10 @@ class OutputFolder {
   void Commit();
 
  private:
+  void DropLock();
   std::string path_, temp_;
   bool force_ = false, committed_ = false;
+  int lock_fd_ = -1;
 };
 
 }  // namespace zwidth::io

@@ -2,25 +2,36 @@
 
 #include <cmath>
 #include <cstdio>
+#include <locale>
 #include <sstream>
 
 #include "io/atomic_file.h"
 #include "io/hdf5_api.h"
+#include "io/io_internal.h"
 #include "model/error.h"
 #include "model/state_space.h"
 
 namespace zwidth::io {
 namespace {
 
+// Locale-independent (to_chars): embedded in a process whose C locale is
+// German (Python after locale.setlocale), "%.17g" wrote m = 0,001168, which
+// MATLAB and Octave read as m = 0.
 std::string Num(double v) {
-  char b[40];
-  std::snprintf(b, sizeof b, "%.17g", v);
-  return b;
+  std::string s;
+  internal::AppendG(&s, v, 17);
+  return s;
 }
+
+// A stream that writes numbers the same under any global C++ locale (no
+// digit grouping: 1000 stays 1000).
+struct ClassicStream : std::ostringstream {
+  ClassicStream() { imbue(std::locale::classic()); }
+};
 
 // "[a b; c d]" (MATLAB) or "[[a, b], [c, d]]" (Python).
 std::string Matrix(const Eigen::MatrixXd& M, bool python) {
-  std::ostringstream os;
+  ClassicStream os;
   os << "[";
   for (int i = 0; i < M.rows(); ++i) {
     if (python) os << (i ? ", [" : "[");
@@ -90,9 +101,35 @@ nlohmann::json MatrixJson(const Eigen::MatrixXd& M) {
   return j;
 }
 
+}  // namespace
+
+namespace internal {
+std::vector<std::pair<std::string, double>> FrictionFields(const model::Friction& f) {
+  return {{"coulomb_pos", f.coulomb_pos}, {"coulomb_neg", f.coulomb_neg}, {"offset", f.offset},
+          {"breakaway_pos", f.breakaway_pos}, {"breakaway_neg", f.breakaway_neg}};
+}
+}  // namespace internal
+
+namespace {
+
+// The friction (model.json "friction") and its std as variables friction_<field>
+// and friction_std_<field>, after `comment` (MATLAB "%", Python "#").
+std::string FrictionVariables(const ModelFile& mf, const char* comment, const char* end) {
+  if (!mf.friction) return "";
+  std::ostringstream os;
+  os << comment << " Coulomb friction at the input (model.json 'friction', model/friction.h) [input units]\n";
+  for (const auto& [name, v] : internal::FrictionFields(*mf.friction)) os << "friction_" << name << " = " << Num(v) << end << "\n";
+  if (mf.friction_std) {
+    for (const auto& [name, v] : internal::FrictionFields(*mf.friction_std)) {
+      os << "friction_std_" << name << " = " << (std::isfinite(v) ? Num(v) : std::string(*comment == '%' ? "Inf" : "float('inf')")) << end << "\n";
+    }
+  }
+  return os.str();
+}
+
 std::string Matlab(const ModelFile& mf, double T) {
   const model::Plant& p = mf.plant;
-  std::ostringstream os;
+  ClassicStream os;
   os << "% zwidth model export for MATLAB or GNU Octave (pkg load control).\n"
      << "% The parameters of eq. (1) as named variables (SI units, rad/s); G(s) built from its\n"
      << "% factored sections as in the paper's appendix. The model's name is in `name`.\n"
@@ -107,7 +144,7 @@ std::string Matlab(const ModelFile& mf, double T) {
        << ": pole pair w, its damping c, zero pair v, its damping d [rad/s]\n";
   }
   os << "delay_samples = " << p.delay_samples << ";  % input delay of the sampled model [samples]\n"
-     << "G = tf(1, [m b 0]);\n";
+     << FrictionVariables(mf, "%", ";") << "G = tf(1, [m b 0]);\n";
   for (size_t i = 0; i < p.modes.size(); ++i) {
     const std::string k = std::to_string(i + 1);
     os << "G = G * tf(w" << k << "^2 / v" << k << "^2 * [1 d" << k << " v" << k << "^2], [1 c" << k << " w" << k
@@ -123,13 +160,22 @@ std::string Matlab(const ModelFile& mf, double T) {
        << "% appendix's call (f_CR = w_cr / (2 pi)). CAVEAT: margin() reports the -180 deg crossover whose\n"
        << "% gain is nearest 0 dB, which can be a high-frequency one (a lightly damped mode, the delay near\n"
        << "% Nyquist): then it is not the paper's K_CR, which is the smallest positive gain over all -180 deg\n"
-       << "% crossings (zwidth's exact K_CR). Check every crossing (allmargin, or the phase of freqresp on a\n"
-       << "% fine grid) or compare with `zwidth boundary`, which prints both.\n"
+       << "% crossings (zwidth's exact K_CR). zwidth_crossings(B, d) below lists every -180 deg crossing\n"
+       << "% (from freqresp on a log grid of 20000 frequencies up to Nyquist, interpolated) as rows\n"
+       << "% [K f_hz]; the paper's K_CR is the smallest positive K. `zwidth boundary` prints both.\n"
        << "% WARNING: a gain margin is a stability limit only while the loop with K = 0 is stable.\n"
        << "% Past B_max that loop is unstable and margin() still reports a positive K although no\n"
        << "% K is stable: eq. (4)'s margin is not the Z-width there (`zwidth boundary` gives both).\n"
        << "zwidth_z = tf('z', T);\n"
-       << "zwidth_loop = @(B, d) T / ((T * zwidth_z^d) / Gz + B * (zwidth_z - 1) / zwidth_z);\n";
+       << "zwidth_loop = @(B, d) T / ((T * zwidth_z^d) / Gz + B * (zwidth_z - 1) / zwidth_z);\n"
+       << "zwidth_w = logspace(log10(2 * pi * 0.01), log10(pi / T * (1 - 1e-9)), 20000);\n"
+       << "zwidth_h = @(B, d) reshape(freqresp(zwidth_loop(B, d), zwidth_w), 1, []);\n"
+       << "zwidth_at = @(h, i) [i; imag(h(i)) ./ (imag(h(i)) - imag(h(i + 1)))];  % bin and fraction of each sign change\n"
+       << "zwidth_interp = @(x, i) x(i(1, :)) + i(2, :) .* (x(i(1, :) + 1) - x(i(1, :)));\n"
+       << "zwidth_cross = @(h, i) [-1 ./ real(zwidth_interp(h, i)); zwidth_interp(zwidth_w, i) / (2 * pi)].';\n"
+       << "zwidth_sign_changes = @(h) find(imag(h(1:end-1)) .* imag(h(2:end)) <= 0);\n"
+       << "zwidth_crossings_of = @(h) zwidth_cross(h, zwidth_at(h, zwidth_sign_changes(h)));\n"
+       << "zwidth_crossings = @(B, d) zwidth_crossings_of(zwidth_h(B, d));\n";
   }
   return os.str();
 }
@@ -137,7 +183,7 @@ std::string Matlab(const ModelFile& mf, double T) {
 std::string Python(const ModelFile& mf, double T) {
   const model::Plant& p = mf.plant;
   const model::StateSpace c = model::ContinuousStateSpace(p);
-  std::ostringstream os;
+  ClassicStream os;
   os << "\"\"\"zwidth model export. Needs NumPy and SciPy; python-control objects too when it is installed.\n\n"
      << "name: the model's name. m, b, modes, delay_samples: the parameters of eq. (1).\n"
      << "G: continuous scipy.signal.StateSpace of eq. (1) (a well-conditioned cascade realisation).\n";
@@ -148,7 +194,7 @@ std::string Python(const ModelFile& mf, double T) {
      << "name = " << PythonString(p.name) << "\n"
      << "m = " << Num(p.m) << "  # kg m^2\nb = " << Num(p.b) << "  # N m s/rad\nmodes = [  # (omega, c, v, d) rad/s\n";
   for (const model::Mode& md : p.modes) os << "    (" << Num(md.omega) << ", " << Num(md.c) << ", " << Num(md.v) << ", " << Num(md.d) << "),\n";
-  os << "]\ndelay_samples = " << p.delay_samples << "\n\n"
+  os << "]\ndelay_samples = " << p.delay_samples << "\n" << FrictionVariables(mf, "#", "") << "\n"
      << "G = signal.StateSpace(np.array(" << Matrix(c.A, true) << "),\n    np.array(" << Matrix(c.B, true)
      << "),\n    np.array(" << Matrix(c.C, true) << "),\n    np.array([[" << Num(c.D) << "]]))\n";
   if (T > 0) {

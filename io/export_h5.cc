@@ -1,5 +1,6 @@
 // The HDF5 model export of io/export.cc (layout in docs/export.md); in the
 // plugin zwidth-hdf5.so for the zwidth executable (io/hdf5_api.h).
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -37,16 +38,17 @@ void WriteModelHdf5(const std::string& tmp, const ModelFile& mf, double T) {
       const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> R = M;
       ds.write(R.data(), H5::PredType::NATIVE_DOUBLE);
     };
-    auto params = [&](const std::string& gname, const model::Plant& p) {
+    auto params = [&](const std::string& gname, const model::Plant& p, const std::optional<model::Friction>& fr) {
       H5::Group g = f.createGroup(gname);
+      if (fr) for (const auto& [name, v] : FrictionFields(*fr)) vec(g, "friction_" + name, {v}, "input units");
       vec(g, "m", {p.m}, "kg m^2");
       vec(g, "b", {p.b}, "N m s/rad");
       std::vector<double> w, c, v, d;
       for (const model::Mode& md : p.modes) { w.push_back(md.omega); c.push_back(md.c); v.push_back(md.v); d.push_back(md.d); }
       vec(g, "omega", w, "rad/s"); vec(g, "c", c, "rad/s"); vec(g, "v", v, "rad/s"); vec(g, "d", d, "rad/s");
     };
-    params("/parameters", mf.plant);
-    if (mf.std_errors) params("/std", *mf.std_errors);
+    params("/parameters", mf.plant, mf.friction);
+    if (mf.std_errors) params("/std", *mf.std_errors, mf.friction_std);
     const model::StateSpace c = model::ContinuousStateSpace(mf.plant);
     H5::Group gc = f.createGroup("/continuous");
     mat(gc, "A", c.A); mat(gc, "B", c.B); mat(gc, "C", c.C); mat(gc, "D", Eigen::MatrixXd::Constant(1, 1, c.D));

@@ -2,6 +2,8 @@
 
 #include <vector>
 
+#include "io/printable.h"
+
 namespace zwidth::io {
 namespace {
 
@@ -28,12 +30,13 @@ ModelFile FittedModelFile(const fit::FitResult& r, const ident::FrequencyRespons
                           const fit::FitOptions& o, const std::string& source) {
   ModelFile mf;
   mf.plant = r.plant;
-  mf.plant.name = "fitted from " + source;
+  const std::string shown = Utf8ForJson(source);  // a Latin-1 file name is no valid JSON string
+  mf.plant.name = "fitted from " + shown;
   mf.std_errors = r.std_errors;
   mf.log_covariance = r.log_covariance;
   mf.sample_period_s = 1.0 / frf.sample_rate_hz;
   mf.fit = {{"status", fit::ToString(r.status)},
-            {"source", source},
+            {"source", shown},
             {"quality", fit::ToString(r.quality)},
             {"quality_reasons", QualityJson(r)},
             {"modes", r.plant.modes.size()},
@@ -59,6 +62,7 @@ ModelFile FittedModelFile(const fit::FitResult& r, const ident::FrequencyRespons
             {"covariance_ok", r.covariance_ok},
             {"num_bins", r.num_residuals / 2},
             {"num_averages", frf.num_averages},
+            {"estimator", frf.estimator.empty() ? std::string("unknown") : frf.estimator},
             {"sample_rate_hz", frf.sample_rate_hz},
             {"f_min_hz", r.band.f_lo_hz},
             {"f_max_hz", r.band.f_hi_hz},

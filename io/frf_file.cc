@@ -135,6 +135,35 @@ ident::FrequencyResponse ReadCsv(const std::string& path) {
   return r;
 }
 
+// A response reaches at most Nyquist (a Welch estimate's last bin is Nyquist
+// itself, up to rounding); above it the rate is wrong (a kHz typed for Hz).
+void CheckBelowNyquist(const ident::FrequencyResponse& r, const std::string& source, const char* rate_name) {
+  const double nyquist = 0.5 * r.sample_rate_hz;
+  if (r.f_hz.back() > nyquist * (1.0 + 1e-12)) {
+    char msg[200];
+    std::snprintf(msg, sizeof msg, ": frequencies reach %g Hz, above the Nyquist frequency of %g Hz; wrong %s?",
+                  r.f_hz.back(), nyquist, rate_name);
+    throw InputError(source + msg);
+  }
+}
+
+// Per bin: a std of 0 would weight the fit by 1/0 (an infinite chi2 or one bin
+// alone deciding it), a coherence outside [0, 1] or a negative frequency is
+// no response an estimate gives.
+void CheckBinValues(const ident::FrequencyResponse& r, const std::string& path) {
+  for (size_t k = 0; k < r.f_hz.size(); ++k) {
+    const std::string where = path + ": bin " + std::to_string(k) + " (f = " + Num(r.f_hz[k]) + " Hz): ";
+    if (!(r.H_std[k] > 0.0)) {
+      throw InputError(where + "H_std = " + Num(r.H_std[k]) + ", a per-bin std must be > 0 (the fit weights each "
+                       "bin by 1/std): write the std the estimate gave, or drop the H_std column (then |H| x 1e-3)");
+    }
+    if (!(r.coherence[k] >= 0.0 && r.coherence[k] <= 1.0)) {
+      throw InputError(where + "coherence = " + Num(r.coherence[k]) + " is outside [0, 1]");
+    }
+    if (!(r.f_hz[k] >= 0.0)) throw InputError(where + "a frequency must be >= 0");
+  }
+}
+
 // The rate (--rate wins over the file's) and the checks common to both formats.
 void Finish(ident::FrequencyResponse& r, const std::string& path, double rate) {
   if (!(std::isfinite(r.effective_averages) && r.effective_averages >= 0.0)) {
@@ -143,16 +172,12 @@ void Finish(ident::FrequencyResponse& r, const std::string& path, double rate) {
   if (!(std::isfinite(r.bin_correlation) && r.bin_correlation > 0.0)) {
     throw InputError(path + ": bin_correlation = " + Num(r.bin_correlation) + " must be finite, > 0");
   }
+  CheckBinValues(r, path);
   if (rate > 0.0) r.sample_rate_hz = rate;
   if (!(r.sample_rate_hz > 0.0) || !std::isfinite(r.sample_rate_hz)) {
     throw InputError(path + ": no sample_rate_hz column or attribute; pass ReadFrequencyResponse::sample_rate_hz (the log's sample rate)");
   }
-  if (r.f_hz.back() >= 0.5 * r.sample_rate_hz) {
-    char msg[160];
-    std::snprintf(msg, sizeof msg, ": frequencies reach %g Hz, the Nyquist frequency of %g Hz; wrong ReadFrequencyResponse::sample_rate_hz?",
-                  r.f_hz.back(), 0.5 * r.sample_rate_hz);
-    throw InputError(path + msg);
-  }
+  CheckBelowNyquist(r, path, "ReadFrequencyResponse::sample_rate_hz");
 }
 
 ident::FrequencyResponse ReadH5(const std::string& path, bool isolated) {
@@ -192,6 +217,27 @@ ident::FrequencyResponse ReadH5(const std::string& path, bool isolated) {
 }
 
 }  // namespace
+
+void CheckResponseValues(const ident::FrequencyResponse& r, const std::string& source) {
+  const size_t n = r.f_hz.size();
+  if (n == 0) throw InputError(source + ": f_hz is empty");
+  auto bad = [&](const std::string& what) { throw InputError(source + ": " + what); };
+  if (r.H.size() != n || r.coherence.size() != n || r.H_std.size() != n) {
+    bad("f_hz has " + std::to_string(n) + " values, H " + std::to_string(r.H.size()) + ", coherence " +
+        std::to_string(r.coherence.size()) + ", H_std " + std::to_string(r.H_std.size()) + ": they must agree");
+  }
+  for (size_t k = 0; k < n; ++k) {
+    const std::string at = "[" + std::to_string(k) + "]";
+    if (!std::isfinite(r.f_hz[k])) bad("f_hz" + at + " = " + Num(r.f_hz[k]) + " must be finite");
+    if (k > 0 && !(r.f_hz[k] > r.f_hz[k - 1])) bad("f_hz" + at + ": f_hz is not increasing");
+    if (!(std::isfinite(r.H[k].real()) && std::isfinite(r.H[k].imag()))) bad("H" + at + " is not finite");
+    if (!std::isfinite(r.H_std[k])) bad("H_std" + at + " = " + Num(r.H_std[k]) + " must be finite");
+  }
+  CheckBinValues(r, source);  // the reader's per-bin rules: H_std > 0, coherence in [0, 1], f >= 0
+  if (r.num_averages < 1) bad("num_averages = " + std::to_string(r.num_averages) + " must be >= 1");
+  if (!(r.sample_rate_hz > 0.0 && std::isfinite(r.sample_rate_hz))) bad("sample_rate_hz = " + Num(r.sample_rate_hz) + " must be finite, > 0");
+  CheckBelowNyquist(r, source, "sample_rate_hz");
+}
 
 void CheckFiniteResponse(const ident::FrequencyResponse& r, const std::string& source) {
   for (size_t k = 0; k < r.f_hz.size(); ++k) {

@@ -27,6 +27,12 @@ bool IsFrequencyResponseFile(const std::string& path);
 // value of r is NaN or infinite; the cause when it can tell (spectra that
 // overflowed: an input scaled out of range; an infinite per-bin std).
 // WriteFrequencyResponse calls it: a non-finite response is never written.
+// The rules a response file's reader applies to the whole response (sizes
+// agree, every value finite, f_hz >= 0 increasing and below Nyquist, coherence
+// in [0, 1], H_std > 0, num_averages >= 1): InputError naming `source` and the
+// column. For a response made in memory (the Python FrequencyResponse).
+void CheckResponseValues(const ident::FrequencyResponse& r, const std::string& source);
+
 void CheckFiniteResponse(const ident::FrequencyResponse& r, const std::string& source);
 
 // Throws InputError naming `source`, the band and the flag to limit it when

@@ -7,6 +7,10 @@
 #include <string_view>
 #include <vector>
 
+#include <utility>
+
+#include "model/friction.h"
+
 namespace H5 { class H5Object; }
 
 namespace zwidth::io::internal {
@@ -50,5 +54,9 @@ class CsvFile {
   std::string buf_;
   bool first_ = true, ok_ = true;
 };
+
+// The fields of model/friction.h as (name, value), in model.json's key order
+// and names: what the MATLAB, Python and HDF5 exports write.
+std::vector<std::pair<std::string, double>> FrictionFields(const model::Friction& f);
 
 }  // namespace zwidth::io::internal

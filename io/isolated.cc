@@ -157,7 +157,9 @@ void RunIsolated(const std::string& path, const std::function<void(const FrameSe
   if (::pipe(fds) != 0) return in_process();
   std::fflush(nullptr);
   const pid_t parent = ::getpid();
+  std::unique_lock<std::recursive_mutex> no_library_call_in_flight(LibraryForkMutex());
   const pid_t pid = ::fork();
+  no_library_call_in_flight.unlock();  // in the parent; the child's copy is never used
   if (pid < 0) {
     ::close(fds[0]);
     ::close(fds[1]);
@@ -186,6 +188,11 @@ void RunIsolated(const std::string& path, const std::function<void(const FrameSe
     throw;
   }
   CheckChild(path, reap(false), error, done);
+}
+
+std::recursive_mutex& LibraryForkMutex() {
+  static std::recursive_mutex m;
+  return m;
 }
 
 bool SanitizedBuild() { return ZWIDTH_SANITIZED != 0; }

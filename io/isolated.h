@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <mutex>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -44,6 +45,14 @@ using FrameSender = std::function<void(const void* data, size_t size)>;
 // the parent needs them anyway to write HDF5.
 void RunIsolated(const std::string& path, const std::function<void(const FrameSender&)>& produce,
                  const std::function<void(std::string_view frame)>& consume);
+
+// Held by this process's own calls into libhdf5 and libmatio (every
+// WriteAtomically, whose writer may be HDF5's) and by RunIsolated across
+// fork(): libhdf5 is built thread-safe, with one global lock, and a child
+// forked while another thread held it (a Python thread saving a .h5 while
+// three others read logs) inherited it held and hung for good at its first
+// HDF5 call. Recursive: a writer may itself read an input in a child.
+std::recursive_mutex& LibraryForkMutex();
 
 // True in an ASan/UBSan build of zwidth's io library (then a child's sanitizer
 // report aborts the parent, see above).

@@ -126,6 +126,32 @@ LogFormat DetectLogFormat(const std::string& path) {
   return LogFormat::kCsv;
 }
 
+// A text log is UTF-8 (or ASCII): a UTF-16 or UTF-32 file (Windows' "Unicode"
+// text: a byte-order mark, or a NUL beside every ASCII character) is named as
+// such with the conversion, instead of "no numeric data row".
+static void CheckTextEncoding(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char head[4096];
+  in.read(reinterpret_cast<char*>(head), sizeof head);
+  const size_t n = static_cast<size_t>(in.gcount());
+  const bool bom32 = n >= 4 && ((head[0] == 0xFF && head[1] == 0xFE && head[2] == 0 && head[3] == 0) ||
+                                (head[0] == 0 && head[1] == 0 && head[2] == 0xFE && head[3] == 0xFF));
+  const bool bom16 = !bom32 && n >= 2 && ((head[0] == 0xFF && head[1] == 0xFE) || (head[0] == 0xFE && head[1] == 0xFF));
+  size_t nul_even = 0, nul_odd = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (head[i] == 0) ++(i % 2 ? nul_odd : nul_even);
+  }
+  const bool alternating = n >= 16 && std::max(nul_even, nul_odd) >= n / 2 - 2 && std::min(nul_even, nul_odd) == 0;
+  if (!bom32 && !bom16 && !alternating && nul_even + nul_odd > 0 && HasExtension(path, {".mat"})) {
+    throw InputError(path + ": a binary .mat file without the MATLAB v5/v7/v7.3 header: a MATLAB v4 file (save -v4) "
+                     "or another format, which zwidth does not read: save it again with save -v7");
+  }
+  if (!bom32 && !bom16 && !alternating) return;
+  const char* enc = bom32 ? "UTF-32" : "UTF-16";
+  throw InputError(path + ": a " + std::string(enc) + " text file; zwidth reads text logs in UTF-8 or ASCII: convert "
+                   "it (iconv -f " + enc + " -t UTF-8 FILE > FILE.csv, or save as 'CSV UTF-8')");
+}
+
 LogInfo StreamLog(const std::string& path, const LogSelect& select, const LogSink& sink) {
   if (select.sample_rate_hz < 0.0 || !std::isfinite(select.sample_rate_hz)) {
     throw InputError("LogSelect::sample_rate_hz must be finite and > 0");
@@ -136,6 +162,9 @@ LogInfo StreamLog(const std::string& path, const LogSelect& select, const LogSin
     }
   }
   TimeScale(select.time_unit);  // validates the flag
+  for (const auto& [v, flag] : {std::pair{select.counts_per_rev, "LogSelect::counts_per_rev"}, std::pair{select.counts_per_m, "LogSelect::counts_per_m"}}) {
+    if (!std::isfinite(v) || v < 0.0) throw InputError(std::string(flag) + " = " + std::to_string(v) + ": must be finite and > 0");
+  }
   CheckInputFile(path, "log");
   size_t total = 0;
   internal::ConstantCheck output_constant;
@@ -165,7 +194,10 @@ LogInfo StreamLog(const std::string& path, const LogSelect& select, const LogSin
     }
     return info;
   };
-  if (format == LogFormat::kCsv) return check_output(StreamCsv(path, select, capped));
+  if (format == LogFormat::kCsv) {
+    CheckTextEncoding(path);
+    return check_output(StreamCsv(path, select, capped));
+  }
   if (!select.time_unit.empty() && select.time_unit != "s") {
     throw InputError(path + ": LogSelect::time_unit applies to text logs; this " +
                      std::string(format == LogFormat::kMat ? "MATLAB" : "HDF5") +
@@ -198,6 +230,16 @@ LogInfo StreamLog(const std::string& path, const LogSelect& select, const LogSin
     if (r < 100.0) info.warnings.push_back(os.str() + ", low for a haptic device log" + hint);
   }
   return check_output(std::move(info));
+}
+
+void LogFingerprint::Add(const double* input, const double* output, size_t n) {
+  auto add = [n](const double* v, std::uint64_t* h) {
+    const unsigned char* b = reinterpret_cast<const unsigned char*>(v);
+    for (size_t k = 0; k < n * sizeof(double); ++k) *h = (*h ^ b[k]) * 1099511628211ull;
+  };
+  add(input, &hu_);
+  add(output, &hy_);
+  n_ += n;
 }
 
 Log ReadLog(const std::string& path, const LogSelect& select) {

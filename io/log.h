@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -36,6 +37,18 @@ struct LogSelect {
   // Unit of the text time column: "s", "ms" or "us"; "" = s, and then an
   // implied rate outside [10 Hz, 1 MHz] is refused with a suggestion.
   std::string time_unit;
+  // Units of the input and output columns (io/log_units.h): "" reads them
+  // from the header (a bracketed unit, a known suffix such as _deg, or a units
+  // row under the header), else SI; "si" takes the column as SI; or a unit
+  // such as "mN m", "deg", "mm", "counts". The samples are converted to N m
+  // or N, and rad or m, before input_scale / output_scale multiply them.
+  std::string input_unit, output_unit;
+  // Encoder resolution for an output in counts: counts per turn (rotary, to
+  // rad) or per metre (linear, to m); 0 = not given.
+  double counts_per_rev = 0.0, counts_per_m = 0.0;
+  // Numbers of a text log use ',' as the decimal mark ("0,25"); without it a
+  // file whose first data line reads only that way is detected as such.
+  bool decimal_comma = false;
   std::string time_dataset = "/time";                 // HDF5
   std::string input_dataset = "/input/torque";        // HDF5
   std::string output_dataset = "/output/position";    // HDF5
@@ -79,6 +92,20 @@ struct Log {
   std::vector<double> output;  // rad
 };
 Log ReadLog(const std::string& path, const LogSelect& select = {});
+
+// A 64-bit fingerprint (FNV-1a) of a log's samples as read, whatever the
+// format: two logs with the same fingerprint hold the same data (the same
+// file, a copy, a link, or the same samples saved as .h5 and .csv). Runs of one
+// device are averaged as independent; the same data twice would shrink every
+// per-bin std by 1/sqrt(2) while adding nothing, so the estimate refuses it.
+class LogFingerprint {
+ public:
+  void Add(const double* input, const double* output, size_t n);
+  std::uint64_t value() const { return hu_ ^ (hy_ * 31) ^ n_; }  // whatever the chunks were
+
+ private:
+  std::uint64_t hu_ = 14695981039346656037ull, hy_ = 14695981039346656037ull, n_ = 0;
+};
 
 // The HDF5 parsing that StreamLog runs in a child process (io/isolated.h),
 // callable in this process for the fuzzer (the isolation is tested on its own).

@@ -1,6 +1,7 @@
 #include "io/log.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -12,7 +13,10 @@
 #include <memory>
 #include <sstream>
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <H5Cpp.h>
 
@@ -187,6 +191,23 @@ bool IsPlainNumber(hid_t type) {
   return false;
 }
 
+// The first filter of a dataset's pipeline that this libhdf5 cannot apply
+// (h5py's LZF, 32000; a plugin's), named, or "".
+static std::string MissingFilter(hid_t dcpl) {
+  const int n = H5Pget_nfilters(dcpl);
+  for (int i = 0; i < n; ++i) {
+    unsigned flags = 0, config = 0;
+    size_t nvalues = 0;
+    char name[64] = {};
+    const H5Z_filter_t id = H5Pget_filter2(dcpl, static_cast<unsigned>(i), &flags, &nvalues, nullptr, sizeof name,
+                                           name, &config);
+    if (id < 0 || H5Zfilter_avail(id) > 0) continue;
+    const std::string known = id == 32000 ? "LZF (h5py's)" : id == 32001 ? "Blosc" : id == 32004 ? "LZ4" : "";
+    return "the HDF5 filter " + std::to_string(id) + " (" + (known.empty() ? std::string(name) : known) + ")";
+  }
+  return "";
+}
+
 void CheckH5DatasetLocal(hid_t dataset, const std::string& where) {
   const hid_t type = H5Dget_type(dataset);
   const bool plain = type >= 0 && IsPlainNumber(type);
@@ -199,7 +220,12 @@ void CheckH5DatasetLocal(hid_t dataset, const std::string& where) {
   if (dcpl < 0) throw InputError(where + ": unreadable dataset properties (corrupt file?)");
   const int external = H5Pget_external_count(dcpl);
   const H5D_layout_t layout = H5Pget_layout(dcpl);
+  const std::string missing_filter = MissingFilter(dcpl);
   H5Pclose(dcpl);
+  if (!missing_filter.empty()) {
+    throw InputError(where + ": compressed with " + missing_filter + ", which this HDF5 library does not have: "
+                     "save it again with gzip (h5py: compression='gzip') or without compression");
+  }
   if (external != 0) {
     throw InputError(where + ": its data are stored in external files; zwidth reads only what is "
                      "inside the file: copy the data into it");
@@ -336,6 +362,34 @@ double LogRate(const std::string& path, const LogSelect& sel, double attr_rate_h
 
 }  // namespace
 
+// Why libhdf5 refused to open `path`, for the message: another program holds
+// it open for writing (HDF5's file lock), or its writer never closed it (the
+// superblock's "open for writing" mark, versions 2 and 3), else truncated or
+// corrupt.
+static std::string WhyHdf5WontOpen(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return std::string("cannot open it: ") + std::strerror(errno);
+  const bool locked = ::flock(fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK;
+  unsigned char sb[12] = {};
+  bool open_mark = false;
+  for (off_t off : {0, 512, 1024, 2048}) {
+    if (::pread(fd, sb, sizeof sb, off) == static_cast<ssize_t>(sizeof sb) && std::memcmp(sb, "\x89HDF\r\n\x1a\n", 8) == 0) {
+      open_mark = sb[8] >= 2 && sb[11] != 0;  // superblock version, file consistency flags
+      break;
+    }
+  }
+  ::close(fd);
+  if (locked) {
+    return "another program has it open for writing (HDF5's file lock): wait until it closes the file, or read a "
+           "copy";
+  }
+  if (open_mark) {
+    return "the program that wrote it never closed it (it is still being written, or it crashed): when no program "
+           "has it open, `h5clear -s FILE` clears the mark; the data may be incomplete";
+  }
+  return "truncated or corrupt file";
+}
+
 LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& sel, const LogSink& sink) {
   H5::Exception::dontPrint();
   std::unique_ptr<H5::H5File> file;
@@ -343,7 +397,7 @@ LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& sel, const
     if (!H5::H5File::isHdf5(path)) throw InputError(path + ": not an HDF5 file");
     file = std::make_unique<H5::H5File>(path, H5F_ACC_RDONLY, H5::FileCreatPropList::DEFAULT, SafeH5Access());
   } catch (const H5::Exception&) {
-    throw InputError(path + ": cannot open as HDF5 (missing, truncated or corrupt file)");
+    throw InputError(path + ": cannot open as HDF5 (" + WhyHdf5WontOpen(path) + ")");
   }
   try {
     const Hdf5LogSets sets = OpenLogDatasets(*file, path, sel);

@@ -14,9 +14,11 @@
 
 #include <sys/stat.h>
 
+#include <H5Cpp.h>
 #include <matio.h>
 
 #include "io/atomic_file.h"
+#include "io/h5_safety.h"
 #include "io/hdf5_api.h"
 #include "io/io_internal.h"
 #include "io/log_internal.h"
@@ -44,6 +46,120 @@ std::string MatVariables(mat_t* mat) {
   return n ? list : "none";
 }
 
+// ---- MAT v5 before libmatio reads it ---------------------------------------
+//
+// libmatio trusts a v5 file's sizes: a variable cut short was read with its
+// tail uninitialised (exit 0), a 1.8 MB zlib bomb expanded for 20 s into
+// 2.8 GB. So the top-level data elements are walked here first: after the
+// 128-byte header, each is an 8-byte tag (type, byte count) and its bytes
+// (miMATRIX padded to 8, miCOMPRESSED not).
+constexpr uint32_t kMiMatrix = 14, kMiCompressed = 15;
+// deflate's largest expansion (RFC 1951: at most 258 bytes from 2 bits), so
+// no valid compressed variable declares more bytes than this times its own.
+constexpr double kMaxZlibRatio = 1032.0;
+
+struct MatElement {
+  uint32_t type = 0;
+  uint64_t offset = 0, size = 0;  // of the tag; bytes after it
+};
+
+std::vector<MatElement> MatV5Elements(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(0, std::ios::end);
+  const uint64_t file_size = static_cast<uint64_t>(in.tellg());
+  char header[128];
+  in.seekg(0);
+  if (!in.read(header, sizeof header)) throw InputError(path + ": a MATLAB file shorter than its 128-byte header (truncated)");
+  const bool swap = header[126] == 'M' && header[127] == 'I';  // written on a machine of the other byte order
+  std::vector<MatElement> out;
+  for (uint64_t off = 128; off + 8 <= file_size;) {
+    unsigned char tag[8];
+    in.seekg(static_cast<std::streamoff>(off));
+    if (!in.read(reinterpret_cast<char*>(tag), 8)) break;
+    auto word = [&](int at) {
+      uint32_t v = 0;
+      for (int k = 0; k < 4; ++k) v |= uint32_t{tag[at + (swap ? 3 - k : k)]} << (8 * k);
+      return v;
+    };
+    MatElement e{word(0), off, word(4)};
+    if (e.type != kMiMatrix && e.type != kMiCompressed) {
+      throw InputError(path + ": byte " + std::to_string(off) + ": not a MATLAB variable (data type " +
+                       std::to_string(e.type) + "): a corrupt file");
+    }
+    if (off + 8 + e.size > file_size) {
+      throw InputError(path + ": truncated: the variable at byte " + std::to_string(off) + " declares " +
+                       std::to_string(e.size) + " bytes, but the file ends " + std::to_string(file_size - off - 8) +
+                       " bytes after its tag (an interrupted copy or save?); copy or save it again");
+    }
+    out.push_back(e);
+    off += 8 + e.size + (e.type == kMiMatrix ? (8 - e.size % 8) % 8 : 0);
+  }
+  return out;
+}
+
+std::string Num(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.0f", v);
+  return b;
+}
+
+size_t MatClassBytes(matio_classes c) {
+  switch (c) {
+    case MAT_C_DOUBLE: case MAT_C_INT64: case MAT_C_UINT64: return 8;
+    case MAT_C_SINGLE: case MAT_C_INT32: case MAT_C_UINT32: return 4;
+    case MAT_C_INT16: case MAT_C_UINT16: case MAT_C_CHAR: return 2;
+    default: return 1;
+  }
+}
+
+// InputError when the v5 variable `info` (the index-th element) declares more
+// values than zwidth reads, more than its element holds (uncompressed), or more
+// than its compressed bytes can expand to.
+void CheckMatV5Sizes(const std::string& path, const matvar_t* info, const MatElement& e) {
+  double values = 1.0;
+  for (int i = 0; i < info->rank; ++i) values *= static_cast<double>(info->dims[i]);
+  const std::string name = std::string(info->name ? info->name : "?").substr(0, 40);
+  if (values > static_cast<double>(kMaxLogSamples)) {
+    throw InputError(path + ": variable '" + name + "' declares " + Num(values) + " values, more than zwidth reads (" +
+                     std::to_string(kMaxLogSamples) + "); split the log");
+  }
+  if (info->class_type == MAT_C_STRUCT || info->class_type == MAT_C_CELL || info->class_type == MAT_C_SPARSE) return;
+  const double bytes = values * static_cast<double>(MatClassBytes(info->class_type)) * (info->isComplex ? 2 : 1);
+  if (e.type == kMiMatrix && bytes > static_cast<double>(e.size)) {
+    throw InputError(path + ": variable '" + name + "' declares " + Num(values) + " values (" + Num(bytes) +
+                     " bytes) but holds " + std::to_string(e.size) + " bytes: a truncated or corrupt file");
+  }
+  if (e.type == kMiCompressed && bytes > kMaxZlibRatio * static_cast<double>(e.size) + 4096.0) {
+    throw InputError(path + ": variable '" + name + "' declares " + Num(values) + " values (" + Num(bytes) +
+                     " bytes) from " + std::to_string(e.size) + " compressed bytes, more than zlib can expand "
+                     "(1032:1): a corrupt or hostile file, not read");
+  }
+}
+
+// Every v5 variable's declared size against the file, before any is read.
+void CheckMatV5File(const std::string& path, mat_t* mat) {
+  const std::vector<MatElement> elements = MatV5Elements(path);
+  Mat_Rewind(mat);
+  for (size_t k = 0; k < elements.size(); ++k) {
+    std::unique_ptr<matvar_t, VarFree> info(Mat_VarReadNextInfo(mat));
+    if (!info) break;
+    CheckMatV5Sizes(path, info.get(), elements[k]);
+  }
+  Mat_Rewind(mat);
+}
+
+// What a variable that is no plain numeric vector is, for the message.
+std::string MatKind(const matvar_t* v) {
+  switch (v->class_type) {
+    case MAT_C_SPARSE: return "a sparse matrix (save it full: u = full(u))";
+    case MAT_C_CELL: return "a cell array (save each signal as a numeric vector)";
+    case MAT_C_CHAR: return "text (a char array), not samples";
+    case MAT_C_STRUCT: return "a struct (name one of its fields: s.field)";
+    case MAT_C_OBJECT: case MAT_C_FUNCTION: case MAT_C_OPAQUE: return "a MATLAB object, not samples";
+    default: return "not numeric (class " + std::to_string(static_cast<int>(v->class_type)) + ")";
+  }
+}
+
 // The variable "name" or the field "name.field" of a struct, as doubles.
 // Returns false when it does not exist (and required is false).
 bool ReadMatVector(mat_t* mat, const std::string& path, const std::string& spec, const char* flag,
@@ -59,6 +175,12 @@ bool ReadMatVector(mat_t* mat, const std::string& path, const std::string& spec,
     if (v->class_type != MAT_C_STRUCT) {
       throw InputError(path + ": '" + var.substr(0, 40) + "' is not a struct; " + flag + " " + spec.substr(0, 40) +
                        " names a field of one");
+    }
+    size_t elements = 1;
+    for (int i = 0; i < v->rank; ++i) elements *= v->dims[i];
+    if (elements != 1) {
+      throw InputError(path + ": '" + var.substr(0, 40) + "' is an array of " + std::to_string(elements) +
+                       " structs; zwidth reads one struct's fields (save s(1), or its fields as variables)");
     }
     v = Mat_VarGetStructFieldByName(v, spec.substr(dot + 1).c_str(), 0);
     if (!v) {
@@ -78,6 +200,10 @@ bool ReadMatVector(mat_t* mat, const std::string& path, const std::string& spec,
   for (int i = 0; i < v->rank; ++i) {
     n *= v->dims[i];
     if (v->dims[i] > 1) ++long_dims;
+  }
+  if (v->class_type == MAT_C_SPARSE || v->class_type == MAT_C_CELL || v->class_type == MAT_C_STRUCT ||
+      v->class_type == MAT_C_CHAR) {
+    throw InputError(path + ": '" + spec.substr(0, 40) + "' is " + MatKind(v));
   }
   if (v->isComplex || long_dims > 1 || !v->data) {
     std::string shape;
@@ -102,10 +228,56 @@ bool ReadMatVector(mat_t* mat, const std::string& path, const std::string& spec,
     case MAT_C_INT64: copy(static_cast<const int64_t*>(v->data)); break;
     case MAT_C_UINT64: copy(static_cast<const uint64_t*>(v->data)); break;
     default:
-      throw InputError(path + ": '" + spec.substr(0, 40) + "' is not numeric (class " +
-                       std::to_string(static_cast<int>(v->class_type)) + ")");
+      throw InputError(path + ": '" + spec.substr(0, 40) + "' is " + MatKind(v));
   }
   return true;
+}
+
+// A v7.3 file is an HDF5 file behind a 512-byte header: read by the HDF5
+// reader, with all of its safeguards (no external link, external storage or
+// virtual dataset; declared sizes against what was written), variable "u" as
+// dataset "/u" and struct field "s.u" as "/s/u". Its messages name the .mat
+// flags.
+LogInfo StreamMat73AsHdf5(const std::string& path, const LogSelect& sel, const LogSink& sink) {
+  auto dataset = [](std::string spec) {
+    for (char& c : spec) if (c == '.') c = '/';
+    return "/" + spec;
+  };
+  try {  // a variable that is not there: named with the file's variables, as for v5
+    H5::Exception::dontPrint();
+    H5::H5File file(path, H5F_ACC_RDONLY, H5::FileCreatPropList::DEFAULT, SafeH5Access());
+    std::string names;
+    const hsize_t n = file.getNumObjs();
+    for (hsize_t i = 0; i < n && i < 12; ++i) names += (i ? ", " : "") + file.getObjnameByIdx(i).substr(0, 24);
+    if (n > 12) names += ", ...";
+    for (const auto& [spec, flag] : {std::pair{sel.input_column, "LogSelect::input_column"},
+                                     std::pair{sel.output_column, "LogSelect::output_column"}}) {
+      if (!H5LinkExists(file.getId(), path, dataset(spec))) {
+        throw InputError(path + ": no variable '" + spec.substr(0, 40) + "' in this MATLAB v7.3 file (variables: " +
+                         (names.empty() ? "none" : names) + "); choose one with " + flag);
+      }
+    }
+  } catch (const H5::Exception& e) {
+    throw InputError(path + ": a MATLAB v7.3 file that HDF5 cannot open (truncated, corrupt, or open for writing "
+                     "by another program)");
+  }
+  LogSelect h = sel;
+  h.input_dataset = dataset(sel.input_column);
+  h.output_dataset = dataset(sel.output_column);
+  h.time_dataset = sel.time_column == "none" ? "/.zwidth-no-time-variable" : dataset(sel.time_column);
+  try {
+    return StreamHdf5InProcess(path, h, sink);
+  } catch (const H5::Exception& e) {
+    throw InputError(path + ": a MATLAB v7.3 file that HDF5 cannot read (" + e.getDetailMsg() + "): corrupt?");
+  } catch (const InputError& e) {
+    std::string m = e.what();
+    for (const auto& [from, to] : {std::pair<std::string, std::string>{"LogSelect::input_dataset", "LogSelect::input_column"},
+                                   {"LogSelect::output_dataset", "LogSelect::output_column"},
+                                   {"LogSelect::time_dataset", "LogSelect::time_column"}}) {
+      for (size_t at = m.find(from); at != std::string::npos; at = m.find(from, at + to.size())) m.replace(at, from.size(), to);
+    }
+    throw InputError(m + " (a MATLAB v7.3 file)");
+  }
 }
 
 }  // namespace
@@ -114,7 +286,17 @@ LogInfo StreamMatInProcess(const std::string& path, const LogSelect& sel, const 
   Mat_LogInitFunc("zwidth", [](int, char*) {});  // no stderr chatter from libmatio
   std::unique_ptr<mat_t, MatCloser> mat(Mat_Open(path.c_str(), MAT_ACC_RDONLY));
   if (!mat) throw InputError(path + ": cannot open as a MATLAB .mat file (truncated or corrupt?)");
-  const char* version = Mat_GetVersion(mat.get()) == MAT_FT_MAT73 ? "v7.3" : "v5";
+  const int file_version = Mat_GetVersion(mat.get());
+  if (file_version == MAT_FT_MAT73) {
+    mat.reset();
+    return StreamMat73AsHdf5(path, sel, sink);
+  }
+  if (file_version == MAT_FT_MAT4) {
+    throw InputError(path + ": a MATLAB v4 file (save -v4), which zwidth does not read: save it again as v5, v7 "
+                     "or v7.3 (save -v7)");
+  }
+  CheckMatV5File(path, mat.get());
+  const char* version = "v5/v7";
   std::vector<double> u, y, t;
   auto need = [&](const std::string& spec, const char* flag, std::vector<double>* v) {
     if (!ReadMatVector(mat.get(), path, spec, flag, v)) {

@@ -18,6 +18,7 @@
 #include "io/atomic_file.h"
 #include "io/io_internal.h"
 #include "io/log_internal.h"
+#include "io/log_units.h"
 #include "model/error.h"
 
 
@@ -100,6 +101,7 @@ class LineReader {
 struct Delim {
   char c = ',';
   bool ws = false;
+  bool decimal_comma = false;  // numbers read "0,25" (LogSelect::decimal_comma or detected)
   std::string Name() const {
     if (ws) return "whitespace";
     if (c == '\t') return "tab";
@@ -140,9 +142,14 @@ bool ParseNumber(std::string_view f, double* v) {
   return ec == std::errc() && p == f.data() + f.size();
 }
 
-bool AllNumbers(const std::vector<std::string_view>& fields) {
+// A number as the file writes them (decimal point, or comma with d.decimal_comma).
+bool ParseNumberIn(std::string_view f, const Delim& d, double* v) {
+  return d.decimal_comma ? internal::ParseDecimalComma(f, v) : ParseNumber(f, v);
+}
+
+bool AllNumbers(const std::vector<std::string_view>& fields, const Delim& d = {}) {
   double v;
-  for (auto f : fields) if (!ParseNumber(f, &v)) return false;
+  for (auto f : fields) if (!ParseNumberIn(f, d, &v)) return false;
   return true;
 }
 
@@ -195,8 +202,19 @@ struct CsvPreLine { size_t no; std::string text; bool comment; };
 // line (in *line, split into *fields) into numbers.
 struct CsvPreamble {
   std::optional<CsvPreLine> last;
+  std::optional<CsvPreLine> before_last;  // the non-blank line before `last` (a header above a units row)
   std::optional<Delim> delim;
 };
+
+// The delimiters tried on the first data line, in order: with a decimal point
+// (';', tab, ',', whitespace), then with a decimal comma (';', tab,
+// whitespace); only the latter with LogSelect::decimal_comma.
+std::vector<Delim> CandidateDelims(bool decimal_comma) {
+  std::vector<Delim> out;
+  if (!decimal_comma) out = {Delim{';', false}, Delim{'\t', false}, Delim{',', false}, Delim{' ', true}};
+  for (const Delim d : {Delim{';', false, true}, Delim{'\t', false, true}, Delim{' ', true, true}}) out.push_back(d);
+  return out;
+}
 
 // Reads comment, blank and other lines up to the first data line.
 CsvPreamble ReadPreamble(LineReader& reader, const std::string& path, const LogSelect& sel, std::string* line_ptr,
@@ -209,6 +227,10 @@ CsvPreamble ReadPreamble(LineReader& reader, const std::string& path, const LogS
   std::optional<Delim>& delim = out->delim;
   std::optional<CsvPreLine>& last = out->last;
   delim = GivenDelim(sel.delimiter);
+  if (delim && sel.decimal_comma) {
+    if (delim->c == ',' && !delim->ws) throw InputError("LogSelect::decimal_comma with LogSelect::delimiter ',': a comma cannot be both");
+    delim->decimal_comma = true;
+  }
   bool found = false;
   while (reader.Next(&line)) {
     if (reader.line_no() == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);  // UTF-8 BOM
@@ -224,11 +246,11 @@ CsvPreamble ReadPreamble(LineReader& reader, const std::string& path, const LogS
                                                  sv[0] == '-' || sv[0] == '+' || sv[0] == '.');
       if (delim) {
         Split(line, *delim, &fields);
-        if (AllNumbers(fields)) { found = true; break; }
+        if (AllNumbers(fields, *delim)) { found = true; break; }
       } else {
-        for (const Delim d : {Delim{';', false}, Delim{'\t', false}, Delim{',', false}, Delim{' ', true}}) {
+        for (const Delim d : CandidateDelims(sel.decimal_comma)) {
           Split(line, d, &fields);
-          if (fields.size() >= 2 && AllNumbers(fields)) { delim = d; break; }
+          if (fields.size() >= 2 && AllNumbers(fields, d)) { delim = d; break; }
         }
         if (delim) { found = true; break; }
         Split(line, Delim{' ', true}, &fields);
@@ -246,6 +268,7 @@ CsvPreamble ReadPreamble(LineReader& reader, const std::string& path, const LogS
       }
     }
     if (last) ++skipped;
+    out->before_last = last;
     last = CsvPreLine{reader.line_no(), line, IsComment(line)};
     if (reader.line_no() > kMaxPreambleLines) {
       throw InputError(path + ": no numeric data row in the first " + std::to_string(kMaxPreambleLines) +
@@ -266,8 +289,38 @@ CsvPreamble ReadPreamble(LineReader& reader, const std::string& path, const LogS
 // sentence that every message about the file quotes.
 struct CsvHeader {
   std::vector<std::string> names;
+  std::vector<std::string> units;  // from a units row under the header ("" per column without), else empty
   std::string layout;
 };
+
+// The text of a preamble line, without a leading comment mark.
+std::string_view PreLineText(const CsvPreLine& l) {
+  std::string_view h = l.text;
+  if (l.comment) {
+    h.remove_prefix(h.find('#'));
+    while (!h.empty() && h.front() == '#') h.remove_prefix(1);
+  }
+  return h;
+}
+
+// A units row: the line before the data holds a unit (or nothing) in every
+// field and the line above it is a header with as many fields
+// ("t;torque;position" over "s;mN m;deg"). Its fields, else nullopt.
+std::optional<std::vector<std::string>> UnitsRow(const CsvPreamble& pre, const Delim& d, size_t ncols) {
+  if (!pre.last || !pre.before_last) return std::nullopt;
+  std::vector<std::string_view> f, h;
+  Split(PreLineText(*pre.last), d, &f);
+  Split(PreLineText(*pre.before_last), d, &h);
+  if (f.size() != ncols || h.size() != ncols || AllNumbers(h, d)) return std::nullopt;
+  bool any = false;
+  for (std::string_view x : f) {
+    if (x.empty()) continue;
+    if (!internal::LooksLikeUnit(std::string(x))) return std::nullopt;
+    any = true;
+  }
+  if (!any) return std::nullopt;
+  return std::vector<std::string>(f.begin(), f.end());
+}
 
 CsvHeader ReadHeader(const std::optional<CsvPreLine>& last, const Delim& delim_value, size_t ncols,
                      size_t first_data, const std::string& path) {
@@ -276,14 +329,10 @@ CsvHeader ReadHeader(const std::optional<CsvPreLine>& last, const Delim& delim_v
   size_t header_line = 0;
   bool header_comment = false;
   if (last) {
-    std::string_view h = last->text;
-    if (last->comment) {
-      h.remove_prefix(h.find('#'));
-      while (!h.empty() && h.front() == '#') h.remove_prefix(1);
-    }
+    const std::string_view h = PreLineText(*last);
     std::vector<std::string_view> hf;
     Split(h, *delim, &hf);
-    if (hf.size() == ncols && !AllNumbers(hf)) {
+    if (hf.size() == ncols && !AllNumbers(hf, *delim)) {
       for (auto f : hf) names.emplace_back(f);
       header_line = last->no;
       header_comment = last->comment;
@@ -294,7 +343,8 @@ CsvHeader ReadHeader(const std::optional<CsvPreLine>& last, const Delim& delim_v
                        std::to_string(ncols) + "; mark it with '#' if it is not a header, or pass LogSelect::delimiter");
     }
   }
-  std::string layout = "text, " + delim->Name() + "-separated, " + std::to_string(ncols) + " columns, ";
+  std::string layout = "text, " + delim->Name() + "-separated" + (delim->decimal_comma ? " (decimal comma)" : "") +
+                       ", " + std::to_string(ncols) + " columns, ";
   std::string name_list;
   for (size_t i = 0; i < names.size() && i < 12; ++i) {
     name_list += (i ? ", " : "") + names[i].substr(0, 24);
@@ -307,7 +357,7 @@ CsvHeader ReadHeader(const std::optional<CsvPreLine>& last, const Delim& delim_v
   }
   layout += ", data from line " + std::to_string(first_data);
 
-  return {names, layout};
+  return {names, {}, layout};
 }
 
 // The column that spec names (exact name, then a unique case-insensitive
@@ -463,6 +513,45 @@ struct ChunkedSink {
   size_t rows = 0;
 };
 
+// The units of the input and output columns: LogSelect::input_unit /
+// output_unit, else the units row, else the header name, else SI; and the
+// layout's note of what was read.
+struct ColumnUnits {
+  internal::ColumnUnit input, output;
+  std::string layout;
+};
+
+internal::ColumnUnit ColumnUnitOf(const std::string& given, const CsvHeader& h, const CsvColumns& cols, int c,
+                                  internal::ColumnRole role, const LogSelect& sel, const std::string& where,
+                                  const char* flag) {
+  const double cpr = sel.counts_per_rev, cpm = sel.counts_per_m;
+  const bool scaled = (role == internal::ColumnRole::kInput ? sel.input_scale : sel.output_scale) != 1.0;
+  if (!given.empty()) return internal::ParseColumnUnit(given, role, cpr, cpm, false, flag, where + " (" + flag + ")");
+  if (!h.units.empty() && !h.units[c].empty()) {
+    return internal::ParseColumnUnit(h.units[c], role, cpr, cpm, scaled, flag, where + " (units row)");
+  }
+  if (!cols.names.empty()) {
+    if (auto u = internal::UnitOfColumnName(cols.names[c], role, cpr, cpm, scaled, flag, where)) return *u;
+  }
+  return {"", role == internal::ColumnRole::kInput ? "N m" : "rad", 1.0};
+}
+
+ColumnUnits ResolveColumnUnits(const LogSelect& sel, const CsvHeader& h, const CsvColumns& cols, const std::string& path) {
+  ColumnUnits u;
+  u.input = ColumnUnitOf(sel.input_unit, h, cols, cols.input, internal::ColumnRole::kInput, sel,
+                         path + ": input " + cols.Name(cols.input), "LogSelect::input_unit");
+  u.output = ColumnUnitOf(sel.output_unit, h, cols, cols.output, internal::ColumnRole::kOutput, sel,
+                          path + ": output " + cols.Name(cols.output), "LogSelect::output_unit");
+  for (const auto* x : {&u.input, &u.output}) {
+    if (x->written.empty()) continue;
+    char b[120];
+    std::snprintf(b, sizeof b, "; %s unit '%s' read: x %.6g to %s", x == &u.input ? "input" : "output",
+                  x->written.substr(0, 24).c_str(), x->scale, x->si.c_str());
+    u.layout += b;
+  }
+  return u;
+}
+
 LogInfo StreamCsv(const std::string& path, const LogSelect& sel, const LogSink& sink) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot open log file (does it exist?)");
@@ -476,15 +565,22 @@ LogInfo StreamCsv(const std::string& path, const LogSelect& sel, const LogSink& 
   const size_t ncols = fields.size();
   const std::vector<double> first_values = [&] {
     std::vector<double> v(ncols);
-    for (size_t i = 0; i < ncols; ++i) ParseNumber(fields[i], &v[i]);
+    for (size_t i = 0; i < ncols; ++i) ParseNumberIn(fields[i], *delim, &v[i]);
     return v;
   }();
-  const CsvHeader header = ReadHeader(pre.last, *delim, ncols, first_data, path);
+  const std::optional<std::vector<std::string>> units_row = UnitsRow(pre, *delim, ncols);
+  CsvHeader header = ReadHeader(units_row ? pre.before_last : pre.last, *delim, ncols, first_data, path);
+  if (units_row) {
+    header.units = *units_row;
+    header.layout += ", units row at line " + std::to_string(pre.last->no);
+  }
   const bool rate_given = sel.sample_rate_hz > 0.0;
-  const CsvColumns cols = SelectColumns(sel, header, ncols, path);
+  CsvColumns cols = SelectColumns(sel, header, ncols, path);
   const int ci = cols.input, co = cols.output, ct = cols.time;
+  const ColumnUnits units = ResolveColumnUnits(sel, header, cols, path);
+  cols.layout += units.layout;
   if (ct >= 0 && !cols.names.empty() && !rate_given && sel.time_unit.empty()) {
-    const std::string unit = UnitInName(cols.names[ct]);
+    const std::string unit = UnitInName(cols.names[ct] + (header.units.empty() ? "" : " " + header.units[ct]));
     if (!unit.empty()) {
       throw InputError(path + ": the time column '" + cols.names[ct].substr(0, 40) + "' looks like " +
                        (unit == "ms" ? "milliseconds" : "microseconds") + ": pass LogSelect::time_unit " + unit +
@@ -511,15 +607,17 @@ LogInfo StreamCsv(const std::string& path, const LogSelect& sel, const LogSink& 
       double v = 0.0;
       auto where = [&] { return "line " + std::to_string(line_no) + ", " + col_name(col); };
       if (first) v = first_values[col];
-      else if (!ParseNumber(fields[col], &v)) {
-        throw InputError(path + ": " + where() + ": " + Shown(fields[col]) + " is not a number");
+      else if (!ParseNumberIn(fields[col], *delim, &v)) {
+        const bool comma = !delim->decimal_comma && delim->c != ',' && fields[col].find(',') != std::string_view::npos;
+        throw InputError(path + ": " + where() + ": " + Shown(fields[col]) + " is not a number" +
+                         (comma ? " (a decimal comma? pass LogSelect::decimal_comma)" : ""));
       }
       if (!std::isfinite(v)) CheckFinite(v, path, where());
       return v;
     };
     const double uv = parse(ci), yv = parse(co);
     if (ct >= 0) times.AddLazy(parse(ct) * time_scale, [&] { return "line " + std::to_string(line_no); });
-    out.Add(uv * sel.input_scale, yv * sel.output_scale);
+    out.Add(uv * units.input.scale * sel.input_scale, yv * units.output.scale * sel.output_scale);
     first = false;
   } while (reader.Next(&line));
   out.Flush();
@@ -540,8 +638,16 @@ void WriteCsvLog(const std::string& tmp, double rate, const std::vector<double>&
   std::FILE* f = std::fopen(tmp.c_str(), "wb");
   if (!f) throw InputError("cannot create '" + tmp + "'");
   std::fputs("t,torque,position\n", f);
+  std::string line;  // to_chars: no decimal comma under the host's locale (Python's locale.setlocale)
   for (size_t k = 0; k < u.size(); ++k) {
-    std::fprintf(f, "%.17g,%.17g,%.17g\n", static_cast<double>(k) / rate, u[k], y[k]);
+    line.clear();
+    AppendG(&line, static_cast<double>(k) / rate, 17);
+    line += ',';
+    AppendG(&line, u[k], 17);
+    line += ',';
+    AppendG(&line, y[k], 17);
+    line += '\n';
+    std::fputs(line.c_str(), f);
   }
   const bool ok = std::ferror(f) == 0;
   if (std::fclose(f) != 0 || !ok) throw InputError("failed writing '" + tmp + "' (disk full?)");

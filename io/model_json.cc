@@ -260,6 +260,19 @@ std::string ReadSmallFile(const std::string& path, const std::string& what, size
   return text;
 }
 
+std::string SamplePeriodProblem(double T, const std::string& name) {
+  if (T >= kMinPeriodS && T <= kMaxPeriodS) return "";
+  std::ostringstream os;
+  os.precision(6);
+  os << name << " = " << T << " s: a sample period must lie in [1e-06, 0.1] s (a rate of 10 Hz..1 MHz); " << name
+     << " is the period T in seconds";
+  const bool rate = T >= 10.0 && T <= 1e6, ms = T > 0.1 && T <= 100.0;
+  const std::string give = name.rfind("--", 0) == 0 ? "pass " + name + " " : "write ";
+  if (rate) os << ", not the rate: for " << T << " Hz " << give << 1.0 / T;
+  if (ms) os << (rate ? "; " : ": ") << "for " << T << " ms " << give << T * 1e-3;
+  return os.str();
+}
+
 ModelFile ParseModelJson(const std::string& text, const std::string& source) {
   CheckJsonDepth(text, source);
   json j;
@@ -291,7 +304,7 @@ ModelFile ParseModelJson(const std::string& text, const std::string& source) {
   }
   if (j.contains("sample_period_s")) {
     const double t = Number(j, "sample_period_s", source, "");
-    if (t <= 0.0) Fail(source, "key 'sample_period_s' must be > 0");
+    if (const std::string why = SamplePeriodProblem(t, "key 'sample_period_s'"); !why.empty()) Fail(source, why);
     mf.sample_period_s = t;
   }
   if (auto it = j.find("std"); it != j.end()) {

@@ -48,6 +48,14 @@ inline constexpr double kPlausibleMin = 1e-12;     // m, b, omega, c, v, d in
 inline constexpr double kPlausibleMax = 1e12;      //   [min, max] (SI, rad/s)
 inline constexpr int kMaxJsonDepth = 64;           // nesting of [ and { (anywhere, "fit" too)
 inline constexpr size_t kMaxJsonBytes = 64u << 20; // size of a model or scene file
+// A sample period, from a model's "sample_period_s" or a --period flag, lies
+// in [kMinPeriodS, kMaxPeriodS] s: the rates a log may have, 10 Hz..1 MHz.
+inline constexpr double kMinPeriodS = 1e-6, kMaxPeriodS = 0.1;
+
+// "" when T lies in that range, else the message naming `name` ("--period",
+// "key 'sample_period_s'") with the likely slip (a rate or milliseconds typed
+// for a period in s) and the value to give instead.
+std::string SamplePeriodProblem(double T, const std::string& name);
 
 // InputError when `text` nests arrays/objects deeper than max_depth: checked
 // by a scan of the brackets (outside strings) before nlohmann parses, whose

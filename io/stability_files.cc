@@ -54,6 +54,11 @@ nlohmann::json SummaryToJson(const stability::DelaySummary& s, const stability::
   for (const auto& b : s.reopened_bands) {
     bands.push_back({{"B_lo", b.B_lo}, {"B_hi", b.B_hi}, {"K_max", NumberOrNull(b.K_max)}});
   }
+  nlohmann::json jumps = nlohmann::json::array();
+  for (const auto& f : s.frequency_jumps) {
+    jumps.push_back({{"B", f.B}, {"K_before", NumberOrNull(f.K_before)}, {"K_after", NumberOrNull(f.K_after)},
+                     {"f_before_hz", NumberOrNull(f.f_before_hz)}, {"f_after_hz", NumberOrNull(f.f_after_hz)}});
+  }
   nlohmann::json j = {{"delay_samples", s.delay_samples},
           {"K_cr_at_zero_B", NumberOrNull(s.K_cr_at_zero_B)},
           {"f_at_zero_B_hz", NumberOrNull(s.f_at_zero_B_hz)},
@@ -64,7 +69,11 @@ nlohmann::json SummaryToJson(const stability::DelaySummary& s, const stability::
           {"f_after_hz", NumberOrNull(s.f_after_hz)},
           {"B_max", NumberOrNull(s.B_max)},
           {"B_max_from_zero", NumberOrNull(s.B_max_from_zero)},
-          {"reopened_bands", bands}};
+          {"reopened_bands", bands},
+          {"frequency_jumps", jumps},
+          {"stability_test", {{"method", s.polynomial_test ? "schur-cohn" : "eigenvalues"},
+                              {"polynomial_error", NumberOrNull(s.polynomial_error)},
+                              {"pole_shift", NumberOrNull(s.pole_shift)}}}};
   if (std) {
     j["std"] = {{"K_cr_at_zero_B", NumberOrNull(std->K_cr_at_zero_B)}, {"B_t", NumberOrNull(std->B_t)},
                 {"K_cr_max", NumberOrNull(std->K_cr_max)}, {"B_max", NumberOrNull(std->B_max)}};
@@ -72,10 +81,51 @@ nlohmann::json SummaryToJson(const stability::DelaySummary& s, const stability::
   return j;
 }
 
+namespace {
+
+// '{' outside strings: at least the number of objects a scene holds, plus one.
+size_t CountJsonObjects(const std::string& text) {
+  size_t n = 0;
+  bool in_string = false;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\') ++i;
+      else if (c == '"') in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '{') {
+      ++n;
+    }
+  }
+  return n;
+}
+
+}  // namespace
+
+std::string LoopDelaysProblem(const std::vector<int>& delays, const std::string& name) {
+  if (delays.empty()) return name + " is empty: give at least one delay [samples]";
+  if (delays.size() > kMaxLoopDelays) {
+    return name + ": " + std::to_string(delays.size()) + " delays, more than the " + std::to_string(kMaxLoopDelays) +
+           " one command takes: run it again for the others";
+  }
+  for (int d : delays) {
+    if (d < 0 || d > kMaxLoopDelaySamples) {
+      return name + " = " + std::to_string(d) + ": a loop delay must lie in [0, " +
+             std::to_string(kMaxLoopDelaySamples) + "] samples (a delay counts samples of the period, not ms or us)";
+    }
+  }
+  return "";
+}
+
 std::vector<SceneObject> ReadScene(const std::string& path) {
-  const std::string text = ReadSmallFile(path, "scene file");  // a regular file, bounded size
+  const std::string text = ReadSmallFile(path, "scene file", kMaxSceneBytes);  // a regular file, bounded size
   CheckNotJsonOfAnotherKind(text, path, "scene", "check");
   CheckJsonDepth(text, path);
+  if (CountJsonObjects(text) > kMaxSceneObjects + 1) {
+    throw InputError(path + ": more than " + std::to_string(kMaxSceneObjects) +
+                     " objects (the most `check` takes in one scene): split the scene into several files");
+  }
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(text);
@@ -164,6 +214,12 @@ double PassiveBMax(const stability::Passivity& pa, double b) {
     (pa.At(mid).passive_set_empty ? hi : lo) = mid;
   }
   return lo;
+}
+
+nlohmann::json MonteCarloJson(const stability::MonteCarloResult& mc, std::uint64_t seed) {
+  return {{"samples", mc.samples}, {"seed", seed},
+          {"std", SummaryToJson(stability::DelaySummary{}, &mc.std)["std"]},
+          {"mean", SummaryToJson(stability::DelaySummary{}, &mc.mean)["std"]}};
 }
 
 nlohmann::json PassivitySummaryJson(const stability::Passivity& pa, double b) {

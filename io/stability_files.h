@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "stability/haptic_loop.h"
+#include "stability/uncertainty.h"
 #include "stability/zwidth.h"
 
 namespace zwidth::io {
@@ -68,12 +69,32 @@ ObjectVerdict Classify(const SceneObject& o, const stability::CriticalPoint& cri
 ObjectVerdict CheckObject(const stability::ZWidth& z, const SceneObject& o);
 nlohmann::json NumberOrNull(double v);
 
+// The bounds of a scene (refused beyond them, before the JSON is parsed): at
+// most kMaxSceneObjects objects in at most kMaxSceneBytes. `check` costs one
+// Z-width evaluation per object and hand: 100000 objects took 10.9 s and 197
+// MB (measured on the shared 2-core build machine, under load); a
+// 1.2-million-object scene (64 MiB) took 21 s and 2.2 GB.
+inline constexpr size_t kMaxSceneObjects = 100000;
+// The loop delays a command takes: each in [0, kMaxLoopDelaySamples], at most
+// kMaxLoopDelays of them. A delay's Z-width costs time and memory in
+// proportion to it (its frequency grid has ~ grid_points_per_delay x d
+// points): `boundary --delays 1000` (1000 B values) took 100.6 s and 16 MB
+// on the shared 2-core build machine under load; `--delays 5000` ran past 20 s
+// before and would take ~5x that.
+inline constexpr int kMaxLoopDelaySamples = 1000;
+inline constexpr size_t kMaxLoopDelays = 64;
+// "" when `delays` keeps those bounds (and is not empty), else the message
+// naming `name` (a flag or an options field).
+std::string LoopDelaysProblem(const std::vector<int>& delays, const std::string& name);
+inline constexpr size_t kMaxSceneBytes = 16u << 20;
 std::vector<SceneObject> ReadScene(const std::string& path);
 
 // The largest B >= 0 with a passive K >= 0 (Colgate-Schenkel; bisection on
 // "the passive set is empty", which grows with B), for physical damping b.
 double PassiveBMax(const stability::Passivity& pa, double b);
 // The summary's "passivity" object: K_P_at_zero_B, B_P_max, physical_damping_b, meaning.
+// A summary's "monte_carlo" entry: {"samples", "seed", "std", "mean"} (boundary --monte-carlo).
+nlohmann::json MonteCarloJson(const stability::MonteCarloResult& mc, std::uint64_t seed);
 nlohmann::json PassivitySummaryJson(const stability::Passivity& pa, double b);
 
 }  // namespace zwidth::io

@@ -1,12 +1,12 @@
-// Runs f(0), ..., f(n - 1) on up to hardware_concurrency() threads (the
-// caller's among them). Each index runs at most once, in no particular order;
+// Runs f(0), ..., f(n - 1) on up to NumThreads() threads (the caller's among
+// them). Each index runs at most once, in no particular order;
 // once an index has thrown, the indices above it are not started. After every
 // thread has joined, the exception of the lowest index that threw is rethrown,
 // so the error a caller sees is the one a plain loop would have met first.
 // When a thread cannot be created the work goes on with those that were.
 // For independent work per delay or per start: results must be written to
 // slots indexed by i, never to shared containers, so that the output does not
-// depend on timing.
+// depend on timing. Each item starts with PollCancel() (model/cancel.h).
 #pragma once
 
 #include <algorithm>
@@ -17,7 +17,19 @@
 #include <thread>
 #include <vector>
 
+#include "model/cancel.h"
+
 namespace zwidth {
+
+// The cores this process may run on: its affinity mask (taskset, cpusets)
+// capped by a cgroup CPU quota (containers), at least 1.
+int AvailableCpus();
+// Threads of a ParallelFor: SetNumThreads(n > 0) if called (the Python
+// module's set_num_threads), else the environment's ZWIDTH_NUM_THREADS (a
+// whole number >= 1; anything else is an InputError), else AvailableCpus().
+// SetNumThreads(0) returns to the default; n < 0 is an InputError.
+void SetNumThreads(int n);
+int NumThreads();
 
 template <class F>
 void ParallelFor(size_t n, F&& f) {
@@ -28,6 +40,7 @@ void ParallelFor(size_t n, F&& f) {
     for (size_t i; (i = next.fetch_add(1)) < n;) {
       if (i > first_failed.load()) continue;  // a lower index already failed
       try {
+        PollCancel();
         f(i);
       } catch (...) {
         errors[i] = std::current_exception();
@@ -37,7 +50,7 @@ void ParallelFor(size_t n, F&& f) {
       }
     }
   };
-  const size_t threads = std::min<size_t>(n, std::max(1u, std::thread::hardware_concurrency()));
+  const size_t threads = std::min<size_t>(n, static_cast<size_t>(NumThreads()));
   std::vector<std::jthread> pool;
   for (size_t t = 1; t < threads; ++t) {
     try {

@@ -56,24 +56,34 @@ std::vector<double> BandLimitedNoise(size_t n, double fs, double bw, double rms,
   return out;
 }
 
-SimulatedLog SimulateLog(const Plant& plant_in, const SimulateOptions& o) {
+void ApplySensor(const SimulateOptions& o, std::vector<double>* position) {
+  std::mt19937_64 rng(o.seed ^ 0x9e3779b97f4a7c15ULL);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (double& y : *position) {
+    if (o.encoder_step_rad > 0.0) y = o.encoder_step_rad * std::round(y / o.encoder_step_rad);
+    if (o.noise_std_rad > 0.0) y += o.noise_std_rad * normal(rng);
+  }
+}
+
+SimulatedLog SimulatedTorque(const Plant& plant_in, const SimulateOptions& o, Plant* plant) {
   std::string why;
   if (!o.IsValid(&why)) throw InputError(why);
   plant_in.Validate();
-  Plant plant = plant_in;
-  plant.delay_samples += o.delay_samples;
+  *plant = plant_in;
+  plant->delay_samples += o.delay_samples;
   const size_t n = static_cast<size_t>(std::llround(o.seconds * o.sample_rate_hz));
   SimulatedLog log;
   log.sample_rate_hz = o.sample_rate_hz;
   log.torque = BandLimitedNoise(n, o.sample_rate_hz, o.bandwidth_hz, o.torque_rms, o.seed);
+  return log;
+}
+
+SimulatedLog SimulateLog(const Plant& plant_in, const SimulateOptions& o) {
+  Plant plant;
+  SimulatedLog log = SimulatedTorque(plant_in, o, &plant);
   const StateSpace d = DiscretizeZoh(plant, 1.0 / o.sample_rate_hz);
   log.position = SimulateDiscrete(d, log.torque);
-  std::mt19937_64 rng(o.seed ^ 0x9e3779b97f4a7c15ULL);
-  std::normal_distribution<double> normal(0.0, 1.0);
-  for (double& y : log.position) {
-    if (o.encoder_step_rad > 0.0) y = o.encoder_step_rad * std::round(y / o.encoder_step_rad);
-    if (o.noise_std_rad > 0.0) y += o.noise_std_rad * normal(rng);
-  }
+  ApplySensor(o, &log.position);
   return log;
 }
 

@@ -30,8 +30,17 @@ struct SimulatedLog {
   std::vector<double> position;  // rad
 };
 
+// The start of every simulated log: options and plant validated (InputError),
+// the torque of `options` made, the plant's delay raised by options.delay_samples.
+// The caller fills `position`.
+SimulatedLog SimulatedTorque(const Plant& plant, const SimulateOptions& options, Plant* delayed_plant);
+
 // Throws InputError for invalid options or model.
 SimulatedLog SimulateLog(const Plant& plant, const SimulateOptions& options);
+
+// The encoder step, then the sensor noise of `options`, applied to positions in
+// place (the noise seeded from options.seed as SimulateLog does).
+void ApplySensor(const SimulateOptions& options, std::vector<double>* position);
 
 // Band-limited white noise: Gaussian white noise filtered by a linear-phase
 // windowed-sinc low-pass (Blackman, 8 cut-off periods each side), scaled to the

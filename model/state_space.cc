@@ -87,12 +87,11 @@ StateSpace ContinuousStateSpace(const Plant& plant) {
   return ss;
 }
 
-StateSpace DiscretizeZoh(const Plant& plant, double period_s) {
+StateSpace DiscretizeZoh(const StateSpace& c, double period_s) {
   if (!std::isfinite(period_s) || period_s <= 0.0) {
     throw InputError("sample period = " + std::to_string(period_s) +
                      " s: must be finite and > 0");
   }
-  const StateSpace c = ContinuousStateSpace(plant);
   const int n = static_cast<int>(c.A.rows());
   Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n + 1, n + 1);
   M.topLeftCorner(n, n) = c.A * period_s;
@@ -109,6 +108,11 @@ StateSpace DiscretizeZoh(const Plant& plant, double period_s) {
   d.C = c.C;
   d.D = c.D;
   d.period_s = period_s;
+  return d;
+}
+
+StateSpace DiscretizeZoh(const Plant& plant, double period_s) {
+  StateSpace d = DiscretizeZoh(ContinuousStateSpace(plant), period_s);
   d.delay_samples = plant.delay_samples;
   return d;
 }

@@ -40,6 +40,10 @@ StateSpace ContinuousStateSpace(const Plant& plant);
 // (Van Loan). The plant's delay_samples is carried along. Throws InputError for
 // a period that is not finite and positive.
 StateSpace DiscretizeZoh(const Plant& plant, double period_s);
+// The same for any continuous state space (delay_samples 0): e.g. the plant
+// with the hand (stability/haptic_loop.h) or the stuck plant of
+// model/nonlinear_simulate.h.
+StateSpace DiscretizeZoh(const StateSpace& continuous, double period_s);
 
 // The same system with the input delay realised as extra states (a shift
 // register), so that A alone describes the whole sampled plant.

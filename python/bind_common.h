@@ -6,9 +6,13 @@
 // new function of fit/ or stability/ is a few lines in one file.
 #pragma once
 
+#include <charconv>
 #include <chrono>
+#include <clocale>
 #include <cmath>
 #include <complex>
+#include <cstring>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -18,6 +22,8 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+
+#include <locale.h>
 
 #include "io/model_json.h"
 
@@ -65,6 +71,75 @@ void TimedCpp(F&& f) {
 }
 
 py::object JsonToPython(const nlohmann::json& j);
+
+// v in %g (six significant digits) whatever the locale: how reprs show numbers
+// (std::to_string's %f shows 1e-7 as 0.000000).
+inline std::string G(double v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, 6);
+  return std::string(buf, r.ptr);
+}
+
+// The samples of a 1-D array of numbers (ints or floats; complex with `complex`),
+// every one finite: the argument `name`'s rule, with a message saying what to
+// pass. A non-numeric dtype is a TypeError (as NumPy's own), a wrong shape or a
+// NaN/inf sample an InputError.
+py::array CheckedArray(const py::handle& a, const char* name, bool complex = false);
+std::vector<double> Samples(const py::handle& a, const char* name);
+std::vector<std::complex<double>> ComplexSamples(const py::handle& a, const char* name);
+// A finite number (a float, int or NumPy scalar; not a bool or a string).
+double Number(const py::handle& v, const char* name);
+// An integer (int or NumPy integer; not a bool or a float) as Python's own
+// `range(2.5)` refuses a float: TypeError.
+int Integer(const py::handle& v, const char* name);
+
+// A vector's bytes and back: the pickled state of the arrays (exact, NaN kept).
+template <typename T>
+py::bytes Bytes(const std::vector<T>& v) {
+  return py::bytes(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+}
+template <typename T>
+std::vector<T> FromBytes(const py::handle& b) {
+  const std::string s = b.cast<std::string>();
+  std::vector<T> v(s.size() / sizeof(T));
+  std::memcpy(v.data(), s.data(), v.size() * sizeof(T));
+  return v;
+}
+
+// Two states equal: tuples and lists element by element, floats equal or both NaN.
+bool SameState(const py::handle& a, const py::handle& b);
+
+// Value semantics from one state: pickling (and so copy.copy, copy.deepcopy and
+// multiprocessing) and ==, which compares the states (NaN equal to NaN).
+template <class T, class Get, class Set, class... Options>
+void DefValue(py::class_<T, Options...>& cls, Get get, Set set) {
+  cls.def(py::pickle(get, set));
+  cls.def("__eq__", [get](const T& a, const py::object& b) -> py::object {
+    if (!py::isinstance<T>(b)) return py::reinterpret_borrow<py::object>(Py_NotImplemented);
+    return py::bool_(SameState(get(a), get(b.template cast<const T&>())));
+  });
+  cls.attr("__hash__") = py::none();  // mutable or array-valued: unhashable, as NumPy arrays
+}
+
+// The C locale for this thread while it lives: text the library writes or
+// reads (printf's %g, strtod) is the same under a German locale that Python's
+// locale.setlocale chose, and other threads keep theirs (uselocale).
+class ScopedCLocale {
+ public:
+  ScopedCLocale() : c_(newlocale(LC_ALL_MASK, "C", nullptr)), old_(c_ ? uselocale(c_) : nullptr) {}
+  ~ScopedCLocale() {
+    if (c_) {
+      uselocale(old_);
+      freelocale(c_);
+    }
+  }
+  ScopedCLocale(const ScopedCLocale&) = delete;
+  ScopedCLocale& operator=(const ScopedCLocale&) = delete;
+
+ private:
+  locale_t c_;
+  locale_t old_;
+};
 
 // A row-major n x n covariance (log space) as an (n, n) array, None when empty.
 inline py::object SquareArray(const std::vector<double>& v) {

@@ -1,7 +1,10 @@
 // zwidth.fit and zwidth.FitResult (fit/fit.h).
 //
+#include <algorithm>
+
 #include "fit/fit.h"
 #include "io/fit_file.h"
+#include "io/option_names.h"
 #include "model/error.h"
 #include "python/bind_common.h"
 #include "stability/uncertainty.h"
@@ -14,29 +17,20 @@ struct PyFitResult {
   io::ModelFile model;  // the fitted plant with its std and sample period
 };
 
-// The library's messages name option fields (FitOptions::allow_few_averages);
-// here they name the keywords. Other fields are left as they are (the CLI's
-// table of fields and flags is apps/common.cc).
-std::string Keywords(std::string s) {
-  for (auto [from, to] : {std::pair{"FitOptions::allow_few_averages", "allow_short=True"},
-                          std::pair{"WelchOptions::window_length ", "window_length="},
-                          std::pair{"FitOptions::auto_modes", "modes='auto'"},
-                          std::pair{"FitOptions::auto_delay", "delay_samples='auto'"},
-                          std::pair{"FitOptions::num_modes", "modes"}}) {
-    for (size_t p = s.find(from); p != std::string::npos; p = s.find(from, p)) s.replace(p, std::string(from).size(), to);
-  }
-  return s;
-}
-
 PyFitResult RunFit(const ident::FrequencyResponse& frf, const fit::FitOptions& o, const std::string& name) {
   PyFitResult out;
-  try {
+  {
     py::gil_scoped_release release;
     TimedCpp([&] { out.result = fit::FitModel(frf, o); });
-  } catch (const InputError& e) {
-    throw InputError(Keywords(e.what()));
+  }  // the library's messages get the keywords in the module's InputError translator
+  fit::FitResult& r = out.result;
+  for (std::string& w : r.warnings) w = io::WithKeywords(w);
+  for (fit::QualityReason& q : r.reasons) {
+    q.message = io::WithKeywords(q.message);
+    q.advice = io::WithKeywords(q.advice);
   }
-  const fit::FitResult& r = out.result;
+  r.order_choice = io::WithKeywords(r.order_choice);
+  r.delay_choice = io::WithKeywords(r.delay_choice);
   // The model as `zwidth fit` stores it (io::FittedModelFile), named by the caller.
   out.model = io::FittedModelFile(r, frf, o, name);
   out.model.plant.name = name;
@@ -56,8 +50,7 @@ fit::FitOptions OptionsFrom(const py::object& modes, int max_modes, const py::ob
     if (s != "auto") throw InputError("modes '" + s + "': expected 'auto' or an integer >= 0");
     o.auto_modes = true;
   } else {
-    if (py::isinstance<py::bool_>(modes)) throw InputError("modes: expected 'auto' or an integer >= 0");
-    o.num_modes = modes.cast<int>();
+    o.num_modes = Integer(modes, "modes");
   }
   o.max_modes = max_modes;
   if (py::isinstance<py::str>(delay_samples)) {
@@ -65,7 +58,7 @@ fit::FitOptions OptionsFrom(const py::object& modes, int max_modes, const py::ob
     if (s != "auto") throw InputError("delay_samples '" + s + "': expected 'auto' or an integer >= 0");
     o.auto_delay = true;
   } else {
-    o.delay_samples = delay_samples.cast<int>();
+    o.delay_samples = Integer(delay_samples, "delay_samples");
   }
   o.max_auto_delay = max_auto_delay;
   o.allow_few_averages = allow_short;
@@ -83,13 +76,122 @@ fit::FitOptions OptionsFrom(const py::object& modes, int max_modes, const py::ob
   o.relative_std_floor = relative_std_floor;
   o.function_tolerance = function_tolerance;
   std::string why;
-  if (!o.IsValid(&why)) throw InputError(why);
+  if (!o.IsValid(&why)) throw InputError(io::WithKeywords(why));
   return o;
+}
+
+// A plant (a fit's, or its std with +inf where unknown) as a picklable tuple and back.
+py::tuple PlantState(const model::Plant& p) {
+  std::vector<double> modes;
+  for (const model::Mode& md : p.modes) modes.insert(modes.end(), {md.omega, md.c, md.v, md.d});
+  return py::make_tuple(p.m, p.b, p.delay_samples, p.name, Bytes(modes));
+}
+model::Plant PlantFrom(const py::handle& h) {
+  const py::tuple t = py::reinterpret_borrow<py::tuple>(h);
+  model::Plant p;
+  p.m = t[0].cast<double>();
+  p.b = t[1].cast<double>();
+  p.delay_samples = t[2].cast<int>();
+  p.name = t[3].cast<std::string>();
+  const std::vector<double> v = FromBytes<double>(t[4]);
+  for (size_t i = 0; i + 3 < v.size(); i += 4) p.modes.push_back({v[i], v[i + 1], v[i + 2], v[i + 3]});
+  return p;
+}
+
+// Everything a FitResult shows, as one tuple (pickling, copy and ==).
+py::tuple FitState(const PyFitResult& p) {
+  const fit::FitResult& r = p.result;
+  py::list reasons;
+  for (const auto& q : r.reasons) reasons.append(py::make_tuple(q.code, q.message, q.advice));
+  const ident::ExcitedBand& b = r.band;
+  return py::make_tuple(
+      io::ModelToJson(p.model).dump(), static_cast<int>(r.status), r.message, PlantState(r.plant),
+      PlantState(r.std_errors), r.covariance_ok, Bytes(r.log_covariance),
+      py::make_tuple(r.cost, r.num_residuals, r.num_parameters, r.chi2_per_dof, r.nrmse_fit_percent,
+                     r.worst_misfit_hz, r.std_scale, r.starts_tried, r.iterations, r.runs_z, r.band_sample_rate_hz),
+      r.warnings,
+      py::make_tuple(Bytes(b.used), b.num_used, b.num_outside, b.num_low_input, b.num_low_coherence,
+                     b.input_power_known, b.f_lo_hz, b.f_hi_hz, b.reference_input_psd),
+      static_cast<int>(r.quality), reasons, Bytes(r.misfit_band_hz), r.order_choice, r.delay_choice);
+}
+
+PyFitResult FitFrom(const py::tuple& t) {
+  PyFitResult p;
+  p.model = io::ParseModelJson(t[0].cast<std::string>(), "<pickle>");
+  fit::FitResult& r = p.result;
+  r.status = static_cast<fit::FitStatus>(t[1].cast<int>());
+  r.message = t[2].cast<std::string>();
+  r.plant = PlantFrom(t[3]);
+  r.std_errors = PlantFrom(t[4]);
+  r.covariance_ok = t[5].cast<bool>();
+  r.log_covariance = FromBytes<double>(t[6]);
+  const py::tuple n = t[7];
+  r.cost = n[0].cast<double>();
+  r.num_residuals = n[1].cast<int>();
+  r.num_parameters = n[2].cast<int>();
+  r.chi2_per_dof = n[3].cast<double>();
+  r.nrmse_fit_percent = n[4].cast<double>();
+  r.worst_misfit_hz = n[5].cast<double>();
+  r.std_scale = n[6].cast<double>();
+  r.starts_tried = n[7].cast<int>();
+  r.iterations = n[8].cast<int>();
+  r.runs_z = n[9].cast<double>();
+  r.band_sample_rate_hz = n[10].cast<double>();
+  r.warnings = t[8].cast<std::vector<std::string>>();
+  const py::tuple b = t[9];
+  r.band.used = FromBytes<char>(b[0]);
+  r.band.num_used = b[1].cast<int>();
+  r.band.num_outside = b[2].cast<int>();
+  r.band.num_low_input = b[3].cast<int>();
+  r.band.num_low_coherence = b[4].cast<int>();
+  r.band.input_power_known = b[5].cast<bool>();
+  r.band.f_lo_hz = b[6].cast<double>();
+  r.band.f_hi_hz = b[7].cast<double>();
+  r.band.reference_input_psd = b[8].cast<double>();
+  r.quality = static_cast<fit::FitQuality>(t[10].cast<int>());
+  for (const py::handle& q : t[11]) {
+    const py::tuple qt = py::reinterpret_borrow<py::tuple>(q);
+    r.reasons.push_back({qt[0].cast<std::string>(), qt[1].cast<std::string>(), qt[2].cast<std::string>()});
+  }
+  r.misfit_band_hz = FromBytes<double>(t[12]);
+  r.order_choice = t[13].cast<std::string>();
+  r.delay_choice = t[14].cast<std::string>();
+  return p;
+}
+
+// "<zwidth.FitResult poor (chi2_per_dof, residual_runs): modes=2 delay_samples=1 chi2/dof=3.1 ...>"
+std::string FitRepr(const PyFitResult& p) {
+  const fit::FitResult& r = p.result;
+  std::string s = "<zwidth.FitResult " + fit::ToString(r.quality);
+  if (!r.reasons.empty()) {
+    s += " (";
+    for (size_t i = 0; i < r.reasons.size(); ++i) s += (i ? ", " : "") + r.reasons[i].code;
+    s += ")";
+  }
+  s += ": " + fit::ToString(r.status) + ", modes=" + std::to_string(r.plant.modes.size()) +
+       " delay_samples=" + std::to_string(p.model.plant.delay_samples) + " chi2/dof=" + G(r.chi2_per_dof) +
+       " fit=" + G(r.nrmse_fit_percent) + "% m=" + G(r.plant.m) + " b=" + G(r.plant.b);
+  if (r.band.num_used > 0) {
+    s += ", " + std::to_string(r.band.num_used) + " bins used " + G(r.band.f_lo_hz) + "-" + G(r.band.f_hi_hz) + " Hz";
+  }
+  return s + ">";
 }
 
 // zwidth.FitResult: the outcome of a fit, read-only.
 void BindFitResult(py::module_& m) {
-  py::class_<PyFitResult>(m, "FitResult", "The outcome of zwidth.fit.")
+  py::class_<PyFitResult> cls(m, "FitResult", "The outcome of zwidth.fit.");
+  DefValue(cls, &FitState, &FitFrom);
+  cls.def("__repr__", &FitRepr)
+      .def_property_readonly("used", [](const PyFitResult& r) {
+             py::array_t<bool> a(static_cast<py::ssize_t>(r.result.band.used.size()));
+             std::transform(r.result.band.used.begin(), r.result.band.used.end(), a.mutable_data(),
+                            [](char c) { return c != 0; });
+             return a;
+           },
+           "bool mask, one per bin of the response fitted: True where the fit used the bin (input power and "
+           "coherence enough, inside [fmin, fmax]); plot frf.f_hz[res.used]")
+      .def_property_readonly("band", [](const PyFitResult& r) { return r.result.band.Describe(); },
+                             "the band used and the bins left out, in words (as `zwidth fit` prints it)")
       .def_readonly("model", &PyFitResult::model, "the fitted Model (with std and sample_period_s)")
       .def_property_readonly("status", [](const PyFitResult& r) { return fit::ToString(r.result.status); },
                              "'converged' (the numbers can be used) or the reason they cannot")
@@ -129,8 +231,8 @@ void BindFitResult(py::module_& m) {
                              "modes='auto': one dict per order tried (modes, chi2_per_dof, bic, pole_hz, ...)")
       .def_property_readonly("delay_choice", [](const PyFitResult& r) { return r.result.delay_choice; })
       .def("brief_report", [](const PyFitResult& r) { return r.result.BriefReport(); },
-           "One line, as `zwidth fit` prints it.")
-      .def("__repr__", [](const PyFitResult& r) { return "<zwidth.FitResult " + r.result.BriefReport() + ">"; });
+           "One line, as `zwidth fit` prints it (the verdict is quality; repr() shows both).")
+;
 }
 
 // zwidth.fit: FitOptions from keywords (OptionsFrom), then RunFit.

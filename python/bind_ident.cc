@@ -71,8 +71,14 @@ band [fmin, fmax] Hz kept (default fmax inf: up to Nyquist, as the CLI).)doc";
 // A LogSelect from read_log's and estimate's selector keywords.
 io::LogSelect SelectFrom(const std::string& input_column, const std::string& output_column,
                          const std::string& time_column, const std::string& input_dataset,
-                         const std::string& output_dataset, const std::string& time_dataset, double rate) {
+                         const std::string& output_dataset, const std::string& time_dataset, double rate,
+                         double input_scale, double output_scale, const std::string& time_unit,
+                         const std::string& delimiter) {
   io::LogSelect s;
+  s.input_scale = input_scale;
+  s.output_scale = output_scale;
+  s.time_unit = time_unit;
+  s.delimiter = delimiter;
   s.input_column = input_column;
   s.output_column = output_column;
   s.time_column = time_column;
@@ -87,7 +93,9 @@ io::LogSelect SelectFrom(const std::string& input_column, const std::string& out
 auto SelectorArgs() {
   return std::make_tuple(py::arg("input_column") = "torque", py::arg("output_column") = "position",
                          py::arg("time_column") = "t", py::arg("input_dataset") = "/input/torque",
-                         py::arg("output_dataset") = "/output/position", py::arg("time_dataset") = "/time");
+                         py::arg("output_dataset") = "/output/position", py::arg("time_dataset") = "/time",
+                         py::arg("rate") = 0.0, py::arg("input_scale") = 1.0, py::arg("output_scale") = 1.0,
+                         py::arg("time_unit") = "", py::arg("delimiter") = "");
 }
 
 // The keywords of the Welch options (WelchFrom) with WelchOptions' defaults.
@@ -105,21 +113,37 @@ void DefWith(py::module_& m, const char* name, F&& f, Args&& args, Extra&&... ex
              std::forward<Args>(args));
 }
 
+// The checks of a log made in memory: what the CLI's readers refuse in a file.
+void CheckLog(const PyLog& l) {
+  if (l.u.size() != l.y.size()) {
+    throw InputError("u has " + std::to_string(l.u.size()) + " samples and y " + std::to_string(l.y.size()) +
+                     ": pass arrays of the same length");
+  }
+  if (l.u.empty()) throw InputError("u and y are empty: a log needs samples");
+  if (!(l.sample_rate_hz > 0.0 && std::isfinite(l.sample_rate_hz))) {
+    throw InputError("sample_rate_hz = " + G(l.sample_rate_hz) + ": must be finite and > 0 [Hz]");
+  }
+}
+
+std::string LogRepr(const PyLog& l) {
+  return "<zwidth.Log " + std::to_string(l.u.size()) + " samples at " + G(l.sample_rate_hz) + " Hz (" +
+         G(static_cast<double>(l.u.size()) / l.sample_rate_hz) + " s)" +
+         (l.source.empty() ? "" : " from " + py::repr(py::str(l.source)).cast<std::string>()) + ">";
+}
+
 // zwidth.Log: a log in memory.
 void BindLog(py::module_& m) {
-  py::class_<PyLog>(m, "Log", "A device log: torque input u [N m], position output y [rad], uniformly sampled.")
-      .def(py::init([](const DoubleArray& u, const DoubleArray& y, double sample_rate_hz) {
+  py::class_<PyLog> cls(m, "Log", "A device log: torque input u [N m], position output y [rad], uniformly sampled.");
+  cls.def(py::init([](const py::object& u, const py::object& y, const py::object& sample_rate_hz) {
              PyLog l;
-             l.u = ToVector(u);
-             l.y = ToVector(y);
-             l.sample_rate_hz = sample_rate_hz;
-             if (l.u.size() != l.y.size()) throw InputError("u and y must have the same length");
-             if (!(sample_rate_hz > 0.0 && std::isfinite(sample_rate_hz))) {
-               throw InputError("sample_rate_hz must be finite and > 0");
-             }
+             l.u = Samples(u, "u");
+             l.y = Samples(y, "y");
+             l.sample_rate_hz = Number(sample_rate_hz, "sample_rate_hz");
+             CheckLog(l);
              return l;
            }),
-           py::arg("u"), py::arg("y"), py::arg("sample_rate_hz"))
+           py::arg("u"), py::arg("y"), py::arg("sample_rate_hz"),
+           "u [N m] and y [rad]: 1-D arrays of finite numbers of the same length; sample_rate_hz [Hz] > 0.")
       .def_readonly("source", &PyLog::source, "the file it was read from ('' when made in memory)")
       .def_readonly("sample_rate_hz", &PyLog::sample_rate_hz, "[Hz]")
       .def_property_readonly("num_samples", [](const PyLog& l) { return l.u.size(); })
@@ -130,12 +154,26 @@ void BindLog(py::module_& m) {
       }, "sample times k / sample_rate_hz [s] (the readers check that the file's are uniform)")
       .def_property_readonly("u", [](const PyLog& l) { return ToArray(l.u); }, "input (torque) [N m]")
       .def_property_readonly("y", [](const PyLog& l) { return ToArray(l.y); }, "output (position) [rad]")
-      .def("save", [](const PyLog& l, const std::string& path) { io::ForgetNotedInputs(); io::WriteLog(path, l.sample_rate_hz, l.u, l.y); },
-           py::arg("path"), "Writes the log as CSV (t,torque,position) or HDF5 by the extension (atomically).")
-      .def("__repr__", [](const PyLog& l) {
-        return "<zwidth.Log " + std::to_string(l.u.size()) + " samples at " + std::to_string(l.sample_rate_hz) +
-               " Hz>";
-      });
+      .def("save", [](const PyLog& l, const std::string& path) {
+             CheckLog(l);
+             ScopedCLocale c;
+             io::ForgetNotedInputs();
+             io::WriteLog(path, l.sample_rate_hz, l.u, l.y);
+           },
+           py::arg("path"),
+           "Writes the log as CSV (t,torque,position; '.' decimals whatever the locale) or HDF5 by the "
+           "extension (atomically).")
+      .def("__len__", [](const PyLog& l) { return l.u.size(); })
+      .def("__repr__", &LogRepr);
+  DefValue(cls, [](const PyLog& l) { return py::make_tuple(l.source, l.sample_rate_hz, Bytes(l.u), Bytes(l.y)); },
+           [](const py::tuple& t) {
+             PyLog l;
+             l.source = t[0].cast<std::string>();
+             l.sample_rate_hz = t[1].cast<double>();
+             l.u = FromBytes<double>(t[2]);
+             l.y = FromBytes<double>(t[3]);
+             return l;
+           });
 }
 
 // zwidth.read_log: a log file read with the CLI's selectors.
@@ -143,13 +181,15 @@ void BindReadLog(py::module_& m) {
   DefWith(m, "read_log",
         [](const std::string& path, const std::string& input_column, const std::string& output_column,
            const std::string& time_column, const std::string& input_dataset, const std::string& output_dataset,
-           const std::string& time_dataset, double rate, double max_interval_deviation) {
+           const std::string& time_dataset, double rate, double input_scale, double output_scale,
+           const std::string& time_unit, const std::string& delimiter, double max_interval_deviation) {
           io::LogSelect s = SelectFrom(input_column, output_column, time_column, input_dataset, output_dataset,
-                                       time_dataset, rate);
+                                       time_dataset, rate, input_scale, output_scale, time_unit, delimiter);
           s.max_interval_deviation = max_interval_deviation;
           PyLog l;
           {
             py::gil_scoped_release release;
+            ScopedCLocale c;
             io::Log log = io::ReadLog(path, s);
             l.source = log.info.source;
             l.sample_rate_hz = log.info.sample_rate_hz;
@@ -159,67 +199,66 @@ void BindReadLog(py::module_& m) {
           return l;
         },
         std::tuple_cat(std::make_tuple(py::arg("path")), SelectorArgs(),
-                       std::make_tuple(py::arg("rate") = 0.0, py::arg("max_interval_deviation") = 0.01)),
-        R"doc(Reads a log (CSV or HDF5, by extension or signature) as `zwidth estimate`
-does, with the CLI's selectors: CSV columns input_column, output_column,
-time_column; HDF5 datasets input_dataset, output_dataset, time_dataset; rate
-[Hz] > 0 overrides the file's (needed for a CSV without a time column).
-Raises InputError naming the file, row or dataset.)doc");
+                       std::make_tuple(py::arg("max_interval_deviation") = 0.01)),
+        R"doc(Reads a log (text, HDF5 or .mat, by content) as `zwidth estimate` does,
+with the CLI's selectors: text columns input_column, output_column,
+time_column (a header name or a 1-based position as a string; time_column
+"none" with rate); HDF5 datasets input_dataset, output_dataset, time_dataset;
+rate [Hz] > 0 overrides the file's (--rate); input_scale, output_scale
+multiply the signals (counts to rad, volts to N m: --input-scale,
+--output-scale); time_unit "s" | "ms" | "us" ("" = s, a unit in the column's
+name refused: --time-unit); delimiter "" (detected), ";", "\t", "," or " "
+(--delimiter). Raises InputError naming the file, row or dataset.)doc");
 }
 
 // zwidth.FrequencyResponse: made, loaded, saved, read.
 void BindFrequencyResponse(py::module_& m) {
-  py::class_<ident::FrequencyResponse>(m, "FrequencyResponse",
+  py::class_<ident::FrequencyResponse> cls(m, "FrequencyResponse",
                                        "An empirical frequency response (output/input) with its coherence and "
-                                       "per-bin standard deviation, as `zwidth estimate` writes it.")
-      .def(py::init([](const DoubleArray& f_hz, const py::array_t<std::complex<double>, py::array::c_style |
-                                                                                       py::array::forcecast>& H,
-                       double sample_rate_hz, std::optional<DoubleArray> coherence,
-                       std::optional<DoubleArray> H_std, int num_averages) {
+                                       "per-bin standard deviation, as `zwidth estimate` writes it.");
+  cls.def(py::init([](const py::object& f_hz, const py::object& H, const py::object& sample_rate_hz,
+                       const py::object& coherence, const py::object& H_std, const py::object& num_averages) {
              ident::FrequencyResponse r;
-             r.f_hz = ToVector(f_hz);
-             r.H.assign(H.data(), H.data() + H.size());
-             r.sample_rate_hz = sample_rate_hz;
-             r.num_averages = num_averages;
-             r.effective_averages = num_averages;
+             r.f_hz = Samples(f_hz, "f_hz");
+             r.H = ComplexSamples(H, "H");
+             r.sample_rate_hz = Number(sample_rate_hz, "sample_rate_hz");
+             r.num_averages = Integer(num_averages, "num_averages");
+             r.effective_averages = r.num_averages;
              const size_t n = r.f_hz.size();
-             if (r.H.size() != n) throw InputError("H must have as many values as f_hz");
-             if (!(sample_rate_hz > 0.0 && std::isfinite(sample_rate_hz))) {
-               throw InputError("sample_rate_hz must be finite and > 0");
-             }
              // The defaults of a response file without these columns (io/frf_file.h).
-             r.coherence = coherence ? ToVector(*coherence) : std::vector<double>(n, 1.0);
-             if (H_std) {
-               r.H_std = ToVector(*H_std);
+             r.coherence = coherence.is_none() ? std::vector<double>(n, 1.0) : Samples(coherence, "coherence");
+             if (!H_std.is_none()) {
+               r.H_std = Samples(H_std, "H_std");
              } else {
                for (const auto& h : r.H) r.H_std.push_back(std::abs(h) * 1e-3);
              }
-             if (r.coherence.size() != n || r.H_std.size() != n) {
-               throw InputError("coherence and H_std must have as many values as f_hz");
-             }
-             for (size_t k = 0; k < n; ++k) {
-               r.S_uu.push_back(std::nan(""));
-               r.S_yy.push_back(std::nan(""));
-               r.S_uy.push_back({std::nan(""), std::nan("")});
-             }
+             io::CheckResponseValues(r, "FrequencyResponse");
+             // No spectra: zeros, as the reader gives a file without them (input power unknown).
+             r.S_uu.assign(n, 0.0);
+             r.S_yy.assign(n, 0.0);
+             r.S_uy.assign(n, 0.0);
              return r;
            }),
            py::arg("f_hz"), py::arg("H"), py::arg("sample_rate_hz"), py::arg("coherence") = py::none(),
            py::arg("H_std") = py::none(), py::arg("num_averages") = 1,
-           "A response measured elsewhere: missing coherence is 1 and H_std |H| 1e-3 (equal relative weights), "
+           "A response measured elsewhere: f_hz [Hz] increasing, below Nyquist (sample_rate_hz / 2); "
+           "complex H; missing coherence is 1 and H_std |H| 1e-3 (equal relative weights), "
            "as for a response file without those columns.")
       .def_static("load", [](const std::string& path, double sample_rate_hz) {
                     py::gil_scoped_release release;
+                    ScopedCLocale c;
                     return io::ReadFrequencyResponse(path, sample_rate_hz);
                   },
                   py::arg("path"), py::arg("sample_rate_hz") = 0.0,
                   "Reads a response file of `zwidth estimate` (CSV or HDF5).")
       .def("save", [](const ident::FrequencyResponse& r, const std::string& path) {
+             io::CheckResponseValues(r, "FrequencyResponse");  // never a file the reader refuses
+             ScopedCLocale c;
              io::ForgetNotedInputs();  // each call is its own command
              io::WriteFrequencyResponse(path, r);
            },
-           py::arg("path"), "Writes it as `zwidth estimate -o` does (CSV or HDF5 by extension).")
-      .def_readonly("sample_rate_hz", &ident::FrequencyResponse::sample_rate_hz, "[Hz]")
+           py::arg("path"), "Writes it as `zwidth estimate -o` does (CSV or HDF5 by extension).");
+  cls.def_readonly("sample_rate_hz", &ident::FrequencyResponse::sample_rate_hz, "[Hz]")
       .def_readonly("window_length", &ident::FrequencyResponse::window_length, "samples per segment")
       .def_readonly("num_averages", &ident::FrequencyResponse::num_averages, "Welch segments averaged")
       .def_readonly("effective_averages", &ident::FrequencyResponse::effective_averages,
@@ -237,9 +276,35 @@ void BindFrequencyResponse(py::module_& m) {
       .def_property_readonly("S_uy", [](const ident::FrequencyResponse& r) { return ToArray(r.S_uy); })
       .def("__len__", [](const ident::FrequencyResponse& r) { return r.f_hz.size(); })
       .def("__repr__", [](const ident::FrequencyResponse& r) {
-        return "<zwidth.FrequencyResponse " + std::to_string(r.f_hz.size()) + " bins, " +
-               std::to_string(r.num_averages) + " averages>";
+        std::string s = "<zwidth.FrequencyResponse " + std::to_string(r.f_hz.size()) + " bins";
+        if (!r.f_hz.empty()) s += " " + G(r.f_hz.front()) + "-" + G(r.f_hz.back()) + " Hz";
+        s += ", " + std::to_string(r.num_averages) + " averages";
+        if (r.num_averages < 3) s += " (fewer than 3: fit() refuses it without allow_short=True)";
+        return s + ", sample_rate_hz=" + G(r.sample_rate_hz) + ">";
       });
+  DefValue(cls,
+           [](const ident::FrequencyResponse& r) {
+             return py::make_tuple(r.sample_rate_hz, r.window_length, r.num_averages, r.effective_averages,
+                                   r.bin_correlation, Bytes(r.f_hz), Bytes(r.H), Bytes(r.coherence), Bytes(r.H_std),
+                                   Bytes(r.S_uu), Bytes(r.S_yy), Bytes(r.S_uy), Bytes(r.used_by_fit));
+           },
+           [](const py::tuple& t) {
+             ident::FrequencyResponse r;
+             r.sample_rate_hz = t[0].cast<double>();
+             r.window_length = t[1].cast<int>();
+             r.num_averages = t[2].cast<int>();
+             r.effective_averages = t[3].cast<double>();
+             r.bin_correlation = t[4].cast<double>();
+             r.f_hz = FromBytes<double>(t[5]);
+             r.H = FromBytes<std::complex<double>>(t[6]);
+             r.coherence = FromBytes<double>(t[7]);
+             r.H_std = FromBytes<double>(t[8]);
+             r.S_uu = FromBytes<double>(t[9]);
+             r.S_yy = FromBytes<double>(t[10]);
+             r.S_uy = FromBytes<std::complex<double>>(t[11]);
+             r.used_by_fit = FromBytes<char>(t[12]);
+             return r;
+           });
 }
 
 // zwidth.estimate from a file (streamed), from arrays, from a Log.
@@ -249,11 +314,13 @@ void BindEstimate(py::module_& m) {
            const std::string& detrend, const std::string& estimator, double fmin, double fmax,
            const std::string& input_column, const std::string& output_column, const std::string& time_column,
            const std::string& input_dataset, const std::string& output_dataset, const std::string& time_dataset,
-           double rate) {
+           double rate, double input_scale, double output_scale, const std::string& time_unit,
+           const std::string& delimiter) {
           const ident::WelchOptions o = WelchFrom(window_length, overlap, window, detrend, estimator, fmin, fmax);
           const io::LogSelect s = SelectFrom(input_column, output_column, time_column, input_dataset, output_dataset,
-                                             time_dataset, rate);
+                                             time_dataset, rate, input_scale, output_scale, time_unit, delimiter);
           py::gil_scoped_release release;
+          ScopedCLocale c;
           // The CLI's streaming pass (apps/common.cc EstimateFromLog): memory for a few windows.
           ident::WelchEstimator est(o);
           const io::LogInfo info =
@@ -264,16 +331,16 @@ void BindEstimate(py::module_& m) {
             throw InputError(path + ": " + e.what());
           }
         },
-        std::tuple_cat(std::make_tuple(py::arg("path")), WelchArgs(), SelectorArgs(),
-                       std::make_tuple(py::arg("rate") = 0.0)),
+        std::tuple_cat(std::make_tuple(py::arg("path")), WelchArgs(), SelectorArgs()),
         "estimate(path, ...): streamed from a log file as `zwidth estimate` does (a few windows in memory, "
         "whatever the log's length), with read_log's selectors.");
   DefWith(m, "estimate",
-        [](const DoubleArray& u, const DoubleArray& y, double sample_rate_hz, int window_length, double overlap,
+        [](const py::array& u, const py::array& y, double sample_rate_hz, int window_length, double overlap,
            const std::string& window, const std::string& detrend, const std::string& estimator, double fmin,
            double fmax) {
           const ident::WelchOptions o = WelchFrom(window_length, overlap, window, detrend, estimator, fmin, fmax);
-          return Estimate(ToVector(u), ToVector(y), sample_rate_hz, o);
+          const std::vector<double> uv = Samples(u, "u");  // u's message first
+          return Estimate(uv, Samples(y, "y"), sample_rate_hz, o);
         },
         std::tuple_cat(std::make_tuple(py::arg("u"), py::arg("y"), py::arg("sample_rate_hz")), WelchArgs()),
         kWelchDoc);

@@ -24,10 +24,60 @@ std::vector<ModeTuple> ModesOf(const model::Plant& p) {
   return out;
 }
 
-std::vector<model::Mode> ModesFrom(const std::vector<ModeTuple>& t) {
+// A list of (omega, c, v, d), each a finite number: modes[i] names the bad one.
+std::vector<model::Mode> ModesFrom(const py::object& modes) {
   std::vector<model::Mode> out;
-  for (const auto& [w, c, v, d] : t) out.push_back({w, c, v, d});
+  if (py::isinstance<py::str>(modes) || !py::hasattr(modes, "__iter__")) {
+    throw py::type_error("modes must be a list of (omega, c, v, d) tuples, not " +
+                         py::str(py::type::of(modes).attr("__name__")).cast<std::string>());
+  }
+  size_t i = 0;
+  for (const py::handle& h : modes) {
+    const std::string where = "modes[" + std::to_string(i++) + "]";
+    if (py::isinstance<py::str>(h) || !py::hasattr(h, "__len__") || py::len(h) != 4) {
+      throw InputError(where + ": expected a tuple (omega, c, v, d) [rad/s]");
+    }
+    const py::sequence t = py::reinterpret_borrow<py::sequence>(h);
+    double x[4];
+    for (size_t k = 0; k < 4; ++k) x[k] = Number(t[k], (where + "." + "wcvd"[k]).c_str());
+    out.push_back({x[0], x[1], x[2], x[3]});
+  }
   return out;
+}
+
+std::optional<double> CheckedPeriod(std::optional<double> T) {
+  if (T && !(*T > 0.0 && std::isfinite(*T))) throw InputError("sample_period_s = " + G(*T) + ": must be finite and > 0");
+  return T;
+}
+
+// The plant after `change`, kept only when it validates (a Model never holds
+// what zwidth would refuse to read back).
+template <typename F>
+void Change(io::ModelFile& mf, F&& change) {
+  model::Plant p = mf.plant;
+  change(p);
+  p.Validate();
+  mf.plant = std::move(p);
+}
+
+// The model JSON as the CLI writes it, checked by the CLI's reader first, so
+// that save() never writes a file `zwidth` refuses.
+nlohmann::json CheckedJson(const io::ModelFile& mf) {
+  nlohmann::json j = io::ModelToJson(mf);
+  io::ParseModelJson(j.dump(), "the model");
+  return j;
+}
+
+std::string ReprOf(const io::ModelFile& mf) {
+  std::string s = "<zwidth.Model m=" + G(mf.plant.m) + " b=" + G(mf.plant.b) + " modes=[";
+  for (size_t i = 0; i < mf.plant.modes.size(); ++i) {
+    const model::Mode& md = mf.plant.modes[i];
+    s += (i ? ", (" : "(") + G(md.omega) + ", " + G(md.c) + ", " + G(md.v) + ", " + G(md.d) + ")";
+  }
+  s += "] delay_samples=" + std::to_string(mf.plant.delay_samples);
+  if (mf.sample_period_s) s += " sample_period_s=" + G(*mf.sample_period_s);
+  if (mf.fit.is_object() && mf.fit.contains("quality")) s += " fit=" + mf.fit["quality"].get<std::string>();
+  return s + ">";
 }
 
 py::object StdOf(const io::ModelFile& mf) {
@@ -69,32 +119,29 @@ py::tuple StateSpaceOf(const io::ModelFile& mf, std::optional<double> period_s) 
 
 // Model(...), load / from_json / table1, save / to_json / export.
 void DefModelConstructionAndFiles(py::class_<io::ModelFile>& cls) {
-  cls.def(py::init([](double m_, double b, const std::vector<ModeTuple>& modes, int delay_samples,
-                       const std::string& name, std::optional<double> sample_period_s) {
+  cls.def(py::init([](const py::object& m_, const py::object& b, const py::object& modes,
+                       const py::object& delay_samples, const std::string& name,
+                       std::optional<double> sample_period_s) {
              io::ModelFile mf;
-             mf.plant.m = m_;
-             mf.plant.b = b;
+             mf.plant.m = Number(m_, "m");
+             mf.plant.b = Number(b, "b");
              mf.plant.modes = ModesFrom(modes);
-             mf.plant.delay_samples = delay_samples;
+             mf.plant.delay_samples = Integer(delay_samples, "delay_samples");
              mf.plant.name = name;
              mf.plant.Validate();
-             if (sample_period_s) {
-               if (!(*sample_period_s > 0.0 && std::isfinite(*sample_period_s))) {
-                 throw InputError("sample_period_s = " + std::to_string(*sample_period_s) +
-                                  ": must be finite and > 0");
-               }
-               mf.sample_period_s = sample_period_s;
-             }
+             mf.sample_period_s = CheckedPeriod(sample_period_s);
              return mf;
            }),
            py::arg("m"), py::arg("b"), py::arg("modes") = std::vector<ModeTuple>{}, py::arg("delay_samples") = 0,
            py::arg("name") = "", py::arg("sample_period_s") = py::none())
-      .def_static("load", &io::ReadModelJson, py::arg("path"),
+      .def_static("load", [](const std::string& path) { ScopedCLocale c; return io::ReadModelJson(path); }, py::arg("path"),
                   "Reads a model JSON file (the CLI's format); InputError names the file and the key.")
       .def_static("from_json", [](const std::string& text) { return io::ParseModelJson(text, "<string>"); },
                   py::arg("text"), "Parses model JSON text.")
       .def_static("table1", &io::Table1Model, "Table I of the paper (PHANToM 1.0, phi axis), built into the library.")
       .def("save", [](const io::ModelFile& mf, const std::string& path) {
+             CheckedJson(mf);
+             ScopedCLocale c;
              io::ForgetNotedInputs();  // each call is its own command: a model loaded earlier may be replaced
              io::WriteModelJson(path, mf);
            },
@@ -107,6 +154,8 @@ void DefModelConstructionAndFiles(py::class_<io::ModelFile>& cls) {
              if (!io::FromString(format, &f)) {
                throw InputError("format '" + format + "' is not one of json, hdf5, matlab, python, statespace");
              }
+             CheckedJson(mf);
+             ScopedCLocale c;
              io::ForgetNotedInputs();
              io::ExportModel(mf, f, period_s ? ResolvePeriod(period_s, mf) : 0.0, path);
            },
@@ -118,20 +167,28 @@ void DefModelConstructionAndFiles(py::class_<io::ModelFile>& cls) {
 // Model: the parameters (read-write), std, covariance, fit_info.
 void DefModelParameters(py::class_<io::ModelFile>& cls) {
   cls.def_property("m", [](const io::ModelFile& mf) { return mf.plant.m; },
-                    [](io::ModelFile& mf, double v) { mf.plant.m = v; }, "rigid-body inertia [kg m^2]")
+                    [](io::ModelFile& mf, const py::object& v) { Change(mf, [&](model::Plant& p) { p.m = Number(v, "m"); }); }, "rigid-body inertia [kg m^2]")
       .def_property("b", [](const io::ModelFile& mf) { return mf.plant.b; },
-                    [](io::ModelFile& mf, double v) { mf.plant.b = v; }, "rigid-body viscous damping [N m s/rad]")
+                    [](io::ModelFile& mf, const py::object& v) { Change(mf, [&](model::Plant& p) { p.b = Number(v, "b"); }); }, "rigid-body viscous damping [N m s/rad]")
       .def_property("modes", [](const io::ModelFile& mf) { return ModesOf(mf.plant); },
-                    [](io::ModelFile& mf, const std::vector<ModeTuple>& t) { mf.plant.modes = ModesFrom(t); },
+                    [](io::ModelFile& mf, const py::object& t) {
+                      Change(mf, [&](model::Plant& p) { p.modes = ModesFrom(t); });
+                      // The covariance and std are of the old sections: dropped, never kept truncated.
+                      mf.log_covariance.clear();
+                      mf.std_errors.reset();
+                    },
                     "list of (omega, c, v, d) per section [rad/s]: pole pair w, its damping c = 2 zeta w, "
-                    "zero pair v, its damping d")
+                    "zero pair v, its damping d. Setting it drops the covariance and std (they were of the "
+                    "old sections).")
       .def_property("delay_samples", [](const io::ModelFile& mf) { return mf.plant.delay_samples; },
-                    [](io::ModelFile& mf, int v) { mf.plant.delay_samples = v; },
+                    [](io::ModelFile& mf, const py::object& v) {
+                      Change(mf, [&](model::Plant& p) { p.delay_samples = Integer(v, "delay_samples"); });
+                    },
                     "input delay of the sampled model [samples]")
       .def_property("name", [](const io::ModelFile& mf) { return mf.plant.name; },
                     [](io::ModelFile& mf, const std::string& v) { mf.plant.name = v; }, "free text")
       .def_property("sample_period_s", [](const io::ModelFile& mf) { return mf.sample_period_s; },
-                    [](io::ModelFile& mf, std::optional<double> v) { mf.sample_period_s = v; },
+                    [](io::ModelFile& mf, std::optional<double> v) { mf.sample_period_s = CheckedPeriod(v); },
                     "sample period the model was fitted at [s], or None")
       .def_property_readonly("std", &StdOf,
                              "standard errors {'m', 'b', 'modes': [(omega, c, v, d), ...]} of a fitted model "
@@ -139,9 +196,8 @@ void DefModelParameters(py::class_<io::ModelFile>& cls) {
       .def_property("covariance", &CovarianceOf,
                     [](io::ModelFile& mf, const py::object& c) {
                       if (c.is_none()) { mf.log_covariance.clear(); return; }
-                      const DoubleArray a = DoubleArray::ensure(c);
-                      if (!a) throw InputError("covariance: expected a square array or None");
-                      std::vector<double> v = ToVector(a);
+                      py::array a = CheckedArray(py::array::ensure(c).attr("ravel")(), "covariance");
+                      std::vector<double> v = Samples(a, "covariance");
                       stability::CheckLogCovariance(mf.plant, v);
                       mf.log_covariance = std::move(v);
                     },
@@ -153,7 +209,21 @@ void DefModelParameters(py::class_<io::ModelFile>& cls) {
                              "the covariance's rows: log m, log b, then log omega, log c, log v, log d per section")
       .def_property_readonly("fit_info", [](const io::ModelFile& mf) { return JsonToPython(mf.fit); },
                              "the fit metrics stored with a fitted model (dict), else None")
-      .def_property_readonly("num_states", [](const io::ModelFile& mf) { return mf.plant.num_states(); });
+      .def_property_readonly("num_states", [](const io::ModelFile& mf) { return mf.plant.num_states(); })
+      // The friction as model.json stores it (issue 32; fit/friction_fit.h).
+      .def_property_readonly("friction",
+                             [](const io::ModelFile& mf) {
+                               return mf.friction ? JsonToPython(io::ModelToJson(mf)["friction"]) : py::object(py::none());
+                             },
+                             "Coulomb friction and offset (dict of model.json's 'friction': coulomb_pos, coulomb_neg, "
+                             "offset, breakaway_pos, breakaway_neg; input units), else None")
+      .def_property_readonly("friction_std",
+                             [](const io::ModelFile& mf) {
+                               const nlohmann::json j = io::ModelToJson(mf);
+                               return j.contains("std") && j["std"].contains("friction")
+                                          ? JsonToPython(j["std"]["friction"]) : py::object(py::none());
+                             },
+                             "the friction's std (dict, None = unknown), else None");
 }
 
 // Model: validate, response, state_space, repr, pickling.
@@ -168,13 +238,9 @@ sampled model G_d(e^{j 2 pi f T}) z^-delay_samples at T = period_s.)doc")
            R"doc((A, B, C, D) NumPy matrices. period_s=None: the continuous cascade
 realisation of model/state_space.h. Else its exact ZOH discretisation with
 the input delay realised as extra states.)doc")
-      .def("__repr__", [](const io::ModelFile& mf) {
-        return "<zwidth.Model m=" + std::to_string(mf.plant.m) + " b=" + std::to_string(mf.plant.b) +
-               " modes=" + std::to_string(mf.plant.modes.size()) +
-               " delay_samples=" + std::to_string(mf.plant.delay_samples) + ">";
-      })
-      .def(py::pickle([](const io::ModelFile& mf) { return io::ModelToJson(mf).dump(); },
-                      [](const std::string& s) { return io::ParseModelJson(s, "<pickle>"); }));
+      .def("__repr__", &ReprOf);
+  DefValue(cls, [](const io::ModelFile& mf) { return py::make_tuple(io::ModelToJson(mf).dump()); },
+           [](const py::tuple& t) { return io::ParseModelJson(t[0].cast<std::string>(), "<pickle>"); });
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 
+#include "analysis/scene_check.h"
 #include "io/stability_files.h"
 #include "model/error.h"
 #include "python/bind_common.h"
@@ -14,10 +15,16 @@
 namespace zwidth::python {
 namespace {
 
-// A ZWidth with the model and period it was built from.
+using Hand = std::tuple<double, double, double>;
+
+// A ZWidth with what it was built from (its pickled state).
 struct PyZWidth {
   io::ModelFile model;
+  std::optional<double> period_arg;  // as given (None: the model's, else 1 ms)
   int delay_samples = 0;
+  stability::BoundaryOptions options;
+  std::optional<double> velocity_filter_hz;
+  std::optional<Hand> hand;
   stability::LoopOptions loop;
   std::unique_ptr<stability::ZWidth> z;
 };
@@ -28,6 +35,9 @@ struct PyZWidth {
 stability::LoopOptions LoopFrom(std::optional<double> velocity_filter_hz,
                                 std::optional<std::tuple<double, double, double>> hand, double T) {
   stability::LoopOptions l;
+  if (velocity_filter_hz && !std::isfinite(*velocity_filter_hz)) {
+    throw InputError("velocity_filter_hz = " + G(*velocity_filter_hz) + ": must be finite (None for no filter)");
+  }
   if (velocity_filter_hz) stability::SetLowPassFilter(*velocity_filter_hz, T, &l);
   if (hand) l.hand = {std::get<0>(*hand), std::get<1>(*hand), std::get<2>(*hand)};
   std::string why;
@@ -38,6 +48,72 @@ stability::LoopOptions LoopFrom(std::optional<double> velocity_filter_hz,
 
 void CheckDelay(int d, const char* name) {
   if (d < 0) throw InputError(std::string(name) + " = " + std::to_string(d) + ": delays must be >= 0 samples");
+}
+
+// B (or K) values as a C-order double array, each finite and >= 0 as `zwidth
+// check` requires of a scene's K and B: `name`[i] names the first bad one.
+DoubleArray Gains(const py::object& v, const char* name) {
+  py::module_ np = py::module_::import("numpy");
+  py::array a = np.attr("asarray")(v);
+  const char kind = a.dtype().kind();
+  if (std::string("iuf").find(kind) == std::string::npos) {
+    throw py::type_error(std::string(name) + " must be a number or an array of real numbers, not of dtype " +
+                         py::str(a.dtype()).cast<std::string>());
+  }
+  const DoubleArray d = DoubleArray::ensure(a);
+  for (py::ssize_t i = 0; i < d.size(); ++i) {
+    const double x = d.data()[i];
+    if (!(std::isfinite(x) && x >= 0.0)) {
+      throw InputError(std::string(name) + (d.ndim() ? "[" + std::to_string(i) + "]" : "") + " = " + G(x) +
+                       ": must be finite and >= 0");
+    }
+  }
+  return d;
+}
+double Gain(double v, const char* name) { return Gains(py::float_(v), name).data()[0]; }
+
+void Build(PyZWidth* p) {
+  const double T = ResolvePeriod(p->period_arg, p->model);
+  p->loop = LoopFrom(p->velocity_filter_hz, p->hand, T);
+  py::gil_scoped_release release;
+  p->z = std::make_unique<stability::ZWidth>(p->model.plant, T, p->delay_samples, p->loop, p->options);
+}
+
+py::tuple ZWidthState(const PyZWidth& z) {
+  const stability::BoundaryOptions& o = z.options;
+  return py::make_tuple(io::ModelToJson(z.model).dump(), z.period_arg, z.delay_samples,
+                        py::make_tuple(o.min_grid_points, o.grid_points_per_delay, o.theta_tolerance, o.verify),
+                        z.velocity_filter_hz, z.hand);
+}
+
+std::unique_ptr<PyZWidth> ZWidthFrom(const py::tuple& t) {
+  auto p = std::make_unique<PyZWidth>();
+  p->model = io::ParseModelJson(t[0].cast<std::string>(), "<pickle>");
+  p->period_arg = t[1].cast<std::optional<double>>();
+  p->delay_samples = t[2].cast<int>();
+  const py::tuple o = t[3];
+  p->options.min_grid_points = o[0].cast<int>();
+  p->options.grid_points_per_delay = o[1].cast<int>();
+  p->options.theta_tolerance = o[2].cast<double>();
+  p->options.verify = o[3].cast<bool>();
+  p->velocity_filter_hz = t[4].cast<std::optional<double>>();
+  p->hand = t[5].cast<std::optional<Hand>>();
+  Build(p.get());
+  return p;
+}
+
+std::string ZWidthRepr(const PyZWidth& z) {
+  std::string s = "<zwidth.ZWidth delay_samples=" + std::to_string(z.delay_samples) +
+                  " (total " + std::to_string(z.z->total_delay()) + ") period_s=" + G(z.z->period_s()) +
+                  " model m=" + G(z.model.plant.m) + " b=" + G(z.model.plant.b) +
+                  " modes=" + std::to_string(z.model.plant.modes.size());
+  if (z.model.fit.is_object() && z.model.fit.contains("quality")) {
+    s += " fit=" + z.model.fit["quality"].get<std::string>();
+    if (z.model.fit["quality"] == "poor") s += " (do not trust this Z-width: see the fit's quality_reasons)";
+  }
+  if (z.velocity_filter_hz) s += " velocity_filter_hz=" + G(*z.velocity_filter_hz);
+  if (z.hand) s += " hand=(" + G(std::get<0>(*z.hand)) + ", " + G(std::get<1>(*z.hand)) + ", " + G(std::get<2>(*z.hand)) + ")";
+  return s + ">";
 }
 
 // Applies f to every B (GIL released); returns arrays shaped like B, or
@@ -99,8 +175,23 @@ std::vector<io::SceneObject> SceneFrom(const py::object& scene) {
 
 // zwidth.CriticalPoint: the boundary at one B.
 void BindCriticalPoint(py::module_& m) {
-  py::class_<stability::CriticalPoint>(m, "CriticalPoint", "The Z-width boundary at one B (stability/zwidth.h).")
-      .def_readonly("B", &stability::CriticalPoint::B, "virtual damping [N m s/rad]")
+  py::class_<stability::CriticalPoint> cls(m, "CriticalPoint", "The Z-width boundary at one B (stability/zwidth.h).");
+  DefValue(cls,
+           [](const stability::CriticalPoint& c) {
+             return py::make_tuple(c.B, c.K_cr, c.f_cr_hz, c.unstable_at_zero_k, c.verified, c.K_margin, c.f_margin_hz);
+           },
+           [](const py::tuple& t) {
+             stability::CriticalPoint c;
+             c.B = t[0].cast<double>();
+             c.K_cr = t[1].cast<double>();
+             c.f_cr_hz = t[2].cast<double>();
+             c.unstable_at_zero_k = t[3].cast<bool>();
+             c.verified = t[4].cast<bool>();
+             c.K_margin = t[5].cast<double>();
+             c.f_margin_hz = t[6].cast<double>();
+             return c;
+           });
+  cls.def_readonly("B", &stability::CriticalPoint::B, "virtual damping [N m s/rad]")
       .def_readonly("K_cr", &stability::CriticalPoint::K_cr,
                     "smallest K > 0 with a closed-loop pole on the unit circle [N m/rad]; 0 when unstable as K -> 0+, "
                     "inf when no crossing exists")
@@ -116,34 +207,32 @@ void BindCriticalPoint(py::module_& m) {
         return py::iter(py::make_tuple(c.K_cr, c.f_cr_hz));
       }, "K_cr, f_cr_hz = point")
       .def("__repr__", [](const stability::CriticalPoint& c) {
-        return "<zwidth.CriticalPoint B=" + std::to_string(c.B) + " K_cr=" + std::to_string(c.K_cr) +
-               " f_cr_hz=" + std::to_string(c.f_cr_hz) + ">";
+        return "<zwidth.CriticalPoint B=" + G(c.B) + " K_cr=" + G(c.K_cr) + " f_cr_hz=" + G(c.f_cr_hz) +
+               (c.verified ? " verified" : " not verified") + (c.unstable_at_zero_k ? " unstable_at_zero_k" : "") +
+               (c.AgreesWithMargin() ? "" : " (margin() reads K=" + G(c.K_margin) + ")") + ">";
       });
 }
 
 // ZWidth(...) and its read-only properties.
 void DefZWidthConstruction(py::class_<PyZWidth>& cls) {
-  cls.def(py::init([](const io::ModelFile& model, std::optional<double> period_s, int delay_samples,
+  cls.def(py::init([](const io::ModelFile& model, std::optional<double> period_s, const py::object& delay_samples,
                        int min_grid_points, int grid_points_per_delay, double theta_tolerance, bool verify,
-                       std::optional<double> velocity_filter_hz,
-                       std::optional<std::tuple<double, double, double>> hand) {
-             CheckDelay(delay_samples, "delay_samples");
-             stability::BoundaryOptions o;
-             o.min_grid_points = min_grid_points;
-             o.grid_points_per_delay = grid_points_per_delay;
-             o.theta_tolerance = theta_tolerance;
-             o.verify = verify;
-             std::string why;
-             if (!o.IsValid(&why)) throw InputError(why);
-             const double T = ResolvePeriod(period_s, model);
+                       std::optional<double> velocity_filter_hz, std::optional<Hand> hand) {
              auto p = std::make_unique<PyZWidth>();
+             p->delay_samples = Integer(delay_samples, "delay_samples");
+             CheckDelay(p->delay_samples, "delay_samples");
+             p->options.min_grid_points = min_grid_points;
+             p->options.grid_points_per_delay = grid_points_per_delay;
+             p->options.theta_tolerance = theta_tolerance;
+             p->options.verify = verify;
+             std::string why;
+             if (!p->options.IsValid(&why)) throw InputError(why);
+             model.plant.Validate();
              p->model = model;
-             p->delay_samples = delay_samples;
-             p->loop = LoopFrom(velocity_filter_hz, hand, T);
-             {
-               py::gil_scoped_release release;
-               p->z = std::make_unique<stability::ZWidth>(model.plant, T, delay_samples, p->loop, o);
-             }
+             p->period_arg = period_s;
+             p->velocity_filter_hz = velocity_filter_hz;
+             p->hand = hand;
+             Build(p.get());
              return p;
            }),
            py::arg("model"), py::arg("period_s") = py::none(), py::arg("delay_samples") = 2,
@@ -152,7 +241,8 @@ void DefZWidthConstruction(py::class_<PyZWidth>& cls) {
            py::arg("theta_tolerance") = stability::BoundaryOptions{}.theta_tolerance,
            py::arg("verify") = stability::BoundaryOptions{}.verify, py::arg("velocity_filter_hz") = py::none(),
            py::arg("hand") = py::none())
-      .def_property_readonly("period_s", [](const PyZWidth& z) { return z.z->period_s(); })
+      .def("__repr__", &ZWidthRepr)
+      .def_property_readonly("period_s", [](const PyZWidth& z) { return z.z->period_s(); }, "loop sample period T [s]")
       .def_property_readonly("delay_samples", [](const PyZWidth& z) { return z.delay_samples; }, "loop delay d")
       .def_property_readonly("total_delay_samples", [](const PyZWidth& z) { return z.z->total_delay(); },
                              "d plus the model's own delay")
@@ -170,6 +260,7 @@ void DefZWidthConstruction(py::class_<PyZWidth>& cls) {
 void DefZWidthAtB(py::class_<PyZWidth>& cls) {
   cls.def("stable_intervals",
            [](const PyZWidth& z, double B) {
+             Gain(B, "B");
              std::vector<stability::KInterval> iv;
              {
                py::gil_scoped_release release;
@@ -187,7 +278,7 @@ loop is stable at (K, B) exactly when K lies strictly inside one of them
 first interval no longer starts at 0 (reopened bands).)doc")
       .def("critical",
            [](const PyZWidth& z, const py::object& B) -> py::object {
-             const DoubleArray b = B.cast<DoubleArray>();
+             const DoubleArray b = Gains(B, "B");
              py::array_t<double> K = ShapedLike<double>(b), f = ShapedLike<double>(b);
              double* k = K.mutable_data();
              double* fh = f.mutable_data();
@@ -206,6 +297,7 @@ first interval no longer starts at 0 (reopened bands).)doc")
 like B for an array (the GIL is released over the sweep). K_cr is 0 where
 the loop is unstable as K -> 0+ (B past B_max), inf with no crossing.)doc")
       .def("point", [](const PyZWidth& z, double B) {
+             Gain(B, "B");
              py::gil_scoped_release release;
              return z.z->At(B);
            },
@@ -215,7 +307,8 @@ the loop is unstable as K -> 0+ (B past B_max), inf with no crossing.)doc")
 // ZWidth: the boundary over an array of B, the crossings at one B.
 void DefZWidthOverB(py::class_<PyZWidth>& cls) {
   cls.def("boundary",
-           [](const PyZWidth& z, const DoubleArray& B) {
+           [](const PyZWidth& z, const py::object& B_in) {
+             const DoubleArray B = Gains(B_in, "B");
              const py::ssize_t n = B.size();
              std::vector<stability::CriticalPoint> pts(static_cast<size_t>(n));
              ForEachB(B, [&](py::ssize_t i, double v) { pts[i] = z.z->At(v); });
@@ -247,6 +340,7 @@ void DefZWidthOverB(py::class_<PyZWidth>& cls) {
            "B, K_cr, f_cr_hz, K_margin, f_margin_hz, unstable_at_zero_k, margin_agrees, verified.")
       .def("crossings",
            [](const PyZWidth& z, double B) {
+             Gain(B, "B");
              std::vector<std::pair<double, double>> out;
              for (const auto& c : z.z->Crossings(B)) out.emplace_back(c.theta, c.K);
              return out;
@@ -259,7 +353,7 @@ void DefZWidthSummary(py::class_<PyZWidth>& cls) {
   cls.def("is_stable",
            [](const PyZWidth& z, const py::object& K, const py::object& B) -> py::object {
              py::list both = py::module_::import("numpy").attr("broadcast_arrays")(
-                 py::array::ensure(DoubleArray::ensure(K)), py::array::ensure(DoubleArray::ensure(B)));
+                 Gains(K, "K"), Gains(B, "B"));
              const DoubleArray k = DoubleArray::ensure(both[0]);  // forcecast copies to C order
              const DoubleArray b = DoubleArray::ensure(both[1]);
              py::array_t<bool> out = ShapedLike<bool>(k);
@@ -270,10 +364,16 @@ void DefZWidthSummary(py::class_<PyZWidth>& cls) {
              return out;
            },
            py::arg("K"), py::arg("B"),
-           "Schur-Cohn test of the closed loop at (K, B); broadcasts arrays (K = 0 is taken as 0+).")
+           "Schur-Cohn test of the closed loop at (K [N m/rad], B [N m s/rad]); broadcasts arrays (K = 0 is "
+           "taken as 0+). K and B must be finite and >= 0 (InputError naming the first that is not).")
       .def("summary",
-           [](const PyZWidth& z) {
+           [](const PyZWidth& z, const py::object& monte_carlo, uint64_t seed) {
              // One entry of the CLI's summary JSON "delays" list (apps/cmd_stability.cc, boundary --summary).
+             const int mc = Integer(monte_carlo, "monte_carlo");
+             if (mc < 0) throw InputError("monte_carlo = " + std::to_string(mc) + ": must be >= 0");
+             if (mc > 0 && z.model.log_covariance.empty()) {
+               throw InputError("monte_carlo needs a model with a covariance (a model fitted by zwidth.fit)");
+             }
              nlohmann::json e;
              {
                py::gil_scoped_release release;
@@ -289,16 +389,31 @@ void DefZWidthSummary(py::class_<PyZWidth>& cls) {
                e["total_delay_samples"] = s.delay_samples;
                const stability::Passivity pa(z.model.plant.b, z.z->period_s(), z.z->total_delay(), z.loop);
                e["passivity"] = io::PassivitySummaryJson(pa, z.model.plant.b);
+               if (mc > 0) {
+                 e["monte_carlo"] = io::MonteCarloJson(
+                     stability::SummaryMonteCarlo(z.model.plant, z.model.log_covariance, z.z->period_s(),
+                                                  z.delay_samples, mc, seed, z.loop),
+                     seed);
+               }
              }
              return JsonToPython(e);
            },
+           py::arg("monte_carlo") = 0, py::arg("seed") = 1,
            R"doc(K_cr(0), B_t, K_cr^max, B_max (the largest B with some stable K > 0),
 B_max_from_zero (the paper's B_max), reopened_bands, passivity (K_P(0),
 B_P_max) and, when the model carries a covariance, "std" (delta method): the
-CLI's summary JSON, one entry of 'delays' (None for NaN/inf).)doc")
+CLI's summary JSON, one entry of 'delays' (None for NaN/inf). monte_carlo=N
+> 0 (--monte-carlo N --seed S) adds "monte_carlo" {samples, seed, std, mean}
+from N seeded draws of the covariance (seconds per hundred draws; Ctrl-C
+stops it with KeyboardInterrupt).)doc")
       .def("characteristic_polynomial",
-           [](const PyZWidth& z, double K, double B) { return ToArray(z.z->CharacteristicPolynomial(K, B)); },
-           py::arg("K"), py::arg("B"), "Closed-loop characteristic polynomial coefficients, z^0 first.");
+           [](const PyZWidth& z, double K, double B) {
+             return ToArray(z.z->CharacteristicPolynomial(Gain(K, "K"), Gain(B, "B")));
+           },
+           py::arg("K"), py::arg("B"),
+           "Closed-loop characteristic polynomial coefficients, z^0 first. With many lightly damped, crowded\n"
+           "modes its roots are ill-conditioned (numpy.roots can put a stable root outside the circle);\n"
+           "is_stable decides by the closed loop's eigenvalues there (docs/zwidth.md).");
 }
 
 // zwidth.ZWidth: the Z-width of one loop.
@@ -316,6 +431,7 @@ velocity_filter_hz: a first-order low-pass on the velocity of the B term,
 cut-off in (0, Nyquist) Hz (--velocity-filter-hz); None: the raw difference.
 hand: the user's hand (M, B, K) at the measured coordinate, each >= 0
 (--hand M,B,K); None: nobody holds the device.)doc");
+  DefValue(cls, &ZWidthState, &ZWidthFrom);
   DefZWidthConstruction(cls);
   DefZWidthAtB(cls);
   DefZWidthOverB(cls);
@@ -323,8 +439,43 @@ hand: the user's hand (M, B, K) at the measured coordinate, each >= 0
 }
 
 // zwidth.RelayResult and zwidth.relay: the simulated relay experiment.
+py::tuple RelayState(const stability::RelayResult& r) {
+  return py::make_tuple(r.K_cr, r.f_cr_hz, static_cast<int>(r.status), r.relay_runs, r.unsettled, r.uncertainty,
+                        r.band_low_hz, r.K_cr_peak, r.f_cr_peak_hz, Bytes(r.relay_force), Bytes(r.damping_force),
+                        Bytes(r.command), Bytes(r.position));
+}
+
+stability::RelayResult RelayFrom(const py::tuple& t) {
+  stability::RelayResult r;
+  r.K_cr = t[0].cast<double>();
+  r.f_cr_hz = t[1].cast<double>();
+  r.status = static_cast<stability::RelayStatus>(t[2].cast<int>());
+  r.relay_runs = t[3].cast<int>();
+  r.unsettled = t[4].cast<double>();
+  r.uncertainty = t[5].cast<double>();
+  r.band_low_hz = t[6].cast<double>();
+  r.K_cr_peak = t[7].cast<double>();
+  r.f_cr_peak_hz = t[8].cast<double>();
+  r.relay_force = FromBytes<double>(t[9]);
+  r.damping_force = FromBytes<double>(t[10]);
+  r.command = FromBytes<double>(t[11]);
+  r.position = FromBytes<double>(t[12]);
+  return r;
+}
+
+std::string RelayRepr(const stability::RelayResult& r) {
+  std::string s = "<zwidth.RelayResult " + stability::ToString(r.status) + ": K_cr=" + G(r.K_cr) +
+                  " f_cr_hz=" + G(r.f_cr_hz) + " (peak reading K=" + G(r.K_cr_peak) + " at " + G(r.f_cr_peak_hz) +
+                  " Hz), " + std::to_string(r.relay_runs) + " runs";
+  if (std::isfinite(r.uncertainty)) s += ", uncertainty " + G(r.uncertainty);
+  if (r.unsettled > 1e-3) s += ", unsettled " + G(r.unsettled) + " (a longer seconds= settles it)";
+  return s + ">";
+}
+
 void BindRelay(py::module_& m) {
-  py::class_<stability::RelayResult>(m, "RelayResult", "The simulated relay experiment (stability/relay.h).")
+  py::class_<stability::RelayResult> cls(m, "RelayResult", "The simulated relay experiment (stability/relay.h).");
+  DefValue(cls, &RelayState, &RelayFrom);
+  cls.def("__repr__", &RelayRepr)
       .def_readonly("K_cr", &stability::RelayResult::K_cr, "estimate [N m/rad]")
       .def_readonly("f_cr_hz", &stability::RelayResult::f_cr_hz)
       .def_property_readonly("status", [](const stability::RelayResult& r) { return stability::ToString(r.status); },
@@ -381,27 +532,33 @@ Raises ComputationError when the loop neither oscillates nor diverges.)doc");
 void BindCheck(py::module_& m) {
   m.def("check",
         [](const py::object& scene, const io::ModelFile& model, int delay_samples, std::optional<double> period_s,
-           std::optional<double> velocity_filter_hz, std::optional<std::tuple<double, double, double>> hand) {
+           std::optional<double> velocity_filter_hz, std::optional<std::tuple<double, double, double>> hand,
+           double marginal_sigmas) {
           CheckDelay(delay_samples, "delay_samples");
           const double T = ResolvePeriod(period_s, model);
           const stability::LoopOptions loop = LoopFrom(velocity_filter_hz, hand, T);
           const std::vector<io::SceneObject> objs = SceneFrom(scene);
-          nlohmann::json out = {{"delay_samples", delay_samples}, {"period_s", T},
-                                {"objects", nlohmann::json::array()}};
+          analysis::SceneCheckOptions o;
+          o.marginal_sigmas = marginal_sigmas;
+          nlohmann::json out;
           {
             py::gil_scoped_release release;
-            const stability::ZWidth z(model.plant, T, delay_samples, loop);
-            for (const auto& o : objs) out["objects"].push_back(io::CheckObject(z, o).ToJson(o));
+            const analysis::SceneCheck sc = analysis::CheckScene(model.plant, model.log_covariance, T, delay_samples,
+                                                                 {loop}, objs, o);
+            out = analysis::SceneCheckJson(sc, objs, delay_samples, T, o);
           }
           return JsonToPython(out);
         },
         py::arg("scene"), py::arg("model"), py::arg("delay_samples"), py::arg("period_s") = py::none(),
-        py::arg("velocity_filter_hz") = py::none(), py::arg("hand") = py::none(),
+        py::arg("velocity_filter_hz") = py::none(), py::arg("hand") = py::none(), py::arg("marginal_sigmas") = 2.0,
         R"doc(Is each object {name, K, B} of a haptic scene stable on this device?
 scene: a scene JSON path ({"objects": [...]}) or a list of dicts / (name, K, B)
 tuples; velocity_filter_hz and hand as for ZWidth. Returns the dict `zwidth
-check --json` prints (each object with its stable intervals); the CLI exits
-with status 3 when an object is unstable, this returns normally.)doc");
+check --json` prints (each object with its stable intervals, its status
+stable/marginal/unstable and, when the model has a covariance, its distance to
+the nearest boundary in std, marginal within marginal_sigmas); the CLI exits
+with status 3 when an object is unstable (4 when none is but some is marginal),
+this returns normally.)doc");
 }
 
 }  // namespace

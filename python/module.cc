@@ -4,8 +4,12 @@
 // with the library's messages, which are the CLI's.
 #include <cmath>
 
+
 #include "build_info.h"
+#include "io/option_names.h"
+#include "model/cancel.h"
 #include "model/error.h"
+#include "model/parallel.h"
 #include "python/bind_common.h"
 
 namespace zwidth::python {
@@ -40,14 +44,64 @@ double ResolvePeriod(const std::optional<double>& period_s, const io::ModelFile&
   return *period_s;
 }
 
+namespace {
+
+unsigned long g_main_thread = 0;  // threading.main_thread().ident: Python handles signals there
+PyObject* g_pending[3] = {nullptr, nullptr, nullptr};  // the exception a signal handler raised
+
+// zwidth::PollCancel's check (model/cancel.h): on the main thread, runs Python's
+// signal handlers (PyErr_CheckSignals, under the GIL); a handler that raised
+// (Ctrl-C: KeyboardInterrupt) stops the computation, and its exception is
+// kept for the translator below to raise when the call unwinds.
+bool PythonSignalRaised() {
+  if (PyThread_get_thread_ident() != g_main_thread) return false;
+  py::gil_scoped_acquire gil;
+  if (PyErr_CheckSignals() == 0) return false;
+  if (!g_pending[0]) PyErr_Fetch(&g_pending[0], &g_pending[1], &g_pending[2]);
+  PyErr_Clear();
+  return true;
+}
+
+void RaiseCancelled() {
+  ClearCancel();
+  if (g_pending[0]) {
+    PyErr_Restore(g_pending[0], g_pending[1], g_pending[2]);
+    g_pending[0] = g_pending[1] = g_pending[2] = nullptr;
+  } else {
+    PyErr_SetNone(PyExc_KeyboardInterrupt);
+  }
+}
+
+}  // namespace
+
 }  // namespace zwidth::python
 
 PYBIND11_MODULE(_zwidth, m) {
   namespace py = pybind11;
   using namespace zwidth::python;
   m.doc() = "zwidth: haptic device identification and Z-width (compiled core; use the package zwidth)";
-  py::register_exception<zwidth::InputError>(m, "InputError", PyExc_ValueError);
-  py::register_exception<zwidth::ComputationError>(m, "ComputationError", PyExc_RuntimeError);
+  // The library's errors with the keywords where it names option fields (io/option_names.h).
+  static py::exception<zwidth::InputError> input_error(m, "InputError", PyExc_ValueError);
+  static py::exception<zwidth::ComputationError> computation_error(m, "ComputationError", PyExc_RuntimeError);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const zwidth::InputError& e) {
+      PyErr_SetString(input_error.ptr(), zwidth::io::WithKeywords(e.what()).c_str());
+    } catch (const zwidth::ComputationError& e) {
+      PyErr_SetString(computation_error.ptr(), zwidth::io::WithKeywords(e.what()).c_str());
+    } catch (const zwidth::Cancelled&) {
+      RaiseCancelled();
+    }
+  });
+  g_main_thread = py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>();
+  zwidth::SetCancelCheck(&PythonSignalRaised);
+  m.def("set_num_threads", [](const py::object& n) { zwidth::SetNumThreads(n.is_none() ? 0 : Integer(n, "n")); },
+        py::arg("n"),
+        "Threads of the parallel parts (fit starts, per-delay summaries, boundary rows): n >= 1, or None for "
+        "the default (the environment's ZWIDTH_NUM_THREADS, else the cores this process may use: affinity and "
+        "cgroup quota).");
+  m.def("num_threads", &zwidth::NumThreads, "The threads a parallel part uses now (see set_num_threads).");
   m.attr("InputError").attr("__module__") = "zwidth";
   m.attr("ComputationError").attr("__module__") = "zwidth";
   m.attr("InputError").attr("__doc__") =

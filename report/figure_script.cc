@@ -1,5 +1,6 @@
 // figures.gp of `zwidth run`: the gnuplot script drawing every figure from the
 // .dat files beside it.
+#include <locale>
 #include <sstream>
 #include <vector>
 
@@ -9,6 +10,7 @@ namespace zwidth::report {
 
 std::string FigureScript(const FigureScriptOptions& o) {
   std::ostringstream gp;
+  gp.imbue(std::locale::classic());  // the numbers of the script, whatever the host's locale
   gp << "set datafile missing 'nan'\nset grid\nset key outside right\n"
      << "set linetype 1 lc rgb '#1f77b4' lw 2\nset linetype 2 lc rgb '#d62728' lw 2\n"
      << "set linetype 3 lc rgb '#2ca02c' lw 2\nset linetype 4 lc rgb '#9467bd' lw 2\n"

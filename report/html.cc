@@ -152,8 +152,15 @@ void ZWidthTable(const analysis::RunAnalysis& a, std::ostringstream& h) {
       h << "<tr><td></td><td colspan='5' style='text-align:left'>reopened band: B in (" << Num(band.B_lo) << ", "
         << Num(band.B_hi) << ") " << u.B << ", largest stable K " << Num(band.K_max) << " " << u.K << "</td></tr>\n";
     }
+    for (const auto& j : s.frequency_jumps) {
+      h << "<tr><td></td><td colspan='5' style='text-align:left'>f_CR jumps at B = " << Num(j.B) << " " << u.B
+        << ": K_CR " << Num(j.K_before) << " &rarr; " << Num(j.K_after) << " " << u.K << ", f_CR "
+        << Num(j.f_before_hz) << " &rarr; " << Num(j.f_after_hz) << " Hz" << (j.B == s.B_t ? " (B_t)" : "")
+        << "</td></tr>\n";
+    }
   }
-  h << "</table>\n";
+  h << "</table>\n<p>B_t: where K_CR(B) peaks and the critical frequency f_CR jumps (the paper's section III); "
+       "every jump of f_CR is listed under its delay.</p>\n";
 }
 
 // The loop a table was computed on, in words.
@@ -273,8 +280,12 @@ void FitSection(const analysis::RunAnalysis& a, const std::string& fit_report, s
   const ident::FrequencyResponse& frf = a.input.response.frf;
   h << "<h2>Fit</h2>\n<pre>" << Html(fit_report.empty() ? analysis::FitReport(fr) : fit_report) << "</pre>\n"
     << "<p>Log <code>" << Html(a.input.source) << "</code>: " << a.input.total_samples << " samples at "
-    << frf.sample_rate_hz << " Hz; Welch " << frf.num_averages << " averages of " << frf.window_length
-    << " samples; " << Html(ident::ToString(a.input.response.method)) << "; " << frf.f_hz.size() << " bins from "
+    << frf.sample_rate_hz << " Hz; "
+    << (frf.error_correlation.empty()
+            ? "Welch " + std::to_string(frf.num_averages) + " averages of " + std::to_string(frf.window_length) + " samples"
+            : "local model per bin, " + std::to_string(frf.num_averages) + " residual degrees of freedom")
+    << "; " << Html(ident::ToString(a.input.response.method)) << " (estimator " << Html(frf.estimator) << "); "
+    << frf.f_hz.size() << " bins from "
     << frf.f_hz.front() << " to " << frf.f_hz.back() << " Hz.</p>\n<h2>Fitted model (eq. 1)</h2>\n<pre>"
     << Html(analysis::ParameterTable(a.input.model, a.options.linear)) << "</pre>\n<p>" << Html(fr.BriefReport())
     << ". Residual: exact ZOH response weighted by the Welch per-bin std. "

@@ -10,6 +10,7 @@
 
 #include "analysis/laps.h"
 #include "io/frf_file.h"
+#include "io/printable.h"
 #include "io/stability_files.h"
 #include "report/report_internal.h"
 
@@ -34,14 +35,16 @@ std::string SummaryJson(const analysis::RunAnalysis& a) {
                              "B_max_from_zero: the B where the interval from K = 0+ closes (the paper's B_max)";
   summary["margin_disagreements"] = st.margin_disagreements;
   if (a.comparison) summary["comparison"] = a.comparison->json;
-  summary["log"] = in.source;
-  summary["logs"] = in.logs;
+  // File names as valid UTF-8 (a Latin-1 name made the JSON writer throw after all the work).
+  summary["log"] = io::Utf8ForJson(in.source);
+  summary["logs"] = nlohmann::json::array();
+  for (const std::string& log : in.logs) summary["logs"].push_back(io::Utf8ForJson(log));
   summary["estimate"] = ident::ToString(in.response.method);
   summary["whole_record"] = in.whole_record;
   summary["sample_rate_hz"] = in.response.frf.sample_rate_hz;
   summary["num_samples"] = in.total_samples;
   summary["fit"] = in.model.fit;
-  summary["reference"] = in.reference ? (in.reference_is_table1 ? "table1 (built in)" : in.reference_name) : "none";
+  summary["reference"] = in.reference ? (in.reference_is_table1 ? "table1 (built in)" : io::Utf8ForJson(in.reference_name)) : "none";
   nlohmann::ordered_json top = {{"fit_quality", fit::ToString(in.fit.quality)},
                                 {"fit_quality_reasons", nlohmann::ordered_json::parse(in.model.fit.value("quality_reasons", nlohmann::json::array()).dump())}};
   for (const auto& [k, v] : summary.items()) top[k] = nlohmann::ordered_json::parse(v.dump());

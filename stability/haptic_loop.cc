@@ -53,6 +53,18 @@ bool LoopOptions::IsValid(std::string* why) const {
     if (filter_a.size() > 32) return bad("filter_a has more than 32 coefficients");
     if (!AllFinite(filter_b)) return bad("filter_b has a coefficient that is not finite");
     if (!AllFinite(filter_a)) return bad("filter_a has a coefficient that is not finite");
+    // Beyond it the sums and products of the loop's polynomials overflow.
+    for (const std::vector<double>* c : {&filter_b, &filter_a}) {
+      for (double v : *c) {
+        if (std::abs(v) > kMaxLoopValue) return bad("a filter coefficient exceeds 1e12 in magnitude");
+      }
+    }
+    // Beyond it the sums and products of the loop's polynomials overflow.
+    for (const std::vector<double>* c : {&filter_b, &filter_a}) {
+      for (double v : *c) {
+        if (std::abs(v) > kMaxLoopValue) return bad("a filter coefficient exceeds 1e12 in magnitude");
+      }
+    }
     if (filter_a[0] != 1.0) return bad("filter_a: a0 must be 1 (divide every coefficient by a0)");
     // Poles: roots of z^m + a1 z^{m-1} + ... + am, i.e. the polynomial with
     // z^0 coefficient am (reversed a).
@@ -66,9 +78,9 @@ bool LoopOptions::IsValid(std::string* why) const {
     for (double v : filter_a) na += v;
     if (!(nb / na > 0.0)) return bad("filter_b/filter_a: the DC gain F(1) must be > 0 (a velocity filter passes DC)");
   }
-  if (!(std::isfinite(hand.M) && hand.M >= 0.0)) return bad("hand.M must be finite and >= 0");
-  if (!(std::isfinite(hand.B) && hand.B >= 0.0)) return bad("hand.B must be finite and >= 0");
-  if (!(std::isfinite(hand.K) && hand.K >= 0.0)) return bad("hand.K must be finite and >= 0");
+  if (!(hand.M >= 0.0 && hand.M <= kMaxLoopValue)) return bad("hand.M must lie in [0, 1e12] (SI)");
+  if (!(hand.B >= 0.0 && hand.B <= kMaxLoopValue)) return bad("hand.B must lie in [0, 1e12] (SI)");
+  if (!(hand.K >= 0.0 && hand.K <= kMaxLoopValue)) return bad("hand.K must lie in [0, 1e12] (SI)");
   return true;
 }
 
@@ -93,7 +105,9 @@ void ParseFilterCoefficients(const std::string& text, const std::string& what, L
     if (a == std::string::npos || p.size() < a + 2 || p[a] != key || p[a + 1] != ':') {
       throw InputError(what + ": the " + std::string(1, key) + " list must start with '" + key + ":'" + hint);
     }
-    return ParseNumbers(p.substr(a + 2), what);
+    std::vector<double> v = ParseNumbers(p.substr(a + 2), what);
+    if (v.empty()) throw InputError(what + ": the " + std::string(1, key) + " list is empty" + hint);
+    return v;
   };
   LoopOptions l = *loop;
   l.filter_b = part(text.substr(0, semi), 'b');
@@ -108,6 +122,10 @@ Hand ParseHand(const std::string& text) {
   if (v.size() != 3) throw InputError("LoopOptions::hand '" + text + "': expected three numbers M,B,K (SI, at the measured coordinate)");
   Hand h{v[0], v[1], v[2]};
   if (h.M < 0 || h.B < 0 || h.K < 0) throw InputError("LoopOptions::hand '" + text + "': M, B and K must be >= 0");
+  LoopOptions l;
+  l.hand = h;
+  std::string why;
+  if (!l.IsValid(&why)) throw InputError("LoopOptions::hand '" + text + "': " + why);
   return h;
 }
 
@@ -124,23 +142,7 @@ model::StateSpace ContinuousStateSpaceWithHand(const model::Plant& plant, const 
 }
 
 model::StateSpace DiscretizeZohStateSpace(const model::StateSpace& c, double period_s) {
-  if (!std::isfinite(period_s) || period_s <= 0.0) {
-    throw InputError("sample period = " + std::to_string(period_s) + " s: must be finite and > 0");
-  }
-  const int n = static_cast<int>(c.A.rows());
-  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n + 1, n + 1);
-  M.topLeftCorner(n, n) = c.A * period_s;
-  M.topRightCorner(n, 1) = c.B * period_s;
-  const Eigen::VectorXd s = model::internal::BalancingScales(M);
-  const Eigen::MatrixXd Mb = s.cwiseInverse().asDiagonal() * M * s.asDiagonal();
-  const Eigen::MatrixXd E = s.asDiagonal() * Mb.exp() * s.cwiseInverse().asDiagonal();
-  model::StateSpace d;
-  d.A = E.topLeftCorner(n, n);
-  d.B = E.topRightCorner(n, 1);
-  d.C = c.C;
-  d.D = c.D;
-  d.period_s = period_s;
-  return d;
+  return model::DiscretizeZoh(c, period_s);
 }
 
 std::vector<KInterval> IntersectIntervals(const std::vector<KInterval>& a, const std::vector<KInterval>& b) {

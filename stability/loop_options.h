@@ -15,6 +15,10 @@ struct Hand {
   bool IsNone() const { return M == 0.0 && B == 0.0 && K == 0.0; }
 };
 
+// The largest magnitude of a hand's M, B, K and of a filter coefficient (the
+// bound of a model's parameters): beyond it the loop's polynomials overflow.
+inline constexpr double kMaxLoopValue = 1e12;
+
 struct LoopOptions {
   // Velocity filter F(z): numerator b0..bn and denominator a0..am over powers of
   // z^-1 (index i multiplies z^-i). Both empty = no filter (F = 1). Valid: a0 =

@@ -8,9 +8,12 @@
 #include <optional>
 #include <utility>
 
+#include "model/cancel.h"
 #include "model/error.h"
+#include "model/nonlinear_simulate.h"
 #include "model/state_space.h"
 #include "stability/haptic_loop.h"
+#include "stability/velocity_filter_internal.h"
 
 #include <unsupported/Eigen/FFT>
 
@@ -30,6 +33,9 @@ bool RelayOptions::IsValid(std::string* why) const {
   }
   std::string loop_why;
   if (!loop.IsValid(&loop_why)) return bad("loop." + loop_why);
+  if (!friction.IsValid(&loop_why)) return bad("friction." + loop_why);
+  if (!actuator.IsValid(&loop_why)) return bad("actuator." + loop_why);
+  if (!(std::isfinite(encoder_step) && encoder_step >= 0)) return bad("encoder_step must be finite and >= 0");
   return true;
 }
 
@@ -156,30 +162,6 @@ struct Resonator {
   }
 };
 
-// The velocity filter F(z) of LoopOptions in direct form I: w_k = sum b_i v_{k-i}
-// - sum_{i>=1} a_i w_{k-i} (a0 = 1). Without coefficients it passes v unchanged.
-class VelocityFilter {
- public:
-  explicit VelocityFilter(const LoopOptions& loop)
-      : b_(loop.filter_b), a_(loop.filter_a), v_(b_.size(), 0.0), w_(a_.size(), 0.0) {}
-  double Step(double v) {
-    if (b_.empty()) return v;
-    std::rotate(v_.rbegin(), v_.rbegin() + 1, v_.rend());
-    v_[0] = v;
-    double w = 0.0;
-    for (size_t i = 0; i < b_.size(); ++i) w += b_[i] * v_[i];
-    for (size_t i = 1; i < a_.size(); ++i) w -= a_[i] * w_[i - 1];
-    if (!w_.empty()) {
-      std::rotate(w_.rbegin(), w_.rbegin() + 1, w_.rend());
-      w_[0] = w;
-    }
-    return w;
-  }
-
- private:
-  std::vector<double> b_, a_, v_, w_;  // v_[i] = v_{k-i}, w_[i] = w_{k-1-i} before the step
-};
-
 // The ideal relay -A sign(s(t)) averaged over the sample centred on t = k,
 // with s linear through s_{k-1} and s_k (a plain sign(s_k) switches up to one
 // sample late, which alone pulls the limit cycle 5-10% low at 1 kHz).
@@ -206,13 +188,18 @@ void SimulateLoop(const model::StateSpace& ss, int d, const RelayOptions& o, dou
   r->position.resize(n);
   const int ns = static_cast<int>(ss.A.rows());
   Eigen::VectorXd x = Eigen::VectorXd::Zero(ns), next(ns);
+  // A continuous realisation (period_s 0, RelayPlant): the nonlinear device.
+  std::optional<model::StickSlipPlant> device;
+  if (ss.period_s == 0.0) device.emplace(ss, o.friction, o.period_s);
   const bool filtered = centre > 0.0;
   Resonator f1, f2;
   if (filtered) f1 = f2 = Resonator::At(centre, kResonatorQ);
-  VelocityFilter velocity(o.loop);
+  internal::VelocityFilter velocity(o.loop);
   double y_prev = 0.0, s_prev = 0.0;
   for (size_t k = 0; k < n; ++k) {
-    const double y = ss.C.dot(x);
+    if ((k & 1023) == 0) PollCancel();  // model/cancel.h: a host's Ctrl-C
+    double y = device ? device->position() : ss.C.dot(x);
+    if (o.encoder_step > 0.0) y = o.encoder_step * std::round(y / o.encoder_step);
     const double s = filtered ? f2.Step(f1.Step(y)) : y;
     const double relay = RelayOutput(s_prev, s, o.amplitude);
     s_prev = s;
@@ -222,7 +209,11 @@ void SimulateLoop(const model::StateSpace& ss, int d, const RelayOptions& o, dou
     r->relay_force[k] = relay;
     r->damping_force[k] = damp;
     r->command[k] = relay + damp;
-    const double u = (k >= static_cast<size_t>(d)) ? r->command[k - d] : 0.0;
+    const double u = o.actuator.Apply((k >= static_cast<size_t>(d)) ? r->command[k - d] : 0.0);
+    if (device) {
+      device->Step(u);
+      continue;
+    }
     next.noalias() = ss.A * x;
     next += ss.B * u;
     x.swap(next);
@@ -547,7 +538,10 @@ bool SteeredSearch::RefineCrossings(const std::vector<Point>& scan, double to_hz
 
 // The sampled plant of the relay's loop: the model (with the hand when one is
 // given, as ZWidth samples it) by exact ZOH, its input delay moved into d.
+// With friction, an encoder or actuator limits: the continuous realisation
+// (period_s 0), which SimulateLoop runs on the stick-slip plant.
 model::StateSpace RelayPlant(const model::Plant& plant, const RelayOptions& o) {
+  if (o.Nonlinear()) return ContinuousStateSpaceWithHand(plant, o.loop.hand);
   model::StateSpace ss = o.loop.hand.IsNone()
                       ? model::DiscretizeZoh(plant, o.period_s)
                       : DiscretizeZohStateSpace(ContinuousStateSpaceWithHand(plant, o.loop.hand), o.period_s);

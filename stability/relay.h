@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "model/friction.h"
 #include "model/plant.h"
 #include "stability/loop_options.h"
 
@@ -33,6 +34,14 @@ struct RelayOptions {
   double seconds = 30.0;      // simulated time [s], > 0
   double settle_fraction = 0.5;  // leading fraction discarded as transient, [0, 0.9]
   LoopOptions loop;  // velocity filter F(z) on the damping term and the user's hand; default: the paper's loop
+  // The device's nonlinear parts (issue 32): Coulomb friction at the plant
+  // input (simulated exactly, model/nonlinear_simulate.h), the actuator's DAC
+  // step and saturation on the command, the encoder's step on the position
+  // the relay and the damping see [rad, >= 0; 0 = exact]. Default: none (the linear loop).
+  model::Friction friction;
+  model::Actuator actuator;
+  double encoder_step = 0.0;
+  bool Nonlinear() const { return !friction.IsZero() || !actuator.IsZero() || encoder_step > 0.0; }
   bool IsValid(std::string* why) const;  // names the field: "RelayOptions::seconds must be > 0"
 };
 

@@ -7,6 +7,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "model/error.h"
+#include "stability/closed_loop.h"
 #include "stability/haptic_loop.h"
 
 namespace zwidth::stability {
@@ -35,20 +36,26 @@ model::StateSpace Sampled(const model::Plant& plant, double period_s, const Hand
 // exactly known discrete poles e^{pT}; *hand_poles gets the continuous poles
 // with Im > 0 of the plant with the hand (none without a hand).
 std::vector<double> DiscreteDenominator(const model::Plant& plant, double T, const Hand& hand_in, bool has_integrator,
-                                        std::vector<std::complex<double>>* hand_poles) {
+                                        std::vector<std::complex<double>>* hand_poles,
+                                        std::vector<std::complex<double>>* roots) {
   const bool hand = !hand_in.IsNone();
   std::vector<double> den1 = {1.0};
   if (!hand) {
     den1 = PolyMul(den1, {-std::exp(-plant.b / plant.m * T), 1.0});
+    roots->push_back(std::exp(-plant.b / plant.m * T));
     for (const model::Mode& md : plant.modes) {
       const double disc = md.c * md.c / 4.0 - md.omega * md.omega;
       if (disc < 0.0) {
         const double r = std::exp(-md.c * T / 2.0), wd = std::sqrt(-disc);
         den1 = PolyMul(den1, {r * r, -2.0 * r * std::cos(wd * T), 1.0});
+        roots->push_back(std::polar(r, wd * T));
+        roots->push_back(std::polar(r, -wd * T));
       } else {
         const double s = std::sqrt(disc);
         den1 = PolyMul(den1, {-std::exp((-md.c / 2.0 + s) * T), 1.0});
         den1 = PolyMul(den1, {-std::exp((-md.c / 2.0 - s) * T), 1.0});
+        roots->push_back(std::exp((-md.c / 2.0 + s) * T));
+        roots->push_back(std::exp((-md.c / 2.0 - s) * T));
       }
     }
   } else {
@@ -67,8 +74,11 @@ std::vector<double> DiscreteDenominator(const model::Plant& plant, double T, con
         const double r = std::exp(l.real() * T);
         den1 = PolyMul(den1, {r * r, -2.0 * r * std::cos(l.imag() * T), 1.0});
         hand_poles->push_back(l);
+        roots->push_back(std::exp(l * T));
+        roots->push_back(std::exp(std::conj(l) * T));
       } else if (l.imag() == 0.0) {
         den1 = PolyMul(den1, {-std::exp(l.real() * T), 1.0});
+        roots->push_back(std::exp(l.real() * T));
       }
     }
   }
@@ -78,13 +88,18 @@ std::vector<double> DiscreteDenominator(const model::Plant& plant, double T, con
 }  // namespace
 
 SampledPlant::SampledPlant(const model::Plant& plant, double period_s, const Hand& hand_in) {
-  auto d = std::make_shared<Data>(Sampled(plant, period_s, hand_in));
+  const model::StateSpace discrete = Sampled(plant, period_s, hand_in);
+  auto d = std::make_shared<Data>(discrete);
+  d->discrete = discrete;
   d->plant = plant;
   d->period_s = period_s;
   d->hand = hand_in;
   const double T = period_s;
   const bool hand = !hand_in.IsNone();
   d->has_integrator = !(hand_in.K > 0.0);
+  // The rigid body's position (m theta) is the cascade's last state but one
+  // (model/state_space.h); nothing else depends on it without hand stiffness.
+  d->position_state = d->has_integrator ? static_cast<int>(discrete.A.rows()) - 2 : -1;
   if (!hand) {
     std::vector<double> sec;
     for (const model::Mode& md : plant.modes) sec.insert(sec.end(), {md.omega, md.c, md.v, md.d});
@@ -100,9 +115,14 @@ SampledPlant::SampledPlant(const model::Plant& plant, double period_s, const Han
   }
   // Denominator from the exactly known discrete poles e^{pT}.
   std::vector<std::complex<double>> hand_poles;  // continuous poles with Im > 0 (hand only)
-  d->den1 = DiscreteDenominator(plant, T, hand_in, d->has_integrator, &hand_poles);
+  std::vector<std::complex<double>> poles;
+  d->den1 = DiscreteDenominator(plant, T, hand_in, d->has_integrator, &hand_poles, &poles);
   const std::vector<double>& den1 = d->den1;
   d->den = d->has_integrator ? PolyMul(den1, {-1.0, 1.0}) : den1;
+  for (const std::complex<double>& r : poles) {
+    const double shift = RootDisplacementBound(d->den, {r}) / (1.0 - std::abs(r));
+    d->denominator_pole_shift = std::max(d->denominator_pole_shift, shift >= 0.0 ? shift : INFINITY);
+  }
   // Numerator by interpolation at n rotated roots of unity (none is a pole).
   const int n = static_cast<int>(d->den.size()) - 1;
   d->num.assign(n, 0.0);

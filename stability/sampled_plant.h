@@ -57,6 +57,16 @@ class SampledPlant {
   // Theta points in (0, pi) dense around every resonance and antiresonance
   // (and the hand's poles), unsorted.
   const std::vector<double>& mode_patch_theta() const { return d_->patch_theta; }
+  // The discrete state space (balanced ZOH, no delay) and the index of the
+  // integrator's (position) state in it, -1 without an integrator.
+  const model::StateSpace& discrete() const { return d_->discrete; }
+  int position_state() const { return d_->position_state; }
+  // How far rounding D(z)'s coefficients to double moves its exactly known
+  // roots e^{pT} (RootDisplacementBound, stability/closed_loop.h), relative to
+  // each one's distance to the unit circle: the largest ratio (the integrator
+  // at z = 1 aside). ~1e-12 for a few separated modes; 1 and more for many
+  // lightly damped modes crowded together, where no polynomial test holds.
+  double denominator_pole_shift() const { return d_->denominator_pole_shift; }
   // G_d(-1).
   std::complex<double> gd_at_minus_one() const { return d_->g_minus_one; }
 
@@ -72,6 +82,9 @@ class SampledPlant {
     std::vector<double> num, den, den1;
     std::vector<double> patch_theta;
     std::complex<double> g_minus_one;
+    model::StateSpace discrete;
+    int position_state = -1;
+    double denominator_pole_shift = 0.0;
     explicit Data(const model::StateSpace& s) : response(s) {}
   };
   std::shared_ptr<const Data> d_;

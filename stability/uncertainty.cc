@@ -1,5 +1,6 @@
 #include "stability/uncertainty.h"
 
+#include "model/cancel.h"
 #include "stability/haptic_loop.h"
 
 #include <cmath>
@@ -211,6 +212,7 @@ MonteCarloResult SummaryMonteCarlo(const model::Plant& plant, const std::vector<
   double sum[4] = {0, 0, 0, 0}, sum2[4] = {0, 0, 0, 0};
   int cnt[4] = {0, 0, 0, 0};
   for (int k = 0; k < samples; ++k) {
+    PollCancel();  // model/cancel.h: a host's Ctrl-C
     Eigen::VectorXd u(p);
     for (int i = 0; i < p; ++i) u[i] = n01(rng);
     const Eigen::VectorXd dx = L * u;

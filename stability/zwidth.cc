@@ -8,7 +8,9 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "model/cancel.h"
 #include "model/error.h"
+#include "stability/closed_loop.h"
 #include "stability/haptic_loop.h"
 #include "stability/schur_cohn.h"
 #include <Eigen/Eigenvalues>
@@ -142,7 +144,10 @@ ZWidth::ZWidth(const SampledPlant& sampled, int delay_samples, const LoopOptions
     for (size_t i = 0; i < loop_.filter_b.size(); ++i) fn_[L - i] = loop_.filter_b[i];
     for (size_t i = 0; i < loop_.filter_a.size(); ++i) fd_[L - i] = loop_.filter_a[i];
   }
+  closed_loop_ = std::make_shared<const ClosedLoopMatrix>(sp_.discrete(), sp_.position_state(), loop_.filter_b,
+                                                          loop_.filter_a, total_delay_, period_s_);
   BuildGrid();
+  ChooseStabilityTest();
   const std::complex<double> gpi = sp_.gd_at_minus_one();
   const double sgn = (total_delay_ % 2 == 0) ? 1.0 : -1.0;  // z^d at z = -1
   K_pi_at_zero_B_ = (-sgn / gpi).real();
@@ -224,6 +229,35 @@ void ZWidth::Point(double theta, double* B, double* K) const {
   *K = W.real() - W.imag() * (s / (1.0 + c));  // tan(theta / 2)
 }
 
+void ZWidth::ChooseStabilityTest() {
+  // Schur-Cohn reads the polynomial's coefficients, and rounding them moves
+  // its roots. Two checks that it cannot misplace a root across the circle:
+  // D(z)'s exactly known poles (K -> 0+) move by under 1e-3 of their distance
+  // to the circle, and on the D-decomposition curve, where e^{j theta} is an
+  // exact root at (K(theta), B(theta)), the rounding moves the boundary by a
+  // relative dK/K or dB/B of at most kPolynomialRelativeTolerance:
+  // eps sum |p_k| / |dP/dK K| (or / |dP/dB B|), since dz = -dP / P'(z).
+  polynomial_error_ = 0.0;
+  const bool poles_ok = sp_.denominator_pole_shift() <= 1e-3;
+  for (size_t i = 0; poles_ok && i < grid_theta_.size(); ++i) {
+    const double K = grid_K_[i], B = grid_B_[i];
+    if (!(std::isfinite(K) && std::isfinite(B) && K >= 0.0 && B >= 0.0)) continue;
+    const std::vector<double> p = CharacteristicPolynomial(K, B);
+    const std::complex<double> z = std::polar(1.0, grid_theta_[i]);
+    double mag = 0.0;
+    for (double c : p) mag += std::abs(c);
+    std::complex<double> n = 0.0, fd = 0.0, fn = 0.0;
+    for (size_t k = sp_.numerator().size(); k-- > 0;) n = n * z + sp_.numerator()[k];
+    for (size_t k = fd_.size(); k-- > 0;) fd = fd * z + fd_[k];
+    for (size_t k = fn_.size(); k-- > 0;) fn = fn * z + fn_[k];
+    const double dp = std::max(std::abs(K * z * fd * n), std::abs(B / period_s_ * (z - 1.0) * fn * n));
+    const double e = 2.220446049250313e-16 * mag / dp;
+    polynomial_error_ = std::max(polynomial_error_, std::isfinite(e) ? e : 1.0);
+    if (polynomial_error_ > kPolynomialRelativeTolerance) break;
+  }
+  use_polynomial_ = poles_ok && polynomial_error_ <= kPolynomialRelativeTolerance;
+}
+
 double ZWidth::HzOf(double theta) const { return theta / (2.0 * std::numbers::pi * period_s_); }
 
 std::vector<Crossing> ZWidth::Crossings(double B) const {
@@ -280,7 +314,19 @@ std::vector<double> ZWidth::CharacteristicPolynomial(double K, double B) const {
   return p;
 }
 
-bool ZWidth::IsStable(double K, double B) const {
+bool ZWidth::IsStable(double K, double B) const { return UnstableRoots(K, B) == 0; }
+
+int ZWidth::UnstableRoots(double K, double B) const {
+  if (!use_polynomial_) {
+    // The closed-loop state matrix (stability/closed_loop.h): K = 0 is 0+,
+    // the integrator's eigenvalue at 1 deflated (it moves inside for K > 0).
+    if (K < 0.0 && has_integrator_) return 1;
+    return closed_loop_->RootsOutside(K, B, K == 0.0 && has_integrator_);
+  }
+  return PolynomialStable(K, B) ? 0 : 1;
+}
+
+bool ZWidth::PolynomialStable(double K, double B) const {
   if (K > 0.0 || !has_integrator_) return AllRootsInsideUnitCircle(CharacteristicPolynomial(K, B));
   if (K < 0.0) return false;  // the integrator pole leaves through z = 1
   // K = 0+: the factor (z - 1) leaves z^{d+1} D1(z) F_d(z) + (B/T) F_n(z) N(z).
@@ -352,7 +398,7 @@ CriticalPoint ZWidth::PointFrom(double B, const std::vector<Crossing>& xs, const
     const double db = std::abs(std::log(x.K));
     if (db < best_db) { best_db = db; cp.K_margin = x.K; cp.f_margin_hz = HzOf(x.theta); }
   }
-  if (!stable(0.0)) {
+  if (stable(0.0) != 0) {
     cp.unstable_at_zero_k = true;
     cp.K_cr = 0.0;
     cp.verified = true;
@@ -366,7 +412,7 @@ CriticalPoint ZWidth::PointFrom(double B, const std::vector<Crossing>& xs, const
     // No crossing with K > 0: every K > 0 is as stable as K -> 0+, unless a
     // crossing at K ~ 0 was lost to rounding (B on the K = 0 boundary, e.g.
     // exactly at B_max_from_zero): then nothing is stable.
-    if (!stable(NoCrossingProbe(xs))) {
+    if (stable(NoCrossingProbe(xs)) != 0) {
       cp.K_cr = 0.0;
       cp.verified = false;
       return cp;
@@ -375,7 +421,7 @@ CriticalPoint ZWidth::PointFrom(double B, const std::vector<Crossing>& xs, const
     return cp;
   }
   cp.verified = !verify || !options_.verify ||
-                (stable(cp.K_cr * (1.0 - 1e-6)) && !stable(cp.K_cr * (1.0 + 1e-6)));
+                (stable(cp.K_cr * (1.0 - 1e-6)) == 0 && stable(cp.K_cr * (1.0 + 1e-6)) != 0);
   return cp;
 }
 
@@ -394,11 +440,16 @@ std::vector<KInterval> ZWidth::IntervalsFrom(const std::vector<Crossing>& xs, co
   std::vector<Crossing> pos;
   for (const Crossing& x : xs) if (x.K > 0.0 && std::isfinite(x.K)) pos.push_back(x);
   std::sort(pos.begin(), pos.end(), [](const Crossing& a, const Crossing& b) { return a.K < b.K; });
-  // Merge coincident crossings (a double root at one K).
+  // Merge coincident crossings (a double root at one K); weight: how many
+  // roots can cross the circle there (a conjugate pair at 0 < theta < pi, one
+  // real root at theta = pi).
   std::vector<Crossing> ks;
+  std::vector<int> weight;
   for (const Crossing& x : pos) {
-    if (!ks.empty() && x.K - ks.back().K <= 1e-13 * x.K) continue;
+    const int w = x.theta < std::numbers::pi ? 2 : 1;
+    if (!ks.empty() && x.K - ks.back().K <= 1e-13 * x.K) { weight.back() += w; continue; }
     ks.push_back(x);
+    weight.push_back(w);
   }
   const double inf = std::numeric_limits<double>::infinity();
   const size_t n = ks.size();
@@ -406,14 +457,21 @@ std::vector<KInterval> ZWidth::IntervalsFrom(const std::vector<Crossing>& xs, co
   // Region i lies between bound(i) and bound(i + 1); bound(0) = 0, bound(n + 1) = inf.
   auto lo_of = [&](size_t i) { return i == 0 ? 0.0 : ks[i - 1].K; };
   auto hi_of = [&](size_t i) { return i == n ? inf : ks[i].K; };
+  // Roots cross the circle only at crossings: a region after one with u
+  // unstable roots has at least u - weight unstable, and is not tested while
+  // that is positive (the eigenvalue test counts u; Schur-Cohn says u >= 1).
+  int unstable_at_least = 0;
   for (size_t i = 0; i <= n; ++i) {
+    if (i > 0) unstable_at_least -= weight[i - 1];
+    if (unstable_at_least > 0) continue;
     const double a = lo_of(i), b = hi_of(i);
     double probe;
     if (i == 0) probe = n == 0 ? 0.0 : 0.5 * b;  // K -> 0+ when there is no crossing at all
     else if (i == n) probe = 2.0 * a;
     else probe = std::sqrt(a * b);
-    if (!stable(probe)) continue;
-    if (n == 0 && !stable(NoCrossingProbe(xs))) continue;  // see PointFrom
+    unstable_at_least = stable(probe);
+    if (unstable_at_least != 0) continue;
+    if (n == 0 && stable(NoCrossingProbe(xs)) != 0) continue;  // see PointFrom
     if (!out.empty() && out.back().K_hi == a) {  // a tangential crossing: both sides stable
       out.back().K_hi = b;
       out.back().f_hi_hz = i == n ? std::numeric_limits<double>::quiet_NaN() : HzOf(ks[i].theta);
@@ -430,8 +488,8 @@ std::vector<KInterval> ZWidth::IntervalsFrom(const std::vector<Crossing>& xs, co
   for (KInterval& iv : out) {
     bool ok = true;
     if (check == Check::kVerify && options_.verify) {
-      if (iv.K_lo > 0.0) ok = ok && stable(iv.K_lo * (1.0 + 1e-6)) && !stable(iv.K_lo * (1.0 - 1e-6));
-      if (std::isfinite(iv.K_hi)) ok = ok && stable(iv.K_hi * (1.0 - 1e-6)) && !stable(iv.K_hi * (1.0 + 1e-6));
+      if (iv.K_lo > 0.0) ok = ok && stable(iv.K_lo * (1.0 + 1e-6)) == 0 && stable(iv.K_lo * (1.0 - 1e-6)) != 0;
+      if (std::isfinite(iv.K_hi)) ok = ok && stable(iv.K_hi * (1.0 - 1e-6)) == 0 && stable(iv.K_hi * (1.0 + 1e-6)) != 0;
     }
     iv.verified = ok;
   }
@@ -439,28 +497,28 @@ std::vector<KInterval> ZWidth::IntervalsFrom(const std::vector<Crossing>& xs, co
 }
 
 CriticalPoint ZWidth::At(double B) const {
-  return PointFrom(B, Crossings(B), [&](double K) { return IsStable(K, B); }, Check::kVerify);
+  return PointFrom(B, Crossings(B), [&](double K) { return UnstableRoots(K, B); }, Check::kVerify);
 }
 
 std::vector<KInterval> ZWidth::StableIntervals(double B) const {
-  return IntervalsFrom(Crossings(B), [&](double K) { return IsStable(K, B); }, Check::kVerify);
+  return IntervalsFrom(Crossings(B), [&](double K) { return UnstableRoots(K, B); }, Check::kVerify);
 }
 
 CriticalPoint ZWidth::ValueAt(double B) const {
-  return PointFrom(B, Crossings(B), [&](double K) { return IsStable(K, B); }, Check::kValuesOnly);
+  return PointFrom(B, Crossings(B), [&](double K) { return UnstableRoots(K, B); }, Check::kValuesOnly);
 }
 
 bool ZWidth::AnyStable(double B) const {
-  return !IntervalsFrom(Crossings(B), [&](double K) { return IsStable(K, B); }, Check::kFirstOnly).empty();
+  return !IntervalsFrom(Crossings(B), [&](double K) { return UnstableRoots(K, B); }, Check::kFirstOnly).empty();
 }
 
 ZWidth::Row ZWidth::RowAt(double B) const {
   // The verification of K_CR and of the first interval's upper end test the
   // same K values: each K is tested once (B is fixed, so K decides).
-  std::vector<std::pair<double, bool>> tested;
+  std::vector<std::pair<double, int>> tested;
   auto stable = [&](double K) {
     for (const auto& [k, s] : tested) if (k == K) return s;
-    const bool s = IsStable(K, B);
+    const int s = UnstableRoots(K, B);
     tested.push_back({K, s});
     return s;
   };
@@ -506,6 +564,9 @@ double ZWidth::StableBBound() const {
 DelaySummary ZWidth::Summarize() const {
   DelaySummary s;
   s.delay_samples = total_delay_;
+  s.polynomial_test = use_polynomial_;
+  s.polynomial_error = polynomial_error_;
+  s.pole_shift = sp_.denominator_pole_shift();
   const CriticalPoint c0 = ValueAt(0.0);
   s.K_cr_at_zero_B = c0.K_cr;
   s.f_at_zero_B_hz = c0.f_cr_hz;
@@ -524,6 +585,7 @@ std::vector<double> ZWidth::ZeroKBoundary(const CriticalPoint& c0, DelaySummary*
   std::vector<double> cand;
   auto Kof = [this](double t) { double b, k; Point(t, &b, &k); return k; };
   for (size_t i = 1; i < grid_theta_.size(); ++i) {
+    if ((i & 255) == 0) PollCancel();  // model/cancel.h: a host's Ctrl-C
     if ((grid_K_[i - 1] > 0) != (grid_K_[i] > 0)) {
       const double t = BrentRoot(Kof, grid_theta_[i - 1], grid_theta_[i], grid_K_[i - 1],
                                  grid_K_[i], options_.theta_tolerance);
@@ -582,7 +644,7 @@ void ZWidth::ScanStableB(const std::vector<double>& cand, DelaySummary* out) con
     std::vector<char> st(bs.size());
     std::vector<double> kmax(bs.size(), 0.0);
     for (size_t i = 0; i < bs.size(); ++i) {
-      const std::vector<KInterval> iv = IntervalsFrom(Crossings(bs[i]), [&](double K) { return IsStable(K, bs[i]); },
+      const std::vector<KInterval> iv = IntervalsFrom(Crossings(bs[i]), [&](double K) { return UnstableRoots(K, bs[i]); },
                                                       Check::kValuesOnly);
       st[i] = !iv.empty();
       for (const KInterval& v : iv) kmax[i] = std::max(kmax[i], std::isfinite(v.K_hi) ? v.K_hi : v.K_lo);
@@ -635,7 +697,7 @@ void ZWidth::ScanKcrMax(const CriticalPoint& c0, const std::vector<double>& cand
     const CriticalPoint cp = ValueAt(b);
     if (!(cp.K_cr > 0.0) || std::isinf(cp.K_cr)) break;
     if (cp.K_cr > s.K_cr_max) { s.K_cr_max = cp.K_cr; s.B_at_K_cr_max = b; }
-    if (!s.has_transition && std::abs(std::log(cp.f_cr_hz / prev_f)) > std::log(1.5)) {
+    if (std::abs(std::log(cp.f_cr_hz / prev_f)) > std::log(1.5)) {
       const double bt = FindTransition(prev_b, b, prev_f, cp.f_cr_hz);
       // Beyond FindTransition's final bracket (1e-14 absolute below B = 1).
       const double eps = std::max(1e-9 * bt, 2e-14 * std::max(1.0, bt));
@@ -646,14 +708,23 @@ void ZWidth::ScanKcrMax(const CriticalPoint& c0, const std::vector<double>& cand
       // A jump only when f_CR really jumps at bt: a smooth but steep f_CR(B)
       // can also change by 1.5x between two scan points.
       if (std::abs(std::log(after.f_cr_hz / before.f_cr_hz)) > std::log(1.5)) {
-        s.has_transition = true;
-        s.B_t = bt;
-        s.f_before_hz = before.f_cr_hz;
-        s.f_after_hz = after.f_cr_hz;
+        s.frequency_jumps.push_back({bt, before.K_cr, after.K_cr, before.f_cr_hz, after.f_cr_hz});
       }
     }
     prev_f = cp.f_cr_hz;
     prev_b = b;
+  }
+  // B_t (the paper's section III): where K_CR(B) peaks as f_CR jumps: of
+  // every jump, the one with the largest K_CR on either side.
+  const FrequencyJump* peak = nullptr;
+  for (const FrequencyJump& j : s.frequency_jumps) {
+    if (!peak || std::max(j.K_before, j.K_after) > std::max(peak->K_before, peak->K_after)) peak = &j;
+  }
+  if (peak) {
+    s.has_transition = true;
+    s.B_t = peak->B;
+    s.f_before_hz = peak->f_before_hz;
+    s.f_after_hz = peak->f_after_hz;
   }
   // Refine an interior maximum that is not at the transition.
   if (s.B_at_K_cr_max > 0.0 && (!s.has_transition || std::abs(s.B_at_K_cr_max - s.B_t) > b_hi / n)) {

@@ -19,6 +19,7 @@
 #pragma once
 
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,13 @@
 #include "stability/sampled_plant.h"
 
 namespace zwidth::stability {
+
+class ClosedLoopMatrix;
+
+// Schur-Cohn decides only where rounding the characteristic polynomial moves
+// the boundary by at most this, relative (ZWidth::polynomial_error): 1e-3 of
+// the smallest offset at which the Z-width probes a boundary's sides (1e-6).
+constexpr double kPolynomialRelativeTolerance = 1e-9;
 
 struct BoundaryOptions {
   int min_grid_points = 2048;    // uniform theta grid on (0, pi), >= 64
@@ -82,12 +90,24 @@ struct ReopenedBand {
   double K_max = 0.0;  // N m/rad: largest stable K seen in the band (on the scan of Summarize)
 };
 
+// A jump of the critical frequency f_CR(B): another branch of the boundary
+// takes over K_CR there (K_CR is continuous or jumps too).
+struct FrequencyJump {
+  double B = 0.0;  // N m s/rad
+  double K_before = 0.0, K_after = 0.0;         // K_CR just below and just above B [N m/rad]
+  double f_before_hz = 0.0, f_after_hz = 0.0;   // f_CR just below and just above B
+};
+
 struct DelaySummary {
   int delay_samples = 0;   // loop delay d (the model's own delay is added)
   double K_cr_at_zero_B = std::numeric_limits<double>::quiet_NaN();
   double f_at_zero_B_hz = std::numeric_limits<double>::quiet_NaN();
+  // B_t as the paper defines it (section III): where K_CR(B) peaks and f_CR
+  // jumps, i.e. of the frequency_jumps the one with the largest K_CR (on a
+  // device with several modes f_CR can jump earlier, at a lower K_CR).
+  // f_before_hz / f_after_hz are that jump's.
   bool has_transition = false;
-  double B_t = std::numeric_limits<double>::quiet_NaN();         // f_CR jumps here
+  double B_t = std::numeric_limits<double>::quiet_NaN();
   double K_cr_max = std::numeric_limits<double>::quiet_NaN();    // max of K_CR(B)
   double B_at_K_cr_max = std::numeric_limits<double>::quiet_NaN();
   double f_before_hz = std::numeric_limits<double>::quiet_NaN();
@@ -104,6 +124,14 @@ struct DelaySummary {
   // be missed.
   double B_max = std::numeric_limits<double>::infinity();
   std::vector<ReopenedBand> reopened_bands;
+  // Every jump of f_CR on [0, B_max_from_zero), ascending in B (found on a
+  // 200-point scan: jumps closer together than its spacing count once).
+  std::vector<FrequencyJump> frequency_jumps;
+  // The stability test used (ZWidth::uses_polynomial_test) and its
+  // conditioning: ZWidth::polynomial_error, SampledPlant::denominator_pole_shift.
+  bool polynomial_test = true;
+  double polynomial_error = std::numeric_limits<double>::quiet_NaN();
+  double pole_shift = std::numeric_limits<double>::quiet_NaN();
 };
 
 // Standard deviations [same units as the quantity] of the summary's quantities
@@ -162,6 +190,10 @@ class ZWidth {
   // Schur-Cohn on the closed-loop polynomial; K = 0 is taken as 0+ (the pole
   // at z = 1 that K = 0 leaves on the circle moves inside for K > 0).
   bool IsStable(double K, double B) const;
+  // The number of closed-loop roots with |z| >= 1 at (K, B) (K = 0 as 0+):
+  // exact with the eigenvalue test, 0 or 1 (at least one) with Schur-Cohn.
+  // IsStable is UnstableRoots == 0: every caller's one test.
+  int UnstableRoots(double K, double B) const;
   DelaySummary Summarize() const;
   // All stable K intervals at this B, ascending. Empty when no K > 0 is stable.
   std::vector<KInterval> StableIntervals(double B) const;
@@ -182,8 +214,18 @@ class ZWidth {
   const LoopOptions& loop() const { return loop_; }
   double period_s() const { return period_s_; }
   const SampledPlant& sampled_plant() const { return sp_; }
-  // Closed-loop characteristic polynomial coefficients (z^0 first).
+  // Closed-loop characteristic polynomial coefficients (z^0 first). Its
+  // roots are only as good as polynomial_root_error() says.
   std::vector<double> CharacteristicPolynomial(double K, double B) const;
+  // How far rounding the characteristic polynomial's coefficients moves the
+  // boundary: the largest relative dK/K (or dB/B) over the D-decomposition
+  // curve (nan when D(z)'s own poles already move too far:
+  // SampledPlant::denominator_pole_shift). At most kPolynomialRelativeTolerance:
+  // IsStable runs Schur-Cohn on the polynomial (O(n^2)); else the eigenvalues
+  // of the closed-loop state matrix (stability/closed_loop.h, O(n^3),
+  // backward stable).
+  double polynomial_error() const { return polynomial_error_; }
+  bool uses_polynomial_test() const { return use_polynomial_; }
 
  private:
   // A monotone piece of B(theta); grid points ia..ib lie strictly inside it.
@@ -223,7 +265,15 @@ class ZWidth {
   // as stable as K -> 0+.
   double NoCrossingProbe(const std::vector<Crossing>& xs) const;
 
+  // Picks IsStable's test from polynomial_error().
+  void ChooseStabilityTest();
+  // Schur-Cohn on the characteristic polynomial (K = 0 as 0+).
+  bool PolynomialStable(double K, double B) const;
+
   SampledPlant sp_;
+  std::shared_ptr<const ClosedLoopMatrix> closed_loop_;
+  bool use_polynomial_ = false;
+  double polynomial_error_ = 0.0;
   double period_s_;
   int total_delay_;
   LoopOptions loop_;

@@ -104,6 +104,7 @@ TEST(AtomicFile, SigtermRemovesRegisteredFilesAndFoldersThenKills) {
   const pid_t pid = ::fork();
   ASSERT_GE(pid, 0);
   if (pid == 0) {
+    InstallCleanupSignalHandlers();  // as the zwidth command does
     OutputFolder* folder = new OutputFolder(dir / "run", false);  // never destroyed: the signal ends us
     fs::create_directories(fs::path(folder->temp_path()) / "figures");
     WriteFile(folder->temp_path() + "/model.json", "{}");
@@ -119,6 +120,103 @@ TEST(AtomicFile, SigtermRemovesRegisteredFilesAndFoldersThenKills) {
   ASSERT_TRUE(WIFSIGNALED(status));
   EXPECT_EQ(WTERMSIG(status), SIGTERM);
   EXPECT_TRUE(fs::is_empty(dir.path())) << "left: " << fs::directory_iterator(dir.path())->path();
+}
+
+// Issue 30: a closed pipe (`-o - | head`) and a file size limit (`ulimit -f`)
+// end the process too; the handler removes the temporaries first.
+class CleanupSignal : public ::testing::TestWithParam<int> {};
+
+TEST_P(CleanupSignal, RemovesTheTemporaryFileThenDiesOfTheSignal) {
+  TempDir dir("zwidth_safety_");
+  const int sig = GetParam();
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    InstallCleanupSignalHandlers();
+    WriteAtomically(dir / "big.csv", [sig](const std::string& tmp) {
+      WriteFile(tmp, std::string(1 << 16, 'x'));
+      ::raise(sig);
+    });
+    ::_exit(0);  // not reached
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFSIGNALED(status));
+  EXPECT_EQ(WTERMSIG(status), sig);
+  EXPECT_TRUE(fs::is_empty(dir.path()));
+}
+
+INSTANTIATE_TEST_SUITE_P(AtomicFile, CleanupSignal, ::testing::Values(SIGPIPE, SIGXFSZ),
+                         [](const ::testing::TestParamInfo<int>& i) { return i.param == SIGPIPE ? "Sigpipe" : "Sigxfsz"; });
+
+// A library never replaces its host's handlers (Python's SIGINT ->
+// KeyboardInterrupt was replaced by the first save()).
+TEST(AtomicFile, WritingLeavesTheHostsSignalHandlersAlone) {
+  TempDir dir("zwidth_safety_");
+  struct sigaction mine = {}, before = {}, after = {};
+  mine.sa_handler = [](int) {};
+  sigemptyset(&mine.sa_mask);
+  ASSERT_EQ(::sigaction(SIGINT, &mine, &before), 0);
+  WriteTextAtomically(dir / "a.txt", "a");
+  OutputFolder(dir / "out", false).Commit();
+  ASSERT_EQ(::sigaction(SIGINT, &before, &after), 0);
+  EXPECT_EQ(after.sa_handler, mine.sa_handler);
+}
+
+TEST(AtomicFile, OverwritingKeepsTheFilesPermissionBits) {
+  TempDir dir("zwidth_safety_");
+  WriteFile(dir / "secret.csv", "old");
+  ASSERT_EQ(::chmod((dir / "secret.csv").c_str(), 0600), 0);
+  WriteTextAtomically(dir / "secret.csv", "new");
+  struct stat st;
+  ASSERT_EQ(::stat((dir / "secret.csv").c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 07777, 0600u);
+  EXPECT_EQ(ReadFile(dir / "secret.csv"), "new");
+}
+
+// After SIGKILL a run's hidden temporary folder stays; the next run for the
+// same output removes it, but never a live run's nor a folder zwidth did not
+// make (no lock file in it).
+TEST(OutputFolder, TheNextRunRemovesAKilledRunsFolderOnly) {
+  TempDir dir("zwidth_safety_");
+  auto child = [&](bool wait_forever) {
+    int ready[2];
+    EXPECT_EQ(::pipe(ready), 0);
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+      OutputFolder* f = new OutputFolder(dir / "out", false);  // never destroyed
+      WriteFile(f->temp_path() + "/model.json", "{}");
+      (void)!::write(ready[1], "x", 1);
+      if (wait_forever) ::pause();
+      ::raise(SIGKILL);
+    }
+    char c;
+    EXPECT_EQ(::read(ready[0], &c, 1), 1);
+    ::close(ready[0]);
+    ::close(ready[1]);
+    return pid;
+  };
+  int status = 0;
+  const pid_t live = child(true);
+  const pid_t killed = child(false);
+  ASSERT_EQ(::waitpid(killed, &status, 0), killed);
+  fs::create_directory(dir / ".out.tmp-Abc123");  // not zwidth's: no lock file
+  auto temps = [&] {
+    int n = 0;
+    for (const auto& e : fs::directory_iterator(dir.path())) n += e.path().filename().string().rfind(".out.tmp-", 0) == 0;
+    return n;
+  };
+  ASSERT_EQ(temps(), 3);
+  {
+    OutputFolder f(dir / "out", false);
+    EXPECT_EQ(temps(), 3);  // the killed run's went, this one's came
+    f.Commit();
+  }
+  EXPECT_EQ(temps(), 2);  // the live run's and the foreign one
+  EXPECT_TRUE(fs::exists(dir / ".out.tmp-Abc123"));
+  EXPECT_FALSE(fs::exists(dir / "out/.zwidth-run.lock"));
+  ::kill(live, SIGKILL);
+  ASSERT_EQ(::waitpid(live, &status, 0), live);
 }
 
 TEST(OutputFolder, AppearsWholeOnCommitAndNotAtAllOnFailure) {

@@ -41,7 +41,7 @@ head -c 60 "$M" > "$T/trunc.json"
 expect model-truncated "not valid JSON" "$T/o10.csv" -- "$ZW" boundary "$T/trunc.json" -o "$T/o10.csv"
 sed 's/"modes"/"mdoes"/' "$M" > "$T/typo.json"
 expect model-unknown-key "unknown key 'mdoes'" "$T/o11.csv" -- "$ZW" boundary "$T/typo.json" -o "$T/o11.csv"
-expect negative-delay "delays must be >= 0" "$T/o12.csv" -- "$ZW" boundary "$M" --delays 2,-1 -o "$T/o12.csv"
+expect negative-delay "--delays = -1: a loop delay must lie in \[0, 1000\]" "$T/o12.csv" -- "$ZW" boundary "$M" --delays 2,-1 -o "$T/o12.csv"
 expect zero-period "period" "$T/o13.csv" -- "$ZW" boundary "$M" --period 0 -o "$T/o13.csv"
 expect window-longer "10000 samples.*fewer than one window of 16384.*--window-length 8192" "$T/o14.csv" -- "$ZW" estimate "$T/good.h5" --window-length 16384 -o "$T/o14.csv"
 expect overlap-one "overlap" "$T/o15.csv" -- "$ZW" estimate "$T/good.h5" --overlap 1 -o "$T/o15.csv"
@@ -55,7 +55,7 @@ expect check-scene-pipe "scene file is a FIFO.*not a regular file" "" -- "$ZW" c
 sed 's/"modes"/"covariance": {"space": "log", "parameters": ["m", "b"], "matrix": [[1e-4, 0], [0, 1e-4]]}, "modes"/' "$M" > "$T/cov.json"
 expect model-covariance-shape "covariance.parameters" "$T/o26.csv" -- "$ZW" boundary "$T/cov.json" -o "$T/o26.csv"
 expect b-grid-cap "over the cap.*--b-step" "$T/o24.csv" -- "$ZW" boundary "$M" --b-max 1e300 --b-step 1e-3 -o "$T/o24.csv"
-expect b-grid-bad-max "--b-max must be finite" "$T/o25.csv" -- "$ZW" boundary "$M" --b-max inf -o "$T/o25.csv"
+expect b-grid-bad-max "--b-max.*not a finite number" "$T/o25.csv" -- "$ZW" boundary "$M" --b-max inf -o "$T/o25.csv"
 # check: exit 3 (not 1 or 2) when an object is unstable, 0 when all are stable.
 echo '{"objects":[{"name":"ok","K":1,"B":0.01},{"name":"wall","K":80,"B":0.01}]}' > "$T/scene2.json"
 echo '{"objects":[{"name":"ok","K":1,"B":0.01}]}' > "$T/scene1.json"
@@ -63,6 +63,19 @@ echo '{"objects":[{"name":"ok","K":1,"B":0.01}]}' > "$T/scene1.json"
 "$ZW" check "$T/scene1.json" --model "$M" --delay 2 >/dev/null 2>&1; rc0=$?
 if [ $rc -eq 3 ] && [ $rc0 -eq 0 ] && grep -q "UNSTABLE" "$T/stdout"; then echo "ok   check-exit-3"; pass=$((pass+1));
 else echo "FAIL check-exit-3: exit $rc / $rc0"; cat "$T/stdout"; fail=$((fail+1)); fi
+# check with a model covariance (1 % relative std on every parameter): an object 0.1 % past K_cr
+# is within 2 std of the boundary, so 'marginal' and exit 4; --marginal-sigmas 0 gives the nominal 3.
+python3 -c "import json, sys; m = json.load(open(sys.argv[1])); n = 2 + 4 * len(m['modes']); \
+names = ['m', 'b'] + [f'modes[{i}].{k}' for i in range(len(m['modes'])) for k in ('omega', 'c', 'v', 'd')]; \
+m['covariance'] = {'space': 'log', 'parameters': names, 'matrix': [[1e-4 * (i == j) for j in range(n)] for i in range(n)]}; \
+json.dump(m, open(sys.argv[2], 'w'))" "$M" "$T/cov_full.json"
+kcr=$("$ZW" check "$T/scene1.json" --model "$M" --delay 2 --json | python3 -c "import json, sys; print(json.load(sys.stdin)['objects'][0]['K_cr'])")
+echo "{\"objects\":[{\"name\":\"edge\",\"K\":$(python3 -c "print($kcr * 1.001)"),\"B\":0.01}]}" > "$T/scene_edge.json"
+"$ZW" check "$T/scene_edge.json" --model "$T/cov_full.json" --delay 2 >"$T/stdout" 2>&1; rc=$?
+"$ZW" check "$T/scene_edge.json" --model "$T/cov_full.json" --delay 2 --marginal-sigmas 0 >/dev/null 2>&1; rc3=$?
+"$ZW" check "$T/scene_edge.json" --model "$M" --delay 2 >/dev/null 2>&1; rc_nocov=$?
+if [ $rc -eq 4 ] && [ $rc3 -eq 3 ] && [ $rc_nocov -eq 3 ] && grep -q "marginal .*std from the boundary" "$T/stdout"; then echo "ok   check-marginal-exit-4"; pass=$((pass+1));
+else echo "FAIL check-marginal-exit-4: exit $rc / $rc3 / $rc_nocov"; cat "$T/stdout"; fail=$((fail+1)); fi
 expect unknown-flag "unknown|extra|not expected" "" -- "$ZW" boundary "$M" --bogus 1 -o "$T/x.csv"
 awk -F, 'NR!=200' OFS=, "$T/good.csv" > "$T/gap.csv"
 expect not-uniform "not uniformly sampled" "$T/o18.csv" -- "$ZW" estimate "$T/gap.csv" -o "$T/o18.csv"

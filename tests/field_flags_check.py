@@ -1,11 +1,13 @@
 #!/usr/bin/env python3
 """The library names option fields (Struct::field) in its messages; the CLI maps
-them to flags through one table, FieldFlags() in apps/common.cc. This check keeps
-the table from going stale:
+them to flags and the Python module to keywords through one table, OptionNames()
+in io/option_names.cc. This check keeps the table from going stale:
 
 1. every Struct::field named in a string literal of the library (model/, ident/,
    fit/, stability/, io/, analysis/), or by a validator's bad("field ...") that
-   prepends "Struct::", has a row in the table;
+   prepends "Struct::", has a row in the table, with a flag and a keyword column
+   ("" where there is none; tests/python checks that each keyword is one the
+   module accepts);
 2. every row's field is still named by the library (no dead rows), and every
    row's flag is a flag the CLI registers (add_option / add_flag in apps/);
 3. no string literal of the library names a command-line flag ("--name");
@@ -63,6 +65,8 @@ for d in LIBRARY:
                 continue
             path = os.path.join(root, name)
             rel = os.path.relpath(path, src)
+            if rel == os.path.join("io", "option_names.cc"):
+                continue  # the table itself
             prefix = None  # a validator whose bad() prepends "Struct::" to each message
             for n, line in code_lines(path):
                 if line.startswith("}"):
@@ -80,13 +84,17 @@ for d in LIBRARY:
                         failures.append(f"{rel}:{n}: a library message names a command-line flag: {lit}")
 
 # The table.
-with open(os.path.join(src, "apps", "common.cc"), encoding="utf-8") as f:
+with open(os.path.join(src, "io", "option_names.cc"), encoding="utf-8") as f:
     common = f.read()
-body = common[common.index("FieldFlags() {"):]
+body = common[common.index("OptionNames() {"):]
 body = body[: body.index("return table;")]
-table = dict(re.findall(r'\{"([A-Za-z0-9_]+::[a-z_0-9]+)", "([^"]*)"\}', body))
+rows = re.findall(r'\{"([A-Za-z0-9_]+::[a-z_0-9]+)",\s*"([^"]*)"(?:,\s*"([^"]*)")?\}', body)
+table = {field: flag for field, flag, _ in rows}
+for field, flag, keyword in rows:
+    if not re.search(r'\{"' + re.escape(field) + r'",\s*"[^"]*",\s*"[^"]*"\}', body):
+        failures.append(f"OptionNames() row {field}: no Python keyword column (write \"\" when there is none)")
 if len(table) < 40:
-    failures.append(f"the table in apps/common.cc parsed to only {len(table)} rows")
+    failures.append(f"the table in io/option_names.cc parsed to only {len(table)} rows")
 
 # The flags the CLI registers.
 registered = set()
@@ -99,12 +107,12 @@ for name in os.listdir(os.path.join(src, "apps")):
 
 for field, where in sorted(named.items()):
     if field not in table:
-        failures.append(f"{where}: the library names {field}, which has no row in FieldFlags() (apps/common.cc)")
+        failures.append(f"{where}: the library names {field}, which has no row in OptionNames() (io/option_names.cc)")
 for field, flag in sorted(table.items()):
     if field not in named:
-        failures.append(f"FieldFlags() row {field}: no library message names it (stale row?)")
+        failures.append(f"OptionNames() row {field}: no library message names it (stale row?)")
     if flag and flag.split()[0] not in registered:
-        failures.append(f"FieldFlags() row {field}: {flag.split()[0]} is not a flag of any command")
+        failures.append(f"OptionNames() row {field}: {flag.split()[0]} is not a flag of any command")
 print(f"{len(named)} fields named by the library, {len(table)} table rows, "
       f"{sum(1 for v in table.values() if v)} with a flag, {len(registered)} CLI flags")
 

@@ -122,5 +122,32 @@ expect fit-one-whole-record "no per-bin std to weight the fit" "$T/e11.json" -- 
 expect excite-kind "--kind 'pink'" "$T/e9.txt" -- "$ZW" excite --kind pink -o "$T/e9.txt"
 expect run-bad-reference "cannot open|does it exist|not found" "$T/r9" -- "$ZW" run "$T/good.csv" -o "$T/r9" --reference "$T/absent.json"
 
+
+# Units in the header (issue 29): the same log in mN m and degrees (names), with a units row and
+# a decimal comma, and in encoder counts, gives the SI response; counts without a resolution are
+# refused with the flag to pass.
+$PY - "$T/good.csv" "$T" <<'PY'
+import math, sys
+rows = [l.split(",") for l in open(sys.argv[1]).read().splitlines()[1:]]
+d = sys.argv[2]
+open(d + "/mnm.csv", "w").write("t,torque [mNm],position [deg]\n" + "".join(
+    f"{t},{float(u) * 1e3!r},{float(y) * 180 / math.pi!r}\n" for t, u, y in rows))
+open(d + "/row.csv", "w").write("t;torque;position\ns;N mm;mrad\n" + "".join(
+    f"{t};{float(u) * 1e3!r};{float(y) * 1e3!r}\n".replace(".", ",") for t, u, y in rows))
+open(d + "/cnt.csv", "w").write("t,torque,position [counts]\n" + "".join(
+    f"{t},{u},{float(y) * 8192 / (2 * math.pi)!r}\n" for t, u, y in rows))
+PY
+"$ZW" estimate "$T/good.csv" -o "$T/uref.csv" 2>/dev/null
+"$ZW" estimate "$T/mnm.csv" --input-column "torque [mNm]" --output-column "position [deg]" -o "$T/u1.csv" 2>"$T/err"
+grep -q "input unit 'mNm' read: x 0.001 to N m; output unit 'deg' read" "$T/err" && same_frf "$T/uref.csv" "$T/u1.csv" 1e-6 >/dev/null \
+  && ok "header units mNm, deg read and said" || { bad "header units mNm, deg"; cat "$T/err"; }
+"$ZW" estimate "$T/row.csv" -o "$T/u2.csv" 2>"$T/err"
+grep -q "decimal comma.*units row at line 2" "$T/err" && same_frf "$T/uref.csv" "$T/u2.csv" 1e-6 >/dev/null \
+  && ok "units row and decimal comma read" || { bad "units row, decimal comma"; cat "$T/err"; }
+"$ZW" estimate "$T/cnt.csv" --output-column "position [counts]" --counts-per-rev 8192 -o "$T/u3.csv" 2>"$T/err"
+same_frf "$T/uref.csv" "$T/u3.csv" 1e-6 >/dev/null && ok "counts with --counts-per-rev" || { bad "counts with --counts-per-rev"; cat "$T/err"; }
+expect counts-need-resolution "--counts-per-rev N.*--counts-per-m N" "$T/u4.csv" -- "$ZW" estimate "$T/cnt.csv" --output-column "position [counts]" -o "$T/u4.csv"
+expect unknown-unit "unit 'lbf ft'.*--input-unit si" "$T/u5.csv" -- "$ZW" estimate "$T/mnm.csv" --input-column 2 --input-unit "lbf ft" --output-column 3 -o "$T/u5.csv"
+
 echo "$pass passed, $fail failed"
 [ $fail -eq 0 ]

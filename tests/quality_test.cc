@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "fit/fit.h"
+#include "fit/fit_internal.h"
 #include "ident/welch.h"
 #include "model/error.h"
 #include "model/plant.h"
@@ -134,6 +135,48 @@ TEST(FitQuality, SixSampleDelayIsFoundAutomatically) {
   EXPECT_EQ(r.plant.delay_samples, 6) << r.delay_choice;
   EXPECT_EQ(r.quality, FitQuality::kGood) << (r.reasons.empty() ? "" : r.reasons[0].message);
   EXPECT_FALSE(r.delay_choice.empty());
+}
+
+// The advice of a poor fit is assembled from optional parts (more modes, a
+// delay, a band): whatever the options leave out, it must read as one
+// sentence ("...: or a band" was written when both optional parts were
+// empty). Residuals of one sign over 300 bins set off both chi2_per_dof and
+// residual_runs for every combination of auto_modes, auto_delay and an order
+// search at its limit.
+TEST(FitQuality, AdviceReadsAsOneSentenceWhateverTheOptions) {
+  EXPECT_EQ(internal::Alternatives({}), "");
+  EXPECT_EQ(internal::Alternatives({"", "a", ""}), "a");
+  EXPECT_EQ(internal::Alternatives({"a", "", "b"}), "a or b");
+  EXPECT_EQ(internal::Alternatives({"a", "b", "c"}), "a, b, or c");
+  for (int mask = 0; mask < 8; ++mask) {
+    internal::Fixed fx;
+    for (int k = 0; k < 300; ++k) {
+      fx.f_hz.push_back(1.0 + k);
+      fx.r.push_back({3.0, 3.0});
+    }
+    fx.res.chi2_per_dof = 50;
+    fx.res.num_residuals = 600;
+    fx.res.num_parameters = 2;
+    fx.res.plant = model::PhantomTable1();
+    ident::FrequencyResponse sub;
+    sub.num_averages = 20;
+    FitOptions o;
+    o.auto_modes = mask & 1;
+    o.auto_delay = mask & 2;
+    o.max_modes = (mask & 4) ? 2 : 4;
+    internal::JudgeQuality(fx, sub, o, &fx.res);
+    int judged = 0;
+    for (const auto& q : fx.res.reasons) {
+      if (q.code != "chi2_per_dof" && q.code != "residual_runs") continue;
+      ++judged;
+      for (const char* bad : {": or ", "try or ", ", ,", ", or or", "  ", ": ,", "try ,"}) {
+        EXPECT_EQ(q.advice.find(bad), std::string::npos) << "mask " << mask << ": '" << bad << "' in " << q.advice;
+      }
+      EXPECT_NE(q.advice.back(), ' ') << q.advice;
+      EXPECT_NE(q.advice.back(), ',') << q.advice;
+    }
+    EXPECT_EQ(judged, 2) << "mask " << mask;
+  }
 }
 
 TEST(FitQuality, SectionsAreNamedFromOneInCanonicalOrder) {

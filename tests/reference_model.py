@@ -14,3 +14,50 @@ def plant_tf(model):
         num = np.polymul(num, np.array([1.0, d, v * v]) * (w * w) / (v * v))
         den = np.polymul(den, [1.0, c, w * w])
     return num, den
+
+
+def cascade_zoh(model, T):
+    """(Ad, Bd, Cd) of the exact ZOH of G(s): each factor (rigid body, then every section) its own
+    small state space (scipy.signal.tf2ss), joined by the series rule, then cont2discrete. Its
+    eigenvalues keep their digits where the roots of the expanded polynomials do not (a lightly
+    damped zero, the double pole at z = 1), so a check built on it does not depend on how a
+    LAPACK resolves an ill-conditioned root."""
+    import scipy.signal as ss
+    factors = [([1.0], [model["m"], model["b"], 0.0])]
+    for md in model["modes"]:
+        w, c, v, dd = md["omega"], md["c"], md["v"], md["d"]
+        factors.append((np.array([1.0, dd, v * v]) * w * w / (v * v), [1.0, c, w * w]))
+    A = Bs = C = Dd = None
+    for num, den in factors:
+        a2, b2, c2, d2 = ss.tf2ss(num, den)
+        if A is None:
+            A, Bs, C, Dd = a2, b2, c2, d2
+            continue
+        n1, n2 = A.shape[0], a2.shape[0]  # u -> (A, Bs, C, Dd) -> (a2, b2, c2, d2)
+        A = np.block([[A, np.zeros((n1, n2))], [b2 @ C, a2]])
+        Bs = np.vstack([Bs, b2 @ Dd])
+        C = np.hstack([d2 @ C, c2])
+        Dd = d2 @ Dd
+    Ad, Bd, Cd, _, _ = ss.cont2discrete((A, Bs, C, Dd), T, method="zoh")
+    return Ad, Bd, Cd
+
+
+def loop_eigenvalues(Ad, Bd, Cd, K, B, dt, T):
+    """Closed-loop poles of eq. (2) as the eigenvalues of one matrix over
+    [x_k, v_{k-1} .. v_{k-dt}, y_{k-1}], v the controller output -(K y_k + (B/T)(y_k - y_{k-1}))
+    delayed dt samples."""
+    nx = Ad.shape[0]
+    M = np.zeros((nx + dt + 1, nx + dt + 1))
+    vrow = np.zeros(nx + dt + 1)  # v_k = -(K + B/T) C x_k + (B/T) y_{k-1}
+    vrow[:nx] = -(K + B / T) * Cd[0]
+    vrow[nx + dt] = B / T
+    M[:nx, :nx] = Ad
+    if dt == 0:
+        M[:nx, :] += np.outer(Bd[:, 0], vrow)
+    else:
+        M[:nx, nx + dt - 1] += Bd[:, 0]
+        M[nx, :] = vrow
+        for i in range(1, dt):
+            M[nx + i, nx + i - 1] = 1.0
+    M[nx + dt, :nx] = Cd[0]
+    return np.linalg.eigvals(M)

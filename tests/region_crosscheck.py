@@ -23,6 +23,7 @@ except ImportError as e:
     print(f"skipped: {e}")
     sys.exit(77)
 import scipy.linalg as sl
+from reference_model import cascade_zoh, loop_eigenvalues
 
 zw = sys.argv[1]
 T = 1e-3
@@ -53,40 +54,10 @@ for n, (model, d) in enumerate(devices):
     subprocess.run([zw, "boundary", path, "--delays", str(d), "--b-points", "40", "-o", csv, "--summary", summ],
                    check=True, capture_output=True)
     dt = d + model.get("delay_samples", 0)
-    factors = [([1.0], [model["m"], model["b"], 0.0])]
-    for md in model["modes"]:
-        w, c, v, dd = md["omega"], md["c"], md["v"], md["d"]
-        factors.append((np.array([1.0, dd, v * v]) * w * w / (v * v), [1.0, c, w * w]))
-    A = np.zeros((0, 0)); Bs = np.zeros((0, 1)); C = np.zeros((1, 0)); Dd = np.zeros((1, 1)); first = True
-    for num, den in factors:
-        a2, b2, c2, d2 = ss.tf2ss(num, den)
-        if first:
-            A, Bs, C, Dd, first = a2, b2, c2, d2, False
-            continue
-        n1, n2 = A.shape[0], a2.shape[0]  # u -> (A, Bs, C, Dd) -> (a2, b2, c2, d2)
-        A = np.block([[A, np.zeros((n1, n2))], [b2 @ C, a2]])
-        Bs = np.vstack([Bs, b2 @ Dd])
-        C = np.hstack([d2 @ C, c2])
-        Dd = d2 @ Dd
-    Ad, Bd, Cd, _, _ = ss.cont2discrete((A, Bs, C, Dd), T, method="zoh")
-    nx = Ad.shape[0]
+    Ad, Bd, Cd = cascade_zoh(model, T)
 
     def stable(K, B):
-        M = np.zeros((nx + dt + 1, nx + dt + 1))
-        # v_k = -(K + B/T) C x_k + (B/T) y_{k-1}
-        vrow = np.zeros(nx + dt + 1)
-        vrow[:nx] = -(K + B / T) * Cd[0]
-        vrow[nx + dt] = B / T
-        M[:nx, :nx] = Ad
-        if dt == 0:
-            M[:nx, :] += np.outer(Bd[:, 0], vrow)
-        else:
-            M[:nx, nx + dt - 1] += Bd[:, 0]
-            M[nx, :] = vrow
-            for i in range(1, dt):
-                M[nx + i, nx + i - 1] = 1.0
-        M[nx + dt, :nx] = Cd[0]
-        return np.max(np.abs(np.linalg.eigvals(M))) < 1.0
+        return np.max(np.abs(loop_eigenvalues(Ad, Bd, Cd, K, B, dt, T))) < 1.0
 
     rows = np.genfromtxt(csv, delimiter=",", names=True)
     by_b = {}

@@ -2,12 +2,12 @@
 """The Z-width and the relay, checked from outside, run by ctest.
 
 The reference is built here from nothing of zwidth's: SciPy's cont2discrete
-(ZOH) of Table I's G(s) as a polynomial ratio N(z)/D(z), then the closed loop of
-eq. (2) multiplied out,
-
-    P_K(z) = z^(d+1) D(z) + (B/T) (z - 1) N(z) + K z N(z),
-
-whose roots (numpy.roots) decide stability. K_cr is found by scanning K on a
+(ZOH) of Table I's G(s) as a cascade of small state spaces, then the closed loop
+of eq. (2) as one matrix (tests/reference_model.py: cascade_zoh,
+loop_eigenvalues), whose eigenvalues decide stability. (The roots of the
+multiplied-out polynomial z^(d+1) D(z) + (B/T)(z - 1) N(z) + K z N(z), used
+before, are ill-conditioned: how well numpy.roots resolves them depends on the
+LAPACK selected.) K_cr is found by scanning K on a
 geometric grid for the first unstable value and bisecting to 1e-11.
 
 1. `zwidth boundary` at d = 1..10, B = 0:0.01:0.4 (410 points): K_cr within
@@ -26,7 +26,7 @@ try:
 except ImportError as e:
     print(f"skipped: {e}")
     sys.exit(77)
-from reference_model import plant_tf
+from reference_model import cascade_zoh, loop_eigenvalues
 
 zw, src = sys.argv[1], sys.argv[2]
 model_path = os.path.join(src, "datasets/phantom/table1.json")
@@ -41,21 +41,11 @@ def fail(msg):
 
 
 model = json.load(open(model_path))
-num_s, den_s = plant_tf(model)
-nz, dz, _ = ss.cont2discrete((num_s, den_s), T, method="zoh")
-N, D = np.trim_zeros(np.atleast_1d(np.squeeze(nz)), "f"), np.atleast_1d(np.squeeze(dz))
-
-
-def char_poly(K, B, d):
-    zd1 = np.zeros(d + 2)
-    zd1[0] = 1.0  # z^(d+1)
-    p = np.polymul(zd1, D)
-    p = np.polyadd(p, (B / T) * np.polymul([1.0, -1.0], N))
-    return np.polyadd(p, K * np.polymul([1.0, 0.0], N))
+Ad, Bd, Cd = cascade_zoh(model, T)
 
 
 def max_root(K, B, d):
-    return np.max(np.abs(np.roots(char_poly(K, B, d))))
+    return np.max(np.abs(loop_eigenvalues(Ad, Bd, Cd, K, B, d, T)))
 
 
 def reference(B, d):
@@ -73,7 +63,7 @@ def reference(B, d):
                     hi = mid
                 else:
                     lo = mid
-            r = np.roots(char_poly(hi, B, d))
+            r = loop_eigenvalues(Ad, Bd, Cd, hi, B, d, T)
             z = r[np.argmin(np.abs(np.abs(r) - 1.0))]
             return lo, abs(np.angle(z)) / (2 * np.pi * T)
         prev = k

@@ -5,24 +5,143 @@ Z-Width Limitation due to the Vibration Modes of Haptic Interfaces"). NumPy arra
 in and out; SI units and rad/s throughout. See docs/python.md.
 
     log = zwidth.read_log("phantom_30s.h5")
-    frf = zwidth.estimate(log)
-    res = zwidth.fit(frf, modes=2)
+    res = zwidth.fit(log, modes=2)           # warns FitQualityWarning when the fit is poor
+    print(res)                                # the verdict first
     z = zwidth.ZWidth(res.model, period_s=1e-3, delay_samples=2)
     K_cr, f_cr = z.critical(numpy.linspace(0, 0.02, 1000))
 
 Errors: zwidth.InputError (a ValueError) for bad input, zwidth.ComputationError
-(a RuntimeError) for a computation that failed; the messages are the CLI's.
+(a RuntimeError) for a computation that failed; the messages are the CLI's, with
+the keywords of this module where the CLI names its flags. Ctrl-C stops a long call
+with KeyboardInterrupt. Threads: set_num_threads(n), or ZWIDTH_NUM_THREADS.
 """
+import os
+import warnings
+
+from . import _zwidth
 from ._zwidth import (  # noqa: F401
     __version__, InputError, ComputationError,
     Model, Log, FrequencyResponse, FitResult, CriticalPoint, ZWidth, RelayResult,
-    read_log, estimate, simulate, fit, relay, check,
 )
 from ._zwidth import _build_info
+from . import _signatures
 
-__all__ = ["__version__", "InputError", "ComputationError", "Model", "Log", "FrequencyResponse",
-           "FitResult", "CriticalPoint", "ZWidth", "RelayResult", "read_log", "estimate", "simulate",
-           "fit", "relay", "check", "build_info"]
+__all__ = ["__version__", "InputError", "ComputationError", "FitQualityWarning", "Model", "Log",
+           "FrequencyResponse", "FitResult", "CriticalPoint", "ZWidth", "RelayResult", "read_log",
+           "estimate", "simulate", "fit", "relay", "check", "build_info", "set_num_threads",
+           "num_threads", "from_frd", "to_frd"]
+
+
+class FitQualityWarning(UserWarning):
+    """A fit judged poor (or not converged): its numbers, and the Z-width from them, are not to be
+    trusted. `.reasons` holds the fit's quality_reasons (dicts code, message, advice) and `.result`
+    the FitResult. Turn it into an error with warnings.simplefilter("error", zwidth.FitQualityWarning)."""
+
+    def __init__(self, result):
+        self.result = result
+        self.reasons = result.quality_reasons
+        if not result.converged:
+            text = f"the fit did not converge ({result.status}): {result.message}"
+        else:
+            text = "poor fit: " + "; ".join(f"{r['code']}: {r['message']} ({r['advice']})" for r in self.reasons)
+        super().__init__(text)
+
+
+for _cls in (Model, Log, FrequencyResponse, FitResult, CriticalPoint, ZWidth, RelayResult):
+    _signatures.wrap_class(_cls)
+for _e in (InputError, ComputationError):
+    _e.__module__ = "zwidth"
+
+read_log = _signatures.wrap(_zwidth.read_log)
+simulate = _signatures.wrap(_zwidth.simulate)
+relay = _signatures.wrap(_zwidth.relay)
+check = _signatures.wrap(_zwidth.check)
+set_num_threads = _signatures.wrap(_zwidth.set_num_threads)
+num_threads = _signatures.wrap(_zwidth.num_threads)
+
+
+def _path(data):
+    return os.fspath(data) if isinstance(data, (str, os.PathLike)) else None
+
+
+def _estimate_signature():
+    """estimate(data, y=None, sample_rate_hz=None, *, <Welch keywords>, <log selectors>)."""
+    import inspect
+    sigs, _ = _signatures.overloads(_zwidth.estimate)
+    by_first = {s[1][0][0]: _signatures.signature(s) for s in sigs}
+    P = inspect.Parameter
+    params = [P("data", P.POSITIONAL_OR_KEYWORD, annotation="Log | str | os.PathLike | ArrayLike"),
+              P("y", P.POSITIONAL_OR_KEYWORD, default=None, annotation="ArrayLike | None"),
+              P("sample_rate_hz", P.POSITIONAL_OR_KEYWORD, default=None, annotation="float | None")]
+    seen = {"data", "y", "sample_rate_hz", "u", "path", "log"}
+    for first in ("u", "path"):
+        for p in by_first[first].parameters.values():
+            if p.name not in seen:
+                seen.add(p.name)
+                params.append(p.replace(kind=P.KEYWORD_ONLY))
+    return inspect.Signature(params, return_annotation="FrequencyResponse")
+
+
+def estimate(data, y=None, sample_rate_hz=None, **options):
+    path = _path(data)
+    if isinstance(data, Log) or path is not None:
+        if y is not None or sample_rate_hz is not None:
+            raise TypeError("estimate(log or path, ...): y and sample_rate_hz are the log's own; "
+                            "pass them only with arrays: estimate(u, y, sample_rate_hz)")
+        return _zwidth.estimate(path if path is not None else data, **options)
+    if y is None or sample_rate_hz is None:
+        raise TypeError("estimate(u, y, sample_rate_hz): pass the output y and the sample rate [Hz] "
+                        "with the input array u (or a Log, or a log file's path)")
+    if any(k in options for k in ("input_column", "output_column", "time_column", "rate")):
+        raise TypeError("estimate(u, y, sample_rate_hz): the log selectors are for a path")
+    return _zwidth.estimate(data, y, sample_rate_hz, **options)
+
+
+estimate.__signature__ = _estimate_signature()
+estimate.__doc__ = """The Welch frequency response y/u, as `zwidth estimate` computes it.
+
+estimate(u, y, sample_rate_hz, ...): from two 1-D arrays (u [N m], y [rad]) sampled at
+sample_rate_hz [Hz]; estimate(log, ...) from a Log; estimate(path, ..., selectors) streamed
+from a log file (read_log's keywords select its columns). """ + _signatures.overloads(_zwidth.estimate)[1]
+
+_fit = _zwidth.fit
+
+
+def fit(data, *args, **kwargs):
+    # kwargs: fit's own, then (for a Log or a path) estimate's.
+    fit_names = set(_fit_signature.parameters) - {"estimate_options"}
+    est = {k: kwargs.pop(k) for k in list(kwargs) if k not in fit_names}
+    if isinstance(data, Log) or _path(data) is not None:
+        data = estimate(data, **est)
+    elif est:
+        raise TypeError(f"fit() got unexpected keyword arguments {sorted(est)} (estimate's keywords are "
+                        "for a Log or a path)")
+    if not isinstance(data, FrequencyResponse):
+        raise TypeError(f"fit(data): data must be a FrequencyResponse, a Log or a log file's path, "
+                        f"not {type(data).__name__}")
+    res = _fit(data, *args, **kwargs)
+    if res.quality != "good":
+        warnings.warn(FitQualityWarning(res), stacklevel=2)
+    return res
+
+
+def _fit_with_estimate_signature():
+    import inspect
+    sig = inspect.signature(_fit_plain)
+    first, *rest = sig.parameters.values()
+    first = first.replace(name="data", annotation="FrequencyResponse | Log | str | os.PathLike")
+    var = inspect.Parameter("estimate_options", inspect.Parameter.VAR_KEYWORD)
+    return sig.replace(parameters=[first, *rest, var])
+
+
+_fit_plain = _signatures.wrap(_fit)
+_fit_signature = _fit_with_estimate_signature()
+fit.__signature__ = _fit_signature
+fit.__doc__ = _fit_plain.__doc__ + """
+
+data may also be a Log or a log file's path: it is estimated first, with estimate's
+keywords (window_length=..., input_column=...) passed through estimate_options.
+A poor fit (quality != 'good') raises the warning FitQualityWarning with its reasons."""
 
 
 def build_info():
@@ -32,7 +151,7 @@ def build_info():
 
 def _to_scipy(self, period_s=None):
     """scipy.signal.StateSpace of the model: continuous (period_s=None) or its exact
-    zero-order-hold discretisation at period_s with the input delay as states (dt = period_s)."""
+    zero-order-hold discretisation at period_s [s] with the input delay as states (dt = period_s)."""
     from scipy import signal
     A, B, C, D = self.state_space(period_s)
     if period_s is None:
@@ -42,12 +161,57 @@ def _to_scipy(self, period_s=None):
 
 def _to_control(self, period_s=None):
     """python-control StateSpace of the model (needs the `control` package), as to_scipy."""
-    import control
+    control = _control()
     A, B, C, D = self.state_space(period_s)
     if period_s is None:
         return control.ss(A, B, C, D)
     return control.ss(A, B, C, D, period_s)
 
 
+def _control():
+    try:
+        import control
+    except ImportError as e:
+        raise ImportError("python-control is not installed (pip install control; Debian 12 has no package): "
+                          f"{e}") from e
+    return control
+
+
+def to_frd(frf):
+    """python-control FrequencyResponseData of a FrequencyResponse (omega = 2 pi f_hz [rad/s],
+    dt = 1 / sample_rate_hz)."""
+    import numpy as np
+    control = _control()
+    return control.frd(frf.H, 2 * np.pi * frf.f_hz, dt=1.0 / frf.sample_rate_hz)
+
+
+def from_frd(frd, sample_rate_hz=None, num_averages=1):
+    """A FrequencyResponse from python-control's FrequencyResponseData (SISO): f_hz = omega / 2 pi;
+    sample_rate_hz from frd.dt when it is a number, else given [Hz]. No coherence (1) nor H_std
+    (|H| 1e-3), as for a response file without those columns; fitting it needs num_averages >= 3
+    or allow_short=True."""
+    import numpy as np
+    if sample_rate_hz is None:
+        dt = getattr(frd, "dt", None)
+        if not isinstance(dt, (int, float)) or isinstance(dt, bool) or not dt > 0:
+            raise InputError("from_frd: the FRD has no sample period (dt); pass sample_rate_hz [Hz]")
+        sample_rate_hz = 1.0 / dt
+    H = np.asarray(frd.fresp)
+    if H.ndim == 3:
+        if H.shape[:2] != (1, 1):
+            raise InputError(f"from_frd: the FRD has {H.shape[0]} outputs and {H.shape[1]} inputs: pass a SISO one")
+        H = H[0, 0]
+    return FrequencyResponse(np.asarray(frd.omega) / (2 * np.pi), H, sample_rate_hz, num_averages=num_averages)
+
+
 Model.to_scipy = _to_scipy
 Model.to_control = _to_control
+FrequencyResponse.to_frd = to_frd
+FrequencyResponse.from_frd = staticmethod(from_frd)
+
+
+def __getattr__(name):
+    if name == "plot":  # zwidth.plot imports matplotlib only when used
+        import importlib
+        return importlib.import_module(".plot", __name__)
+    raise AttributeError(f"module 'zwidth' has no attribute {name!r}")

@@ -1,0 +1,124 @@
+// Coulomb friction identified together with the linear model of eq. (1),
+// from the time-domain log, seeded by the frequency-domain fit (FitModel).
+//
+// Model: friction acts on the rigid body, where the motor torque does
+// (model/friction.h), and the sections act on its position:
+//   m x'' + b x' = u(t - D T) + offset - F_c sign(x'),   y = prod_i M_i(s) x.
+// While the body moves, an asymmetric friction (F_c+, F_c-) and an offset are
+// one and the same thing (F_c+ - offset, F_c- + offset), so the fit estimates
+// the symmetric level F_c and the offset; the breakaway level is not
+// identified (samples at rest are dropped).
+//
+// Method: the inverse-model least squares of the EMPS benchmark's reference
+// (IDIM-LS; Janot, Gautier et al.), with its errors-in-variables problem
+// removed by taking m from the frequency-domain fit, iterated:
+//   1. the rigid body's velocity and acceleration from the encoder by a
+//      zero-phase band-limited differentiation (one FFT of the whole log: the
+//      position, with the straight line through its ends removed, times
+//      j w / prod M_i(j w) and a low-pass L(f): 1 up to cutoff_hz, a cos^2
+//      taper to 0 at 1.5 cutoff_hz); the torque through the same L, delayed
+//      by D + 1/2 samples and weighted by sinc(f T) (the ZOH, exact below
+//      Nyquist); the regressor sign(v) through L too (parallel filtering);
+//   2. least squares over every q-th sample (q: the decimation that L's band
+//      allows, so that the rows are nearly uncorrelated and the OLS std
+//      holds), away from the log's ends, where |v| >= min_speed_fraction
+//      rms(v):  u - m a = b v + F_c L[sign v] - offset;
+//   3. the friction torque removed from the input (u' = u - F_c sign(v) +
+//      offset while moving; u' = 0 while stuck: v ~ 0 and |u + offset| <=
+//      F_c), its response estimated (Welch, as the linear fit's) and refitted
+//      (FitModel, the seed's order and delay, started from the last plant):
+//      the new m and sections go back to step 1.
+// Why not regress m too: the acceleration of a quantised encoder is noisy
+// (errors in variables) and biases m down by tens of % on a 4000-count
+// encoder; the frequency response fixes m well above the friction's band.
+// Why not an output-error fit of the nonlinear model: a stick-slip simulation
+// per cost evaluation is slow, and its cost is not smooth in F_c.
+//
+// Step 2's regressor sign(v) comes from the rigid body with friction simulated
+// exactly from the measured torque (events at v = 0; incrementally stable, so
+// it follows the device), not from the band-limited velocity: under a white
+// torque the velocity changes sign faster than the rigid-body band, and
+// sign(L[v]) underestimates F_c by a third (measured: 5.4 for 8 mN m). The
+// detection uses sign(L[v]) (no simulation: cheap, and unbiased at F_c = 0).
+//
+// The reported plant is the last refit's (m, sections, their std from its
+// covariance), with b from whichever of the refit and step 2 has the smaller
+// std, the refit's std including what std(F_c) does to it (friction_fit.cc,
+// ChooseB); F_c and the offset from step 2 with their OLS std.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "fit/fit.h"
+#include "ident/welch.h"
+#include "model/friction.h"
+
+namespace zwidth::fit {
+
+// What the fit does about friction.
+enum class FrictionModel {
+  kNone,     // the linear fit; friction only detected (the verdict's `friction` reason)
+  kAuto,     // friction fitted when detected (F_c / std > detection_z), else the linear fit
+  kCoulomb,  // friction always fitted
+};
+std::string ToString(FrictionModel f);
+// "none", "auto", "coulomb"; false for another word.
+bool FrictionModelFromString(const std::string& s, FrictionModel* f);
+
+struct FrictionFitOptions {
+  FrictionModel model = FrictionModel::kAuto;
+  // Upper edge of the band used [Hz]; 0 = automatic: 0.4 x the lowest pole or
+  // zero frequency of the seed's sections, at most 0.04 x the sample rate
+  // (the EMPS reference's 40 Hz at 1 kHz). Else in (0, 0.3 x sample rate].
+  double cutoff_hz = 0.0;
+  // Samples whose |v| is below this fraction of v's rms are not used (stick,
+  // where friction is not F_c sign v), in [0, 1).
+  double min_speed_fraction = 0.0;
+  int iterations = 6;          // IDIM + refit rounds, in [1, 20] (converged by 4-5 on the tests' logs)
+  double detection_z = 5.0;    // F_c / std(F_c) above which friction is detected, > 0
+  ident::WelchOptions welch;   // the refit's estimate (use the linear fit's)
+
+  bool IsValid(std::string* why) const;
+};
+
+enum class FrictionFitStatus {
+  kNotRun,       // sentinel
+  kFitted,       // friction fitted: `fit` is the linear part, `friction` its Coulomb level
+  kNotDetected,  // no significant friction (or model kNone): `fit` is the linear fit
+  kFailed,       // the refit did not converge (see message): `fit` is the linear fit
+};
+std::string ToString(FrictionFitStatus s);
+
+struct FrictionFitResult {
+  FrictionFitStatus status = FrictionFitStatus::kNotRun;
+  std::string message;
+  // The first IDIM on the linear fit's plant (what the detection uses).
+  bool detected = false;
+  double detection_coulomb = 0.0, detection_coulomb_std = 0.0;
+  // The last IDIM: coulomb_pos = coulomb_neg = F_c, offset; std alike.
+  model::Friction friction, friction_std;
+  double idim_b = 0.0, idim_b_std = 0.0;  // b of the last IDIM [N m s/rad]
+  double cutoff_hz = 0.0;
+  int rows_used = 0;
+  int decimation = 1;
+  int iterations = 0;
+  double linear_b = 0.0, linear_b_std = 0.0;  // the linear-only fit's b
+  // The linear part: the refit when kFitted, else the linear fit (with the
+  // `friction` reason when friction was detected and not fitted).
+  FitResult fit;
+};
+
+// One log (input torque, encoder position, uniformly sampled). `linear` is
+// FitModel's converged result on this log's response with `fit_options`.
+// Throws InputError for invalid options or a log too short for the band
+// (fewer than 200 rows).
+FrictionFitResult FitFriction(const std::vector<double>& input, const std::vector<double>& output,
+                              double sample_rate_hz, const FitResult& linear, const FitOptions& fit_options,
+                              const FrictionFitOptions& options);
+
+// The verdict's `friction` reason (fit/quality.cc): appended to r, which is
+// then poor, when a linear fit was kept on a log that shows friction.
+void AddFrictionReason(const FrictionFitResult& ff, FitResult* r);
+
+}  // namespace zwidth::fit

@@ -1,0 +1,36 @@
+// FFTW plans shared by the estimators of ident/ (not installed: include only
+// from ident/*.cc).
+#pragma once
+
+#include <map>
+#include <mutex>
+
+#include <fftw3.h>
+
+namespace zwidth::ident::internal {
+
+// One r2c plan per length, made once and shared (FFTW's planner is not
+// thread-safe, hence the mutex; executing a plan on new arrays is, when they
+// have the alignment fftw_alloc_* gives).
+struct PlanCache {
+  std::mutex mu;
+  std::map<int, fftw_plan> plans;
+  ~PlanCache() {
+    for (auto& [n, plan] : plans) fftw_destroy_plan(plan);
+    fftw_cleanup();
+  }
+  static PlanCache& Get() {
+    static PlanCache cache;
+    return cache;
+  }
+  fftw_plan For(int n, double* in, fftw_complex* out) {
+    std::lock_guard<std::mutex> lock(mu);
+    auto it = plans.find(n);
+    if (it != plans.end()) return it->second;
+    fftw_plan p = fftw_plan_dft_r2c_1d(n, in, out, FFTW_ESTIMATE);
+    plans[n] = p;
+    return p;
+  }
+};
+
+}  // namespace zwidth::ident::internal

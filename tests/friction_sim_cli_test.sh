@@ -1,0 +1,29 @@
+#!/bin/bash
+# zwidth simulate/wall/relay/check with friction (issue 32): bad friction flags
+# refused with exit 2 and nothing written; the wall's verdicts on Table I at
+# d = 2, K = 3 (linear K_cr 2.50): grows without friction, decays from 0.01 rad
+# with 5 mN m, grows from 0.3 rad (the prediction's A* is 0.109 rad); check
+# names the amplitude.
+ZW=$1; SRC=$2
+. "$SRC/tests/cli_lib.sh"
+expect "coulomb nan" "--coulomb nan: must be a finite" "$T/a.csv" -- "$ZW" simulate --model "$M" -o "$T/a.csv" --coulomb nan
+expect "coulomb negative" "--coulomb -1" "$T/a.csv" -- "$ZW" simulate --model "$M" -o "$T/a.csv" --coulomb -1
+expect "coulomb both" "not both" "$T/a.csv" -- "$ZW" simulate --model "$M" -o "$T/a.csv" --coulomb 0.01 --coulomb-pos 0.02
+expect "breakaway low" "below the Coulomb level" "$T/a.csv" -- "$ZW" simulate --model "$M" -o "$T/a.csv" --coulomb 0.01 --breakaway 0.001
+expect "dac negative" "--dac-step" "$T/a.csv" -- "$ZW" simulate --model "$M" -o "$T/a.csv" --dac-step -1
+expect "wall seconds" "--seconds" "$T/w.csv" -- "$ZW" wall "$M" --stiffness 3 --damping 0 --delay 2 --seconds 0 -o "$T/w.csv"
+expect "wall start" "--initial-position" "$T/w.csv" -- "$ZW" wall "$M" --stiffness 3 --damping 0 --delay 2 --initial-position 0 -o "$T/w.csv"
+expect "relay encoder" "--encoder-step" "" -- "$ZW" relay "$M" --delay 2 --damping 0 --encoder-step -1
+outcome() { "$ZW" wall "$M" --stiffness 3 --damping 0 --delay 2 --json "$@" | $PY -c 'import json,sys; print(json.load(sys.stdin)["outcome"])'; }
+[ "$(outcome)" = grows ] && ok "wall without friction grows" || bad "wall without friction"
+[ "$(outcome --coulomb 0.005 --initial-position 0.01)" = decays ] && ok "friction holds 0.01 rad" || bad "friction 0.01 rad"
+[ "$(outcome --coulomb 0.005 --initial-position 0.3)" = grows ] && ok "0.3 rad grows" || bad "0.3 rad"
+"$ZW" wall "$M" --stiffness 3 --damping 0 --delay 2 --coulomb 0.005 --seconds 1 -o "$T/w.csv" >/dev/null &&
+  [ "$(wc -l < "$T/w.csv")" -eq 1001 ] && ok "wall trace" || bad "wall trace"
+echo '{"objects":[{"name":"hard","K":3,"B":0}]}' > "$T/s.json"
+"$ZW" check "$T/s.json" --model "$M" --delay 2 --coulomb 0.005 | grep -q "friction holds it below 0.109" &&
+  ok "check names the amplitude" || bad "check amplitude"
+"$ZW" simulate --model "$M" -o "$T/a.csv" --seconds 2 2>/dev/null && "$ZW" simulate --model "$M" -o "$T/b.csv" --seconds 2 --coulomb 0 2>/dev/null &&
+  cmp -s "$T/a.csv" "$T/b.csv" && ok "zero friction = the linear log" || bad "zero friction log"
+echo "$pass passed, $fail failed"
+[ $fail -eq 0 ]

@@ -1,0 +1,190 @@
+// The nonlinear wall (stability/wall_simulation.h) against the exact linear
+// Z-width and an independent closed-loop simulation written here, and the
+// friction predictions (stability/friction_prediction.h) against the wall.
+#include "stability/wall_simulation.h"
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "model/error.h"
+#include "model/state_space.h"
+#include "stability/friction_prediction.h"
+#include "stability/haptic_loop.h"
+#include "stability/relay.h"
+#include "stability/zwidth.h"
+
+namespace zwidth::stability {
+namespace {
+
+constexpr double kT = 1e-3;
+
+TEST(WallSimulation, WithoutNonlinearityFollowsTheExactZWidth) {
+  const model::Plant p = model::PhantomTable1();
+  for (int d : {1, 2, 4}) {
+    for (double B : {0.0, 0.005}) {
+      const double kcr = ZWidth(p, kT, d).At(B).K_cr;
+      WallOptions o;
+      o.delay_samples = d;
+      o.damping = B;
+      o.seconds = 20.0;
+      o.stiffness = 0.9 * kcr;
+      EXPECT_EQ(SimulateWall(p, o).outcome, WallOutcome::kDecays) << d << " " << B;
+      o.stiffness = 1.1 * kcr;
+      EXPECT_EQ(SimulateWall(p, o).outcome, WallOutcome::kGrows) << d << " " << B;
+    }
+  }
+}
+
+// Independent closed loop: the sampled plant with the delay as states,
+// x' = A x + B u_{k-d}, u = -(K y + B (y - y_prev)/T), from rest at y0.
+TEST(WallSimulation, LinearTraceEqualsTheSampledClosedLoop) {
+  const model::Plant p = model::PhantomTable1();
+  WallOptions o;
+  o.delay_samples = 2;
+  o.stiffness = 1.0;
+  o.damping = 0.004;
+  o.seconds = 0.5;
+  o.initial_position = 0.02;
+  const WallResult r = SimulateWall(p, o);
+  const model::StateSpace d = model::DiscretizeZoh(p, kT);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(d.A.rows());
+  x(d.A.rows() - 2) = p.m * o.initial_position;
+  std::vector<double> u(r.position.size(), 0.0);
+  double y_prev = o.initial_position, err = 0.0;
+  for (size_t k = 0; k < r.position.size(); ++k) {
+    const double y = d.C.dot(x);
+    err = std::max(err, std::abs(y - r.position[k]));
+    u[k] = -(o.stiffness * y + o.damping * (y - y_prev) / kT);
+    y_prev = y;
+    x = d.A * x + d.B * (k >= 2 ? u[k - 2] : 0.0);
+  }
+  EXPECT_LT(err, 1e-12);
+}
+
+TEST(WallSimulation, FrictionHoldsALinearlyUnstableWallAtSmallAmplitude) {
+  const model::Plant p{1.168e-3, 5.84e-3, {}, 0, "rigid"};
+  const double kcr = ZWidth(p, kT, 2).At(0.0).K_cr;
+  WallOptions o;
+  o.delay_samples = 2;
+  o.stiffness = 1.2 * kcr;
+  o.friction = model::Friction::Symmetric(0.005);
+  o.initial_position = 0.02;
+  EXPECT_EQ(SimulateWall(p, o).outcome, WallOutcome::kDecays);
+  o.initial_position = 0.5;
+  EXPECT_EQ(SimulateWall(p, o).outcome, WallOutcome::kGrows);
+  o.initial_position = 0.02;
+  o.friction = model::Friction{};
+  EXPECT_EQ(SimulateWall(p, o).outcome, WallOutcome::kGrows);
+}
+
+// The start that separates decay from growth, by bisection on the initial
+// position (the swing from rest at x0 has amplitude ~x0).
+double MeasuredThreshold(const model::Plant& p, WallOptions o, double guess) {
+  double lo = 0.3 * guess, hi = 3.0 * guess;
+  auto grows = [&](double x0) {
+    o.initial_position = x0;
+    const WallResult r = SimulateWall(p, o);
+    return r.outcome == WallOutcome::kGrows || r.amplitude > r.initial_amplitude;
+  };
+  if (grows(lo) || !grows(hi)) return NAN;
+  for (int i = 0; i < 9; ++i) {
+    const double mid = std::sqrt(lo * hi);
+    (grows(mid) ? hi : lo) = mid;
+  }
+  return std::sqrt(lo * hi);
+}
+
+// 44 seeded random (device, K, B, delay): rigid bodies with m in
+// 0.5..3 g m^2, b/m in 1..20 1/s, and Table I with its inertia scaled; delay
+// 1..4; B in [0, 0.3 B_max_from_zero]; K = K_cr(B) x 1.05..1.6; F_c 1..10 mN m;
+// encoders of 4000..40960 counts or none. Within 15 % where the prediction
+// says it is valid; the rule that marks a case invalid is printed.
+TEST(FrictionPrediction, AmplitudeMatchesTheNonlinearWallOnRandomCases) {
+  std::mt19937_64 rng(32);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  int valid = 0, cases = 0;
+  for (int c = 0; c < 44; ++c) {
+    model::Plant p;
+    if (c % 3 == 2) {
+      p = model::PhantomTable1();
+      p.m *= 0.7 + 0.8 * u01(rng);
+    } else {
+      p = model::Plant{0.5e-3 + 2.5e-3 * u01(rng), 0.0, {}, 0, "rigid"};
+      p.b = p.m * (1.0 + 19.0 * u01(rng));
+    }
+    const int d = 1 + static_cast<int>(4 * u01(rng)) % 4;
+    const ZWidth z(p, kT, d);
+    const double B = 0.3 * u01(rng) * z.Summarize().B_max_from_zero;
+    const double K = z.At(B).K_cr * (1.05 + 0.55 * u01(rng));
+    const model::Friction f = model::Friction::Symmetric(1e-3 + 9e-3 * u01(rng));
+    const double counts[] = {0.0, 4000.0, 40960.0};
+    const double n_counts = counts[static_cast<int>(3 * u01(rng)) % 3];
+    const double q = n_counts > 0 ? 2.0 * M_PI / n_counts : 0.0;
+    const FrictionPrediction pr = PredictFriction(p, kT, d, {}, K, B, f, q);
+    ++cases;
+    ASSERT_EQ(pr.verdict, FrictionVerdict::kStableBelow) << c;
+    WallOptions o;
+    o.delay_samples = d;
+    o.stiffness = K;
+    o.damping = B;
+    o.friction = f;
+    o.encoder_step = q;
+    o.seconds = std::max(4.0, 150.0 / pr.frequency_hz);
+    const double x = MeasuredThreshold(p, o, pr.amplitude);
+    std::printf("case %2d: %s d %d B %.4g K %.4g (%.2f K_cr) Fc %.4g q %.3g: A* %.4g at %.1f Hz, wall %.4g "
+                "(%+.1f %%) %s\n", c, p.modes.empty() ? "rigid" : "tableI", d, B, K, K / pr.K_cr_linear, f.coulomb_pos,
+                q, pr.amplitude, pr.frequency_hz, x, 100.0 * (x / pr.amplitude - 1.0),
+                pr.valid ? "valid" : pr.invalid_reason.c_str());
+    if (!pr.valid) continue;
+    ++valid;
+    EXPECT_NEAR(x / pr.amplitude, 1.0, 0.15) << c;
+  }
+  EXPECT_GE(valid, 20) << "of " << cases;
+}
+
+TEST(FrictionPrediction, LinearStableWallIsStableForAnyAmplitude) {
+  const model::Plant p = model::PhantomTable1();
+  const double kcr = ZWidth(p, kT, 2).At(0.0).K_cr;
+  const FrictionPrediction pr =
+      PredictFriction(p, kT, 2, {}, 0.8 * kcr, 0.0, model::Friction::Symmetric(0.01), 2 * M_PI / 4000);
+  EXPECT_EQ(pr.verdict, FrictionVerdict::kLinearStable);
+  EXPECT_TRUE(std::isinf(pr.amplitude));
+  EXPECT_NEAR(pr.K_cr_linear, kcr, 1e-12 * kcr);
+  // Abbott and Okamura: K q <= 2 F_c.
+  EXPECT_NEAR(pr.K_rest_max, 2 * 0.01 / (2 * M_PI / 4000), 1e-9);
+  EXPECT_EQ(pr.rest_point_ok, 0.8 * kcr * 2 * M_PI / 4000 <= 0.02);
+}
+
+TEST(FrictionPrediction, WithoutFrictionAnUnstableWallIsUnstable) {
+  const model::Plant p = model::PhantomTable1();
+  const double kcr = ZWidth(p, kT, 2).At(0.0).K_cr;
+  const FrictionPrediction pr = PredictFriction(p, kT, 2, {}, 1.2 * kcr, 0.0, model::Friction{}, 0.0);
+  EXPECT_EQ(pr.verdict, FrictionVerdict::kUnstable);
+  EXPECT_FALSE(pr.valid);
+}
+
+// The relay on the stick-slip plant (continuous realisation, exact switching)
+// with a friction of 1e-12 of the relay amplitude: the linear relay's answer.
+TEST(RelayWithFriction, StickSlipPathWithNegligibleFrictionGivesTheLinearKcr) {
+  const model::Plant p = model::PhantomTable1();
+  RelayOptions o;
+  o.delay_samples = 2;
+  o.seconds = 10.0;
+  const RelayResult lin = SimulateRelay(p, o);
+  o.friction = model::Friction::Symmetric(1e-12 * o.amplitude);
+  ASSERT_TRUE(o.Nonlinear());
+  const RelayResult non = SimulateRelay(p, o);
+  ASSERT_TRUE(lin.refined());
+  ASSERT_TRUE(non.refined());
+  EXPECT_NEAR(non.K_cr, lin.K_cr, 1e-6 * lin.K_cr);
+  EXPECT_NEAR(non.f_cr_hz, lin.f_cr_hz, 1e-6 * lin.f_cr_hz);
+  o.friction = model::Friction{};
+  o.encoder_step = -1.0;
+  EXPECT_THROW(SimulateRelay(p, o), InputError);
+}
+
+}  // namespace
+}  // namespace zwidth::stability
