@@ -520,8 +520,6 @@ void AddCheckCommand(CLI::App& app) {
     LoopFlags loop;
     FrictionFlags friction;
     double encoder_step = 0.0;
-}
-
     analysis::SceneCheckOptions options;
   };
   auto cf = std::make_shared<CheckFlags>();
