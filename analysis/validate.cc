@@ -9,6 +9,7 @@
 
 #include <Eigen/QR>
 
+#include "fit/fit.h"
 #include "model/error.h"
 #include "model/state_space.h"
 
@@ -132,7 +133,7 @@ void FrequencyDomain(const model::StateSpace& sd, const io::Log& log, const Vali
   if (used == 0) throw InputError("no bin of the log's response has input power and coherence: nothing to compare");
   r->dof = 2 * used;
   r->chi2_per_dof = chi2 / r->dof;
-  r->chi2_limit = 1.5 + 4.0 * std::sqrt(2.0 * std::max(1.0, frf.bin_correlation) / r->dof);
+  r->chi2_limit = fit::Chi2PerDofLimit(r->dof, frf.bin_correlation);  // the fit verdict's rule
 }
 
 void Verdict(ValidationResult* r) {

@@ -15,7 +15,7 @@ namespace zwidth::app {
 // row.
 inline constexpr const char* kHelpTopics[] = {
     "Simulation", "Excitation", "Log selection", "Estimate (Welch)", "Fit",
-    "Comparison", "Loop and stability", "Uncertainty", "Validation", "Output",
+    "Friction and actuator", "Comparison", "Loop and stability", "Uncertainty", "Validation", "Output",
 };
 
 // Call once, after every subcommand has been added: puts each option in its

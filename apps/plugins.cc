@@ -22,6 +22,7 @@
 #include "fit/fit_api.h"
 #include "io/hdf5_api.h"
 #include "model/error.h"
+#include "zwidth_abi_hash.h"  // generated (cmake/abi_hash.cmake): the shared headers' hash
 
 #ifndef ZWIDTH_PLUGIN_DIR_FROM_BIN
 #error "ZWIDTH_PLUGIN_DIR_FROM_BIN (the plugins' folder relative to the executable's) is set by apps/CMakeLists.txt"
@@ -83,7 +84,7 @@ std::mutex g_fit_mutex;
 namespace io::internal {
 
 const Hdf5Api& Hdf5() {
-  return Loaded(g_hdf5, g_hdf5_mutex, "zwidth-hdf5.so", "zwidth_hdf5_plugin", kHdf5ApiKey,
+  return Loaded(g_hdf5, g_hdf5_mutex, "zwidth-hdf5.so", "zwidth_hdf5_plugin", kHdf5ApiKey ^ ZWIDTH_ABI_HASH,
                 "HDF5 and MATLAB files");
 }
 
@@ -97,7 +98,7 @@ long Hdf5OpenObjects() {
 namespace fit {
 
 const FitApi& FitLibrary() {
-  return Loaded(g_fit, g_fit_mutex, "zwidth-fit.so", "zwidth_fit_plugin", kFitApiKey, "fitting a model");
+  return Loaded(g_fit, g_fit_mutex, "zwidth-fit.so", "zwidth_fit_plugin", kFitApiKey ^ ZWIDTH_ABI_HASH, "fitting a model");
 }
 
 }  // namespace fit

@@ -10,6 +10,8 @@
 // log zeta_c, log v, log zeta_d (c = 2 zeta_c w, d = 2 zeta_d v), with bounds.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 #include <optional>
 #include <string>
@@ -141,6 +143,16 @@ struct FitResult {
   std::string delay_choice;             // why this delay (auto_delay)
   std::string BriefReport() const;
 };
+
+// chi2/dof above which a model does not explain a response within its per-bin
+// std, for `dof` degrees of freedom and the estimate's bin correlation kappa
+// (ident::FrequencyResponse::bin_correlation): 1.5 (on correct models with
+// >= 8 averages chi2/dof is 1.0-1.4, the per-bin std being estimated from the
+// same averages) plus 4 standard deviations of chi2/dof for correlated bins,
+// 4 sqrt(2 kappa / dof). The fit's verdict and `validate` both use it.
+inline double Chi2PerDofLimit(int dof, double kappa) {
+  return 1.5 + 4.0 * std::sqrt(2.0 * std::max(1.0, kappa) / std::max(1, dof));
+}
 
 // Throws InputError for invalid options or an unusable response (no bins,
 // Nyquist unknown). A fit that does not converge returns kNoConvergence.

@@ -22,7 +22,9 @@ struct FitApi {
                                           const FrictionFitOptions& friction) = nullptr;
 };
 
-// Changes whenever a type crossing the table changes size (a stale plugin is refused).
+// Changes whenever a type crossing the table changes size; mixed with
+// ZWIDTH_ABI_HASH (cmake/abi_hash.cmake) by the executable and the plugin, so
+// a plugin built from other headers is refused even with the same sizes.
 inline constexpr unsigned long long kFitApiKey = (2ull << 56) ^ (sizeof(FitApi) << 40) ^
                                                  (sizeof(FitOptions) << 24) ^ (sizeof(FitResult) << 8) ^
                                                  sizeof(ident::FrequencyResponse) ^ (sizeof(FrictionFitResult) << 32);

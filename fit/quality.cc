@@ -19,13 +19,8 @@ std::string Fmt(const char* fmt, double a, double b, double c, double d) {
   return s;
 }
 
-// chi2/dof above which the model does not explain the response: 1.5 (on
-// correct models with >= 8 averages chi2/dof is 1.0-1.4, the per-bin std
-// being estimated from the same averages) plus 4 standard deviations of
-// chi2/dof for correlated bins, 4 sqrt(2 kappa / dof).
 double Chi2Limit(const FitResult& r, double kappa) {
-  const int dof = std::max(1, r.num_residuals - r.num_parameters);
-  return 1.5 + 4.0 * std::sqrt(2.0 * std::max(1.0, kappa) / dof);
+  return Chi2PerDofLimit(r.num_residuals - r.num_parameters, kappa);
 }
 
 // Leakage of the Welch window (a tapered one: bin_correlation > 1.2; a

@@ -47,8 +47,10 @@ struct Hdf5Api {
   long (*open_objects)() = nullptr;
 };
 
-// Changes whenever a type crossing the table changes size: the executable
-// refuses a plugin built from other headers (a stale or foreign file).
+// Changes whenever a type crossing the table changes size; the executable and
+// the plugin also mix in ZWIDTH_ABI_HASH, the hash of the shared headers
+// (cmake/abi_hash.cmake): the executable refuses a plugin built from other
+// headers (a stale or foreign file) even when every size is the same.
 inline constexpr unsigned long long kHdf5ApiKey =
     (1ull << 56) ^ (sizeof(Hdf5Api) << 40) ^ (sizeof(LogSelect) << 28) ^ (sizeof(LogInfo) << 20) ^
     (sizeof(ident::FrequencyResponse) << 8) ^ sizeof(ModelFile);

@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <ctime>
 #include <map>
+#include <set>
 #include <numbers>
 #include <sstream>
 #include <string_view>
@@ -76,18 +77,16 @@ std::string InlineSvg(const std::string& svg, const std::string& prefix) {
   const size_t start = svg.find("<svg");
   if (start == std::string::npos) return "";
   std::string s = svg.substr(start);
-  std::vector<std::string> ids;
+  std::set<std::string> known;  // the figure's own ids
   for (size_t p = s.find(" id="); p != std::string::npos; p = s.find(" id=", p + 4)) {
     const char q = p + 4 < s.size() ? s[p + 4] : '\0';
     if (q != '\'' && q != '"') continue;
     const size_t e = s.find(q, p + 5);
     if (e == std::string::npos) break;
-    ids.push_back(s.substr(p + 5, e - p - 5));
+    known.insert(s.substr(p + 5, e - p - 5));
   }
   std::string out;
-  out.reserve(s.size() + ids.size() * 8);
-  std::map<std::string, bool> known;
-  for (const auto& id : ids) known[id] = true;
+  out.reserve(s.size() + known.size() * 8);
   // One pass: an id='X' or a #X reference to a known id gets the prefix.
   for (size_t i = 0; i < s.size(); ++i) {
     const bool id_attr = s.compare(i, 5, " id='") == 0 || s.compare(i, 5, " id=\"") == 0;
@@ -95,7 +94,7 @@ std::string InlineSvg(const std::string& svg, const std::string& prefix) {
       const size_t from = id_attr ? i + 5 : i + 1;
       size_t e = from;
       while (e < s.size() && (std::isalnum(static_cast<unsigned char>(s[e])) || s[e] == '_' || s[e] == '-')) ++e;
-      if (e > from && known.count(s.substr(from, e - from))) {
+      if (e > from && known.contains(s.substr(from, e - from))) {
         out.append(s, i, from - i);
         out += prefix;
         i = from - 1;
