@@ -25,7 +25,7 @@ std::string Num(double v) {
 
 std::string EstimateFlags::ResolvedDetrend() const {
   if (!detrend.empty()) return detrend;
-  return whole_record ? "mean" : "linear";
+  return ident::ToString(analysis::DefaultDetrend(whole_record));
 }
 
 ident::WelchOptions EstimateFlags::Resolve() const {
@@ -114,272 +114,24 @@ std::string JoinPaths(const std::vector<std::string>& paths) {
   return s;
 }
 
-namespace {
-
-void PrintRead(const io::LogInfo& info) {
-  const std::string source = io::Printable(info.source);
-  std::fprintf(stderr, "%s: %zu samples at %g Hz; %s\n", source.c_str(), info.num_samples, info.sample_rate_hz,
-               io::Printable(info.layout).c_str());
-  for (const auto& w : info.warnings) {
-    std::fprintf(stderr, "warning: %s: %s\n", source.c_str(), io::Printable(WithFlags(w)).c_str());
-  }
+analysis::LogsEstimateOptions EstimateFlags::Options(bool for_fit) const {
+  analysis::LogsEstimateOptions o;
+  o.select = select;
+  o.welch = Resolve();
+  if (IsLocal()) o.local = ResolveLocal();
+  o.reference_column = reference_column;
+  o.reference_dataset = reference_dataset;
+  o.whole_record = whole_record;
+  o.period_samples = period_samples;
+  o.for_fit = for_fit;
+  return o;
 }
 
-// Samples after the last whole segment are not used: say so.
-void WarnDropped(const std::string& path, size_t n_samples, const ident::WelchOptions& o) {
-  const size_t n = o.window_length, step = n - o.overlap_samples();
-  if (n_samples < n) return;  // Welch refuses it with a message
-  const size_t segments = (n_samples - n) / step + 1;
-  const size_t dropped = n_samples - ((segments - 1) * step + n);
-  if (dropped == 0) return;
-  std::fprintf(stderr,
-               "warning: %s: the last %zu samples (%.1f %% of the log) do not fill a %zu-sample segment and are "
-               "not used; a --window-length that fits, or --whole-record for a sweep or periodic excitation, uses them\n",
-               io::Printable(path).c_str(), dropped, 100.0 * dropped / n_samples, n);
-}
-
-}  // namespace
-
-namespace {
-
-// --whole-record, --period-samples and --window-length that do not go together.
-void CheckRecordFlags(const EstimateFlags& flags) {
-  if (flags.whole_record && flags.welch.window_length != ident::WelchOptions{}.window_length) {
-    throw InputError("--whole-record takes each log (or --period-samples) as one segment: drop --window-length");
-  }
-  if (flags.period_samples != 0 && (!flags.whole_record || flags.period_samples < 16)) {
-    throw InputError("--period-samples " + std::to_string(flags.period_samples) +
-                     ": needs --whole-record and a period of at least 16 samples");
-  }
-  if (flags.whole_record && flags.detrend == "linear") {
-    std::fprintf(stderr,
-                 "warning: --detrend linear with --whole-record: each rectangular segment (a whole record or period) "
-                 "loses its straight-line fit, and for a periodic response that fit is not a drift but part of the "
-                 "signal (a rigid body's slow swing): it leaks into every bin and biases |H| most where it is small; "
-                 "--detrend mean (the --whole-record default) or none avoids it\n");
-  }
-}
-
-// Closed loop: the selector that reads the logged excitation r as the "input".
-io::LogSelect ExcitationSelect(const std::string& path, const EstimateFlags& flags) {
-  io::LogSelect rsel = flags.select;
-  const bool h5 = io::DetectLogFormat(path) == io::LogFormat::kHdf5;
-  if (h5 && flags.reference_dataset.empty()) {
-    throw InputError(path + ": an HDF5 log: name the excitation with --reference-dataset (not --reference-column)");
-  }
-  if (!h5 && flags.reference_column.empty()) {
-    throw InputError(path + ": not an HDF5 log: name the excitation with --reference-column (not --reference-dataset)");
-  }
-  if (h5) rsel.input_dataset = flags.reference_dataset;
-  else rsel.input_column = flags.reference_column;
-  return rsel;
-}
-
-// Open loop in Welch segments: one streaming pass, memory for a few windows.
-ident::RunSpectra StreamedRun(const std::string& path, const EstimateFlags& flags, const ident::WelchOptions& options,
-                              io::LogInfo* info, std::uint64_t* fingerprint) {
-  ident::WelchEstimator est(options);
-  io::LogFingerprint fp;
-  *info = io::StreamLog(path, flags.select, [&](const double* u, const double* y, size_t n) {
-    est.Push(u, y, n);
-    fp.Add(u, y, n);
-  });
-  *fingerprint = fp.value();
-  PrintRead(*info);
-  WarnDropped(path, info->num_samples, options);
-  ident::RunSpectra spectra;
-  spectra.uy = est.Finish(info->sample_rate_hz);
-  return spectra;
-}
-
-// Each whole period of P samples one run of its own: the std is the scatter between periods.
-std::vector<ident::RunSpectra> PeriodRuns(const std::string& path, const io::Log& log, const std::vector<double>& r,
-                                          size_t P, ident::WelchOptions o) {
-  const size_t periods = log.input.size() / P;
-  if (periods == 0) {
-    throw InputError("the log has " + std::to_string(log.input.size()) + " samples, fewer than one period of " +
-                     std::to_string(P) + " (--period-samples)");
-  }
-  o.window_length = static_cast<int>(P);
-  o.overlap = 0.0;
-  o.window = ident::Window::kRect;
-  WarnDropped(path, log.info.num_samples, o);
-  std::vector<ident::RunSpectra> runs;
-  for (size_t q = 0; q < periods; ++q) {
-    auto cut = [&](const std::vector<double>& v) {
-      return v.empty() ? v : std::vector<double>(v.begin() + q * P, v.begin() + (q + 1) * P);
-    };
-    runs.push_back(ident::EstimateRun(cut(log.input), cut(log.output), cut(r), log.info.sample_rate_hz, o));
-  }
-  return runs;
-}
-
-// The log in memory (closed loop, or --whole-record): its run, or one run per
-// period with --period-samples.
-std::vector<ident::RunSpectra> InMemoryRuns(const std::string& path, const EstimateFlags& flags, bool closed,
-                                            const io::LogSelect& rsel, ident::WelchOptions o, io::LogInfo* info,
-                                            std::uint64_t* fingerprint) {
-  io::Log log = io::ReadLog(path, flags.select);
-  *info = log.info;
-  io::LogFingerprint fp;
-  fp.Add(log.input.data(), log.output.data(), log.input.size());
-  *fingerprint = fp.value();
-  PrintRead(*info);
-  std::vector<double> r;
-  if (closed) {
-    io::Log ex = io::ReadLog(path, rsel);
-    if (ex.input.size() != log.input.size()) {
-      throw InputError("the excitation has " + std::to_string(ex.input.size()) + " samples, the input " +
-                       std::to_string(log.input.size()));
-    }
-    r = std::move(ex.input);
-  }
-  if (flags.whole_record && flags.period_samples > 0) {
-    return PeriodRuns(path, log, r, static_cast<size_t>(flags.period_samples), o);
-  }
-  if (flags.whole_record) {
-    if (log.input.size() > (1u << 24)) throw InputError("a whole record is limited to 2^24 samples");
-    o.window_length = static_cast<int>(log.input.size());
-    o.overlap = 0.0;
-    o.window = ident::Window::kRect;
-  } else {
-    WarnDropped(path, info->num_samples, o);
-  }
-  std::vector<ident::RunSpectra> runs;
-  runs.push_back(ident::EstimateRun(log.input, log.output, r, info->sample_rate_hz, o));
-  return runs;
-}
-
-// One log's runs; an InputError names the file first.
-std::vector<ident::RunSpectra> LogRuns(const std::string& path, const EstimateFlags& flags, bool closed,
-                                       const ident::WelchOptions& options, io::LogInfo* info,
-                                       std::uint64_t* fingerprint) {
-  const io::LogSelect rsel = closed ? ExcitationSelect(path, flags) : flags.select;
-  try {
-    if (!closed && !flags.whole_record) return {StreamedRun(path, flags, options, info, fingerprint)};
-    return InMemoryRuns(path, flags, closed, rsel, options, info, fingerprint);
-  } catch (const InputError& e) {
-    const std::string what = e.what();
-    throw InputError(what.rfind(path, 0) == 0 ? what : path + ": " + what);
-  }
-}
-
-// "<method> from N runs, M segments[; median coherences]" on stderr.
-void PrintCombined(const ident::CombinedResponse& r) {
-  std::fprintf(stderr, "%s from %d run%s, %d segments", ident::ToString(r.method).c_str(), r.num_runs,
-               r.num_runs > 1 ? "s" : "", r.frf.num_averages);
-  if (r.method == ident::CombinedMethod::kJoint) {
-    auto median = [](std::vector<double> v) {
-      std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-      return v[v.size() / 2];
-    };
-    std::fprintf(stderr, "; median coherence r->u %.3f, r->y %.3f (the coherence column holds r->y)",
-                 median(r.coherence_ru), median(r.coherence_ry));
-  }
-  std::fprintf(stderr, "\n");
-}
-
-// The same samples twice (a file given twice, a copy, a link) are not two
-// runs: averaged, they shrink every per-bin std by 1/sqrt(2). Refused, since
-// no use of it is right; the message names both.
-void RefuseRepeatedLog(const std::vector<std::string>& paths, const std::vector<std::uint64_t>& seen,
-                       std::uint64_t fingerprint, const std::string& path) {
-  for (size_t i = 0; i < seen.size(); ++i) {
-    if (seen[i] != fingerprint) continue;
-    throw InputError(path + " holds the same samples as " + paths[i] +
-                     " (the same file, a copy or a link): runs are averaged as independent, and the same data twice "
-                     "would shrink every std by 1/sqrt(2) while adding nothing; give each run once");
-  }
-}
-
-}  // namespace
-
-namespace {
-
-// --estimator lpm|lrm: every log read whole (with its excitation in closed
-// loop), one local estimate over all of them.
-LogsEstimate EstimateLocalFromLogs(const std::vector<std::string>& paths, const EstimateFlags& flags, bool closed) {
-  if (flags.whole_record || flags.period_samples != 0 || flags.welch.window_length != ident::WelchOptions{}.window_length ||
-      flags.welch.overlap != ident::WelchOptions{}.overlap) {
-    throw InputError("--estimator " + flags.estimator + " fits a local model on each whole log: drop --whole-record, "
-                     "--period-samples, --window-length and --overlap (Welch options)");
-  }
-  const ident::LocalModelOptions o = flags.ResolveLocal();
-  LogsEstimate out;
-  std::vector<ident::LocalRecord> runs;
-  double rate = 0.0;
-  for (const std::string& path : paths) {
-    try {
-      io::Log log = io::ReadLog(path, flags.select);
-      PrintRead(log.info);
-      ident::LocalRecord run{std::move(log.input), std::move(log.output), {}};
-      if (closed) run.r = std::move(io::ReadLog(path, ExcitationSelect(path, flags)).input);
-      if (rate == 0.0) rate = log.info.sample_rate_hz;
-      if (std::abs(log.info.sample_rate_hz - rate) > 1e-3 * rate) {
-        throw InputError("the log's rate differs from the first log's: runs of one estimate need one rate");
-      }
-      out.total_samples += log.info.num_samples;
-      out.infos.push_back(log.info);
-      runs.push_back(std::move(run));
-    } catch (const InputError& e) {
-      const std::string what = e.what();
-      throw InputError(what.rfind(path, 0) == 0 ? what : path + ": " + what);
-    }
-  }
-  ident::LocalEstimate est = ident::EstimateLocal(runs, rate, o);
-  for (const std::string& w : est.warnings) std::fprintf(stderr, "warning: %s\n", WithFlags(w).c_str());
-  out.response = ident::ToCombined(std::move(est), o.method, static_cast<int>(runs.size()));
-  std::fprintf(stderr, "%s (%s) from %zu run%s, %d bins per local window, %d residual degrees of freedom\n",
-               ident::ToString(out.response.method).c_str(), out.response.frf.estimator.c_str(), runs.size(),
-               runs.size() > 1 ? "s" : "", 2 * o.HalfWidth() + 1, out.response.frf.num_averages);
-  return out;
-}
-
-}  // namespace
-
+// The library's estimate (analysis/logs_estimate.h); its notes on stderr, in the CLI's words.
 LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const EstimateFlags& flags, bool for_fit) {
-  if (flags.IsLocal()) {
-    LogsEstimate out = EstimateLocalFromLogs(paths, flags, !flags.reference_column.empty() || !flags.reference_dataset.empty());
-    io::CheckInputPower(out.response.frf, JoinPaths(paths));
-    io::CheckFiniteResponse(out.response.frf, JoinPaths(paths));
-    return out;
-  }
-  ident::WelchOptions options = flags.Resolve();
-  const bool closed = !flags.reference_column.empty() || !flags.reference_dataset.empty();
-  CheckRecordFlags(flags);
-  // One segment: the per-bin std (the scatter between segments) would be infinite.
-  auto one_segment = [&] {
-    return InputError(std::string("--whole-record with one log and ") +
-                      (flags.period_samples > 0 ? "one whole period of --period-samples" : "no --period-samples") +
-                      " gives one segment: " +
-                      (for_fit ? "no per-bin std to weight the fit" : "no scatter to estimate the per-bin std from") +
-                      "; pass several runs of the same excitation, --period-samples for a periodic one, or drop "
-                      "--whole-record (Welch segments)");
-  };
-  if (flags.whole_record && flags.period_samples == 0 && paths.size() < 2) throw one_segment();  // before reading
-  LogsEstimate out;
-  std::vector<ident::RunSpectra> runs;
-  std::vector<std::uint64_t> seen;  // one fingerprint per log read
-  for (const std::string& path : paths) {
-    io::LogInfo info;
-    std::uint64_t fingerprint = 0;
-    for (ident::RunSpectra& run : LogRuns(path, flags, closed, options, &info, &fingerprint)) {
-      runs.push_back(std::move(run));
-    }
-    RefuseRepeatedLog(paths, seen, fingerprint, path);
-    seen.push_back(fingerprint);
-    out.total_samples += info.num_samples;
-    out.infos.push_back(info);
-  }
-  out.response = ident::CombineRuns(runs, options.estimator,
-                                    flags.whole_record ? ident::StdSource::kRunScatter : ident::StdSource::kCoherence);
-  if (flags.whole_record && runs.size() < 2) throw one_segment();
-  PrintCombined(out.response);
-  // The stage named: estimate, before fit or write. Bins without input power
-  // first (H is 0/0 there), then any other non-finite value.
-  io::CheckInputPower(out.response.frf, JoinPaths(paths));
-  io::CheckFiniteResponse(out.response.frf, JoinPaths(paths));
-  return out;
+  return analysis::EstimateFromLogs(paths, flags.Options(for_fit), [](const std::string& line) {
+    std::fprintf(stderr, "%s\n", io::Printable(WithFlags(line)).c_str());
+  });
 }
 
 double StageTimer::Lap(const std::string& stage) {

@@ -8,6 +8,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "analysis/logs_estimate.h"
 #include "ident/joint.h"
 #include "ident/local_models.h"
 #include "ident/welch.h"
@@ -52,20 +53,18 @@ struct EstimateFlags {
   ident::WelchOptions Resolve() const;
   ident::LocalModelOptions ResolveLocal() const;  // with IsLocal()
   std::string ResolvedDetrend() const;  // detrend, or its default when not given
+  // The library's options (throws InputError naming the flag).
+  analysis::LogsEstimateOptions Options(bool for_fit) const;
 };
 
 void AddLogFlags(CLI::App* cmd, io::LogSelect* select);
 void AddEstimateFlags(CLI::App* cmd, EstimateFlags* flags);
 
-struct LogsEstimate {
-  ident::CombinedResponse response;
-  std::vector<io::LogInfo> infos;  // one per log
-  size_t total_samples = 0;
-};
-// Reads the logs (runs of one device) and combines their spectra. Prints how
-// each log was read, its warnings and samples left out of the segments.
-// for_fit: a whole record of one segment (no per-bin std to weight a fit) is
-// refused rather than warned about.
+using analysis::LogsEstimate;
+// Reads the logs (runs of one device) and combines their spectra
+// (analysis::EstimateFromLogs). Prints how each log was read, its warnings and
+// samples left out of the segments. for_fit: a whole record of one segment
+// (no per-bin std to weight a fit) is refused rather than warned about.
 LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const EstimateFlags& flags,
                               bool for_fit = false);
 std::string JoinPaths(const std::vector<std::string>& paths);

@@ -1,10 +1,13 @@
 // Logs, the Welch estimate and frequency-response files: zwidth.read_log,
 // zwidth.simulate, zwidth.estimate, zwidth.FrequencyResponse.
 #include <cmath>
+#include <optional>
 #include <tuple>
 #include <utility>
 
+#include "analysis/logs_estimate.h"
 #include "io/atomic_file.h"
+#include "io/option_names.h"
 #include "io/frf_file.h"
 #include "io/log.h"
 #include "model/error.h"
@@ -358,6 +361,83 @@ void BindEstimate(py::module_& m) {
         std::tuple_cat(std::make_tuple(py::arg("log")), WelchArgs()), "estimate(log, ...): the same from a Log.");
 }
 
+// zwidth.estimate_logs: several runs, whole records, periods, closed loop
+// and the local methods, by the library's one estimate of logs
+// (analysis::EstimateFromLogs, what `zwidth estimate/fit/run LOG...` use).
+void BindEstimateLogs(py::module_& m) {
+  const ident::WelchOptions d;
+  DefWith(m, "estimate_logs",
+        [](const py::object& paths, int window_length, double overlap, const std::string& window,
+           const std::optional<std::string>& detrend, const std::string& estimator, double fmin, double fmax,
+           const std::string& reference_column, const std::string& reference_dataset, bool whole_record,
+           int period_samples, const std::string& input_column, const std::string& output_column,
+           const std::string& time_column, const std::string& input_dataset, const std::string& output_dataset,
+           const std::string& time_dataset, double rate, double input_scale, double output_scale,
+           const std::string& time_unit, const std::string& delimiter) {
+          std::vector<std::string> files;
+          if (py::isinstance<py::str>(paths)) {
+            files.push_back(paths.cast<std::string>());
+          } else {
+            for (const py::handle& p : paths) {
+              if (!py::isinstance<py::str>(p) && !py::hasattr(p, "__fspath__")) {
+                throw py::type_error("paths: expected a path or a sequence of paths, got an item of type " +
+                                     py::str(py::type::of(p).attr("__name__")).cast<std::string>());
+              }
+              files.push_back(py::str(py::module_::import("os").attr("fspath")(p)).cast<std::string>());
+            }
+          }
+          analysis::LogsEstimateOptions o;
+          const bool local = estimator == "lpm" || estimator == "lrm";
+          const std::string det = detrend ? *detrend : ident::ToString(analysis::DefaultDetrend(whole_record));
+          o.welch = WelchFrom(window_length, overlap, window, det, local ? "h1" : estimator, fmin, fmax);
+          if (local) {
+            ident::LocalModelOptions lo;
+            ident::FromString(estimator, &lo.method);
+            lo.fmin_hz = fmin;
+            lo.fmax_hz = fmax;
+            o.local = lo;
+          }
+          o.select = SelectFrom(input_column, output_column, time_column, input_dataset, output_dataset,
+                                time_dataset, rate, input_scale, output_scale, time_unit, delimiter);
+          o.reference_column = reference_column;
+          o.reference_dataset = reference_dataset;
+          o.whole_record = whole_record;
+          o.period_samples = period_samples;
+          std::vector<std::string> warnings;
+          analysis::LogsEstimate e;
+          {
+            py::gil_scoped_release release;
+            ScopedCLocale c;
+            e = analysis::EstimateFromLogs(files, o, [&](const std::string& line) {
+              if (line.rfind("warning: ", 0) == 0) warnings.push_back(io::WithKeywords(line.substr(9)));
+            });
+          }
+          const py::object warn = py::module_::import("warnings").attr("warn");
+          for (const std::string& w : warnings) warn(w, py::module_::import("builtins").attr("UserWarning"), 2);
+          return std::move(e.response.frf);
+        },
+        std::make_tuple(py::arg("paths"), py::arg("window_length") = d.window_length,
+                        py::arg("overlap") = d.overlap, py::arg("window") = "hann",
+                        py::arg("detrend") = py::none(), py::arg("estimator") = "h1", py::arg("fmin") = d.fmin_hz,
+                        py::arg("fmax") = d.fmax_hz, py::arg("reference_column") = "",
+                        py::arg("reference_dataset") = "", py::arg("whole_record") = false,
+                        py::arg("period_samples") = 0, py::arg("input_column") = "torque",
+                        py::arg("output_column") = "position", py::arg("time_column") = "t",
+                        py::arg("input_dataset") = "/input/torque", py::arg("output_dataset") = "/output/position",
+                        py::arg("time_dataset") = "/time", py::arg("rate") = 0.0, py::arg("input_scale") = 1.0,
+                        py::arg("output_scale") = 1.0, py::arg("time_unit") = "", py::arg("delimiter") = ""),
+        R"doc(The frequency response of one device from one or several log files, as
+`zwidth estimate LOG...` computes it (the same library function): runs
+averaged (the same samples twice refused); whole_record=True takes each log
+as one rectangular segment, with period_samples one segment per period of a
+periodic excitation (detrend default 'mean' then, else 'linear'); a closed
+loop's logged excitation named by reference_column (text, .mat) or
+reference_dataset (HDF5) gives H = S_ry / S_ru; estimator 'h1' | 'h2'
+(Welch) | 'lpm' | 'lrm' (local methods on each whole log, in [fmin, fmax]).
+Warnings (samples left out, ...) are raised as UserWarning; errors as
+InputError naming the file.)doc");
+}
+
 // zwidth.simulate: a simulated log.
 void BindSimulate(py::module_& m) {
   m.def("simulate",
@@ -399,6 +479,7 @@ void BindIdent(py::module_& m) {
   BindReadLog(m);
   BindFrequencyResponse(m);
   BindEstimate(m);
+  BindEstimateLogs(m);
   BindSimulate(m);
 }
 

@@ -28,7 +28,7 @@ from . import _signatures
 
 __all__ = ["__version__", "InputError", "ComputationError", "FitQualityWarning", "Model", "Log",
            "FrequencyResponse", "FitResult", "CriticalPoint", "ZWidth", "RelayResult", "read_log",
-           "estimate", "simulate", "fit", "relay", "check", "build_info", "set_num_threads",
+           "estimate", "estimate_logs", "simulate", "fit", "relay", "check", "build_info", "set_num_threads",
            "num_threads", "from_frd", "to_frd"]
 
 
@@ -53,6 +53,7 @@ for _e in (InputError, ComputationError):
     _e.__module__ = "zwidth"
 
 read_log = _signatures.wrap(_zwidth.read_log)
+estimate_logs = _signatures.wrap(_zwidth.estimate_logs)
 simulate = _signatures.wrap(_zwidth.simulate)
 relay = _signatures.wrap(_zwidth.relay)
 check = _signatures.wrap(_zwidth.check)

@@ -105,6 +105,7 @@ _OBJECT_TYPES = {
     "H_std": "Optional[ArrayLike]", "K": "ArrayLike", "B": "ArrayLike", "m": "float", "b": "float",
     "sample_rate_hz": "float", "num_averages": "int", "monte_carlo": "int", "n": "Optional[int]",
     "scene": "Union[str, os.PathLike, List[Any]]",
+    "paths": "Union[str, os.PathLike, List[Union[str, os.PathLike]]]",
 }
 
 

@@ -1,0 +1,309 @@
+#include "analysis/logs_estimate.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <utility>
+
+#include "io/frf_file.h"
+#include "model/error.h"
+
+namespace zwidth::analysis {
+namespace {
+
+void Note(const EstimateNote& note, const std::string& line) {
+  if (note) note(line);
+}
+
+std::string JoinPaths(const std::vector<std::string>& paths) {
+  std::string s;
+  for (const auto& p : paths) s += (s.empty() ? "" : " + ") + p;
+  return s;
+}
+
+void NoteRead(const EstimateNote& note, const io::LogInfo& info) {
+  char head[96];
+  std::snprintf(head, sizeof head, ": %zu samples at %g Hz; ", info.num_samples, info.sample_rate_hz);
+  Note(note, info.source + head + info.layout);
+  for (const auto& w : info.warnings) Note(note, "warning: " + info.source + ": " + w);
+}
+
+// Samples after the last whole segment are not used: say so.
+void NoteDropped(const EstimateNote& note, const std::string& path, size_t n_samples, const ident::WelchOptions& o) {
+  const size_t n = o.window_length, step = n - o.overlap_samples();
+  if (n_samples < n) return;  // Welch refuses it with a message
+  const size_t segments = (n_samples - n) / step + 1;
+  const size_t dropped = n_samples - ((segments - 1) * step + n);
+  if (dropped == 0) return;
+  char s[400];
+  std::snprintf(s, sizeof s,
+                ": the last %zu samples (%.1f %% of the log) do not fill a %zu-sample segment and are not used; a "
+                "WelchOptions::window_length that fits, or LogsEstimateOptions::whole_record for a sweep or periodic "
+                "excitation, uses them",
+                dropped, 100.0 * dropped / n_samples, n);
+  Note(note, "warning: " + path + s);
+}
+
+// whole_record, period_samples and the Welch window length that do not go together.
+void CheckRecordOptions(const LogsEstimateOptions& o, const EstimateNote& note) {
+  if (o.whole_record && o.welch.window_length != ident::WelchOptions{}.window_length) {
+    throw InputError("LogsEstimateOptions::whole_record takes each log (or LogsEstimateOptions::period_samples) as "
+                     "one segment: drop WelchOptions::window_length");
+  }
+  if (o.period_samples != 0 && (!o.whole_record || o.period_samples < 16)) {
+    throw InputError("LogsEstimateOptions::period_samples " + std::to_string(o.period_samples) +
+                     ": needs LogsEstimateOptions::whole_record and a period of at least 16 samples");
+  }
+  if (o.whole_record && o.welch.detrend == ident::Detrend::kLinear) {
+    Note(note,
+         "warning: WelchOptions::detrend linear with LogsEstimateOptions::whole_record: each rectangular segment (a "
+         "whole record or period) loses its straight-line fit, and for a periodic response that fit is not a drift "
+         "but part of the signal (a rigid body's slow swing): it leaks into every bin and biases |H| most where it "
+         "is small; WelchOptions::detrend mean (the LogsEstimateOptions::whole_record default) or none avoids it");
+  }
+}
+
+// Closed loop: the selector that reads the logged excitation r as the "input".
+io::LogSelect ExcitationSelect(const std::string& path, const LogsEstimateOptions& o) {
+  io::LogSelect rsel = o.select;
+  const bool h5 = io::DetectLogFormat(path) == io::LogFormat::kHdf5;
+  if (h5 && o.reference_dataset.empty()) {
+    throw InputError(path + ": an HDF5 log: name the excitation with LogsEstimateOptions::reference_dataset (not "
+                     "LogsEstimateOptions::reference_column)");
+  }
+  if (!h5 && o.reference_column.empty()) {
+    throw InputError(path + ": not an HDF5 log: name the excitation with LogsEstimateOptions::reference_column (not "
+                     "LogsEstimateOptions::reference_dataset)");
+  }
+  if (h5) rsel.input_dataset = o.reference_dataset;
+  else rsel.input_column = o.reference_column;
+  return rsel;
+}
+
+// Open loop in Welch segments: one streaming pass, memory for a few windows.
+ident::RunSpectra StreamedRun(const std::string& path, const LogsEstimateOptions& o, const EstimateNote& note,
+                              io::LogInfo* info, std::uint64_t* fingerprint) {
+  ident::WelchEstimator est(o.welch);
+  io::LogFingerprint fp;
+  *info = io::StreamLog(path, o.select, [&](const double* u, const double* y, size_t n) {
+    est.Push(u, y, n);
+    fp.Add(u, y, n);
+  });
+  *fingerprint = fp.value();
+  NoteRead(note, *info);
+  NoteDropped(note, path, info->num_samples, o.welch);
+  ident::RunSpectra spectra;
+  spectra.uy = est.Finish(info->sample_rate_hz);
+  return spectra;
+}
+
+// Each whole period of P samples one run of its own: the std is the scatter between periods.
+std::vector<ident::RunSpectra> PeriodRuns(const std::string& path, const io::Log& log, const std::vector<double>& r,
+                                          size_t P, ident::WelchOptions w, const EstimateNote& note) {
+  const size_t periods = log.input.size() / P;
+  if (periods == 0) {
+    throw InputError("the log has " + std::to_string(log.input.size()) + " samples, fewer than one period of " +
+                     std::to_string(P) + " (LogsEstimateOptions::period_samples)");
+  }
+  w.window_length = static_cast<int>(P);
+  w.overlap = 0.0;
+  w.window = ident::Window::kRect;
+  NoteDropped(note, path, log.info.num_samples, w);
+  std::vector<ident::RunSpectra> runs;
+  for (size_t q = 0; q < periods; ++q) {
+    auto cut = [&](const std::vector<double>& v) {
+      return v.empty() ? v : std::vector<double>(v.begin() + q * P, v.begin() + (q + 1) * P);
+    };
+    runs.push_back(ident::EstimateRun(cut(log.input), cut(log.output), cut(r), log.info.sample_rate_hz, w));
+  }
+  return runs;
+}
+
+// The log in memory (closed loop, or whole_record): its run, or one run per
+// period with period_samples.
+std::vector<ident::RunSpectra> InMemoryRuns(const std::string& path, const LogsEstimateOptions& o,
+                                            const EstimateNote& note, io::LogInfo* info, std::uint64_t* fingerprint) {
+  io::Log log = io::ReadLog(path, o.select);
+  *info = log.info;
+  io::LogFingerprint fp;
+  fp.Add(log.input.data(), log.output.data(), log.input.size());
+  *fingerprint = fp.value();
+  NoteRead(note, *info);
+  std::vector<double> r;
+  if (o.ClosedLoop()) {
+    io::Log ex = io::ReadLog(path, ExcitationSelect(path, o));
+    if (ex.input.size() != log.input.size()) {
+      throw InputError("the excitation has " + std::to_string(ex.input.size()) + " samples, the input " +
+                       std::to_string(log.input.size()));
+    }
+    r = std::move(ex.input);
+  }
+  if (o.whole_record && o.period_samples > 0) {
+    return PeriodRuns(path, log, r, static_cast<size_t>(o.period_samples), o.welch, note);
+  }
+  ident::WelchOptions w = o.welch;
+  if (o.whole_record) {
+    if (log.input.size() > (1u << 24)) throw InputError("a whole record is limited to 2^24 samples");
+    w.window_length = static_cast<int>(log.input.size());
+    w.overlap = 0.0;
+    w.window = ident::Window::kRect;
+  } else {
+    NoteDropped(note, path, info->num_samples, w);
+  }
+  std::vector<ident::RunSpectra> runs;
+  runs.push_back(ident::EstimateRun(log.input, log.output, r, info->sample_rate_hz, w));
+  return runs;
+}
+
+// An InputError names the file first.
+template <class F>
+auto NamingTheFile(const std::string& path, F&& f) {
+  try {
+    return f();
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    throw InputError(what.rfind(path, 0) == 0 ? what : path + ": " + what);
+  }
+}
+
+// One log's runs.
+std::vector<ident::RunSpectra> LogRuns(const std::string& path, const LogsEstimateOptions& o, const EstimateNote& note,
+                                       io::LogInfo* info, std::uint64_t* fingerprint) {
+  return NamingTheFile(path, [&] {
+    if (o.ClosedLoop()) ExcitationSelect(path, o);  // the format and the excitation's name agree, before reading
+    if (!o.ClosedLoop() && !o.whole_record) {
+      return std::vector<ident::RunSpectra>{StreamedRun(path, o, note, info, fingerprint)};
+    }
+    return InMemoryRuns(path, o, note, info, fingerprint);
+  });
+}
+
+// "<method> from N runs, M segments[; median coherences]".
+std::string CombinedLine(const ident::CombinedResponse& r) {
+  char s[300];
+  std::snprintf(s, sizeof s, "%s from %d run%s, %d segments", ident::ToString(r.method).c_str(), r.num_runs,
+                r.num_runs > 1 ? "s" : "", r.frf.num_averages);
+  std::string line = s;
+  if (r.method == ident::CombinedMethod::kJoint) {
+    auto median = [](std::vector<double> v) {
+      std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+      return v[v.size() / 2];
+    };
+    std::snprintf(s, sizeof s, "; median coherence r->u %.3f, r->y %.3f (the coherence column holds r->y)",
+                  median(r.coherence_ru), median(r.coherence_ry));
+    line += s;
+  }
+  return line;
+}
+
+// The same samples twice (a file given twice, a copy, a link) are not two
+// runs: averaged, they shrink every per-bin std by 1/sqrt(2). Refused, since
+// no use of it is right; the message names both.
+void RefuseRepeatedLog(const std::vector<std::string>& paths, const std::vector<std::uint64_t>& seen,
+                       std::uint64_t fingerprint, const std::string& path) {
+  for (size_t i = 0; i < seen.size(); ++i) {
+    if (seen[i] != fingerprint) continue;
+    throw InputError(path + " holds the same samples as " + paths[i] +
+                     " (the same file, a copy or a link): runs are averaged as independent, and the same data twice "
+                     "would shrink every std by 1/sqrt(2) while adding nothing; give each run once");
+  }
+}
+
+// The local method: every log read whole (with its excitation in closed
+// loop), one local estimate over all of them.
+LogsEstimate EstimateLocal(const std::vector<std::string>& paths, const LogsEstimateOptions& options,
+                           const EstimateNote& note) {
+  const ident::LocalModelOptions& o = *options.local;
+  if (options.whole_record || options.period_samples != 0 ||
+      options.welch.window_length != ident::WelchOptions{}.window_length ||
+      options.welch.overlap != ident::WelchOptions{}.overlap) {
+    throw InputError("the local method (" + ident::ToString(o.method) +
+                     ") fits a local model on each whole log: drop LogsEstimateOptions::whole_record, "
+                     "LogsEstimateOptions::period_samples, WelchOptions::window_length and WelchOptions::overlap "
+                     "(Welch options)");
+  }
+  std::string why;
+  if (!o.IsValid(&why)) throw InputError(why);
+  LogsEstimate out;
+  std::vector<ident::LocalRecord> runs;
+  std::vector<std::uint64_t> seen;
+  double rate = 0.0;
+  for (const std::string& path : paths) {
+    NamingTheFile(path, [&] {
+      io::Log log = io::ReadLog(path, options.select);
+      NoteRead(note, log.info);
+      io::LogFingerprint fp;
+      fp.Add(log.input.data(), log.output.data(), log.input.size());
+      RefuseRepeatedLog(paths, seen, fp.value(), path);
+      seen.push_back(fp.value());
+      ident::LocalRecord run{std::move(log.input), std::move(log.output), {}};
+      if (options.ClosedLoop()) run.r = std::move(io::ReadLog(path, ExcitationSelect(path, options)).input);
+      if (rate == 0.0) rate = log.info.sample_rate_hz;
+      if (std::abs(log.info.sample_rate_hz - rate) > 1e-3 * rate) {
+        throw InputError("the log's rate differs from the first log's: runs of one estimate need one rate");
+      }
+      out.total_samples += log.info.num_samples;
+      out.infos.push_back(log.info);
+      runs.push_back(std::move(run));
+      return 0;
+    });
+  }
+  ident::LocalEstimate est = ident::EstimateLocal(runs, rate, o);
+  for (const std::string& w : est.warnings) Note(note, "warning: " + w);
+  out.response = ident::ToCombined(std::move(est), o.method, static_cast<int>(runs.size()));
+  char s[300];
+  std::snprintf(s, sizeof s, "%s (%s) from %zu run%s, %d bins per local window, %d residual degrees of freedom",
+                ident::ToString(out.response.method).c_str(), out.response.frf.estimator.c_str(), runs.size(),
+                runs.size() > 1 ? "s" : "", 2 * o.HalfWidth() + 1, out.response.frf.num_averages);
+  Note(note, s);
+  return out;
+}
+
+}  // namespace
+
+LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const LogsEstimateOptions& options,
+                              const EstimateNote& note) {
+  if (paths.empty()) throw InputError("no log to estimate from: give at least one");
+  LogsEstimate out;
+  if (options.local) {
+    out = EstimateLocal(paths, options, note);
+  } else {
+    std::string why;
+    if (!options.welch.IsValid(&why)) throw InputError(why);
+    CheckRecordOptions(options, note);
+    // One segment: the per-bin std (the scatter between segments) would be infinite.
+    auto one_segment = [&] {
+      return InputError(std::string("LogsEstimateOptions::whole_record with one log and ") +
+                        (options.period_samples > 0 ? "one whole period of LogsEstimateOptions::period_samples"
+                                                    : "no LogsEstimateOptions::period_samples") +
+                        " gives one segment: " +
+                        (options.for_fit ? "no per-bin std to weight the fit"
+                                         : "no scatter to estimate the per-bin std from") +
+                        "; pass several runs of the same excitation, LogsEstimateOptions::period_samples for a "
+                        "periodic one, or drop LogsEstimateOptions::whole_record (Welch segments)");
+    };
+    if (options.whole_record && options.period_samples == 0 && paths.size() < 2) throw one_segment();  // before reading
+    std::vector<ident::RunSpectra> runs;
+    std::vector<std::uint64_t> seen;  // one fingerprint per log read
+    for (const std::string& path : paths) {
+      io::LogInfo info;
+      std::uint64_t fingerprint = 0;
+      for (ident::RunSpectra& run : LogRuns(path, options, note, &info, &fingerprint)) runs.push_back(std::move(run));
+      RefuseRepeatedLog(paths, seen, fingerprint, path);
+      seen.push_back(fingerprint);
+      out.total_samples += info.num_samples;
+      out.infos.push_back(info);
+    }
+    out.response = ident::CombineRuns(runs, options.welch.estimator,
+                                      options.whole_record ? ident::StdSource::kRunScatter : ident::StdSource::kCoherence);
+    if (options.whole_record && runs.size() < 2) throw one_segment();
+    Note(note, CombinedLine(out.response));
+  }
+  // The stage named: estimate, before fit or write. Bins without input power
+  // first (H is 0/0 there), then any other non-finite value.
+  io::CheckInputPower(out.response.frf, JoinPaths(paths));
+  io::CheckFiniteResponse(out.response.frf, JoinPaths(paths));
+  return out;
+}
+
+}  // namespace zwidth::analysis

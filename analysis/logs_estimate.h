@@ -1,0 +1,71 @@
+// The frequency response of one device from its logs: one or several runs,
+// Welch segments streamed (open loop) or records in memory (closed loop with
+// a logged excitation, whole records, periods of a periodic excitation), or
+// the local polynomial / rational method on each whole log. The one place
+// that rule lives: `zwidth estimate`, `fit` and `run` and the Python module's
+// estimate_logs() call it; it prints nothing (what a caller shows as it
+// reads goes to `note`).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ident/joint.h"
+#include "ident/local_models.h"
+#include "ident/welch.h"
+#include "io/log.h"
+
+namespace zwidth::analysis {
+
+struct LogsEstimateOptions {
+  io::LogSelect select;
+  // Welch: window, detrend, estimator h1/h2, band (fmin/fmax also bound the
+  // local methods' band).
+  ident::WelchOptions welch;
+  // The local polynomial / rational method instead of Welch (ident/local_models.h).
+  std::optional<ident::LocalModelOptions> local;
+  // Closed loop: the logged excitation r (a text/.mat column, an HDF5
+  // dataset: the one the log's format reads); H = S_ry / S_ru (ident/joint.h).
+  std::string reference_column, reference_dataset;
+  // Each run one rectangular segment; per-bin std from the scatter between runs.
+  bool whole_record = false;
+  // With whole_record: one segment per period of this many samples (>= 16).
+  int period_samples = 0;
+  // The response is for a fit: one segment (no per-bin std) is refused
+  // rather than returned with an infinite std.
+  bool for_fit = false;
+
+  bool ClosedLoop() const { return !reference_column.empty() || !reference_dataset.empty(); }
+};
+
+// The per-segment detrend when none is chosen: linear for Welch segments;
+// mean for whole records and periods, where a linear fit is not a drift but
+// part of a periodic response (a rigid body's slow swing) and leaks into
+// every bin.
+inline ident::Detrend DefaultDetrend(bool whole_record) {
+  return whole_record ? ident::Detrend::kMean : ident::Detrend::kLinear;
+}
+
+struct LogsEstimate {
+  ident::CombinedResponse response;
+  std::vector<io::LogInfo> infos;  // one per log, in order
+  std::size_t total_samples = 0;
+};
+
+// A line for the user as the logs are read: "PATH: N samples at R Hz; LAYOUT",
+// "warning: PATH: ..." and the estimate's summary, naming option fields
+// (io/option_names.h) and the file names as given (io::Printable them).
+using EstimateNote = std::function<void(const std::string& line)>;
+
+// Throws InputError naming the file first for a log that cannot be read or
+// options that do not go together, and for the same samples given twice (a
+// file, its copy or a link: averaged as two runs they would shrink every std
+// by 1/sqrt(2)).
+LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const LogsEstimateOptions& options,
+                              const EstimateNote& note = {});
+
+}  // namespace zwidth::analysis
