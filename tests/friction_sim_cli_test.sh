@@ -6,7 +6,7 @@
 # names the amplitude.
 ZW=$1; SRC=$2
 . "$SRC/tests/cli_lib.sh"
-expect "coulomb nan" "--coulomb: .nan. is not a finite number" "$T/a.csv" -- "$ZW" simulate --model "$M" -o "$T/a.csv" --coulomb nan
+expect "coulomb nan" "--coulomb: 'nan' is not a finite number" "$T/a.csv" -- "$ZW" simulate --model "$M" -o "$T/a.csv" --coulomb nan
 expect "coulomb negative" "--coulomb -1" "$T/a.csv" -- "$ZW" simulate --model "$M" -o "$T/a.csv" --coulomb -1
 expect "coulomb both" "not both" "$T/a.csv" -- "$ZW" simulate --model "$M" -o "$T/a.csv" --coulomb 0.01 --coulomb-pos 0.02
 expect "breakaway low" "below the Coulomb level" "$T/a.csv" -- "$ZW" simulate --model "$M" -o "$T/a.csv" --coulomb 0.01 --breakaway 0.001
