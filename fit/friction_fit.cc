@@ -123,14 +123,16 @@ std::vector<double> PlantTime(const std::vector<double>& u, int delay) {
 // free of the encoder's noise.
 struct Sliding {
   std::vector<double> sign, moving;
+  std::vector<double> position;  // x(jT), from 0 at the start (the instrument of FrequencyIdim)
 };
 
 Sliding SimulateRigidBody(const std::vector<double>& U, double fs, double m, double b, double fc, double offset,
                           double v0) {
-  Sliding s{std::vector<double>(U.size()), std::vector<double>(U.size())};
+  Sliding s{std::vector<double>(U.size()), std::vector<double>(U.size()), std::vector<double>(U.size())};
   const double T = 1.0 / fs, tau = m / b;
-  double v = v0;
+  double v = v0, x = 0.0;
   for (size_t j = 0; j < U.size(); ++j) {
+    s.position[j] = x;
     const double F = U[j] + offset;
     double left = T, sg = 0.0, mv = 0.0;
     while (left > 0) {
@@ -143,7 +145,9 @@ Sliding SimulateRigidBody(const std::vector<double>& U, double fs, double m, dou
         const double t_stop = tau * std::log((v - v_inf) / (-v_inf));
         if (t_stop < left) { dt = t_stop; stops = true; }
       }
-      v = stops ? 0.0 : v_inf + (v - v_inf) * std::exp(-dt / tau);
+      const double e = std::exp(-dt / tau);
+      x += v_inf * dt + (v - v_inf) * tau * (1.0 - e);
+      v = stops ? 0.0 : v_inf + (v - v_inf) * e;
       sg += dir * dt;
       mv += dt;
       left -= dt;
@@ -156,6 +160,7 @@ Sliding SimulateRigidBody(const std::vector<double>& U, double fs, double m, dou
 
 struct Idim {
   double b = 0, fc = 0, offset = 0, b_std = 0, fc_std = 0, offset_std = 0;
+  double b_fc_cov = 0;  // covariance of b and F_c (the frequency-domain rows)
   int rows = 0, decimation = 1;
 };
 
@@ -213,23 +218,211 @@ Idim DetectionIdim(const Motion& mo, const std::vector<double>& U, double m, dou
   return SolveIdim(mo, HeldBandLimited(U, fs, fc), HeldBandLimited(sg, fs, fc), one, m, fs, fc, min_speed_fraction);
 }
 
-// The simulation-based IDIM with the rigid body (m, b, F_c, offset) of *id
-// (b_sim > 0: that b instead, a sharper estimate): simulated, regressed,
-// repeated `rounds` times.
-Sliding SimulatedIdim(const Motion& mo, const std::vector<double>& U, double m, double b_sim, double fs, double fc,
-                      double min_speed_fraction, int rounds, Idim* id) {
-  Sliding sl;
-  for (int i = 0; i < rounds; ++i) {
-    sl = SimulateRigidBody(U, fs, m, std::max(b_sim > 0 ? b_sim : id->b, 1e-9 * m * fs), std::max(id->fc, 0.0), id->offset, mo.v.front());
-    std::vector<double> um(U.size());
-    for (size_t j = 0; j < U.size(); ++j) um[j] = U[j] * sl.moving[j];
-    *id = SolveIdim(mo, HeldBandLimited(um, fs, fc), HeldBandLimited(sl.sign, fs, fc),
-                    HeldBandLimited(sl.moving, fs, fc), m, fs, fc, min_speed_fraction);
-    // F_c >= 0 (model/friction.h): a negative estimate (noise about 0) is 0,
-    // its std kept.
-    id->fc = std::max(id->fc, 0.0);
+// The detrended encoder's DFT (the line through the ends removed, as in
+// Differentiate).
+std::vector<cd> DetrendedSpectrum(const std::vector<double>& y) {
+  const size_t n = y.size();
+  std::vector<double> yd(n);
+  const double slope = (y.back() - y.front()) / static_cast<double>(n - 1);
+  for (size_t k = 0; k < n; ++k) yd[k] = y[k] - y.front() - slope * static_cast<double>(k);
+  return Forward(yd);
+}
+
+// Step 2 in the frequency domain, weighted as an output error. Per DFT bin k
+// of the whole log (0 < f_k <= fc), with X = Y / prod M_i (the detrended
+// encoder through the sections' inverse) and the held signals' spectra H[.]
+// (ZOH: sinc(f T) e^{-j w T/2}):
+//   H[(U + offset) mv]_k - m (j w)^2 X_k = b j w X_k + F_c H[sign]_k + t0 + t1 j w + t2 (j w)^2,
+// t0..t2 real: the transient of the non-periodic log (the rigid body's two
+// states and the detrending's; Pintelon and Schoukens, System
+// Identification, sec. 6.3). The offset comes from the time-domain rows
+// (without the DC bin the frequency domain sees it only through the stuck
+// phases). The encoder's error N is white in y, so bin k's equation error is
+// j w (m j w + b) / prod M_i(j w) N_k: each bin is divided by that (with the
+// last b), which makes the residual the encoder's error itself. The
+// time-domain rows weight every band alike and so take b where the
+// differentiated encoder is noisiest; here the weight grows as
+// 1 / (w |m j w + b|) towards the rigid-body corner b / (2 pi m), where b shows.
+Idim FrequencyIdim(const std::vector<cd>& Y, const std::vector<double>& um, const Sliding& sl,
+                   const model::Plant& p, double b_weight, double fs, double fc) {
+  const size_t n = um.size();
+  const double T = 1.0 / fs;
+  const std::vector<cd> Fu = Forward(um), Fs = Forward(sl.sign), Xs_sim = DetrendedSpectrum(sl.position);
+  std::vector<size_t> bins;
+  for (size_t k = 1; k < Y.size(); ++k) {
+    if (static_cast<double>(k) * fs / static_cast<double>(n) <= fc) bins.push_back(k);
   }
-  return sl;
+  constexpr int kUnknowns = 5;  // b, F_c, t0, t1, t2
+  if (bins.size() < 100) {
+    throw InputError(Num("the friction fit has %.0f frequency bins below its cutoff (%g Hz): at least 100 are needed; "
+                         "record a longer log",
+                         static_cast<double>(bins.size()), fc));
+  }
+  Eigen::MatrixXd X(2 * bins.size(), kUnknowns), Z(2 * bins.size(), kUnknowns);
+  Eigen::VectorXd z(2 * bins.size());
+  for (size_t i = 0; i < bins.size(); ++i) {
+    const size_t k = bins[i];
+    const double f = static_cast<double>(k) * fs / static_cast<double>(n), w = kTwoPi * f, x = std::numbers::pi * f * T;
+    const cd jw(0.0, w), zoh = (x > 0 ? std::sin(x) / x : 1.0) * std::exp(cd(0.0, -x));
+    const cd inv = InverseSections(p, w), Xk = Y[k] * inv;
+    const cd weight = 1.0 / (jw * (p.m * jw + b_weight) * inv);
+    const cd row[kUnknowns] = {jw * Xk, Fs[k] * zoh, 1.0, jw, jw * jw};
+    const cd rhs = Fu[k] * zoh - p.m * jw * jw * Xk;
+    const cd instrument[kUnknowns] = {jw * Xs_sim[k], row[1], row[2], row[3], row[4]};
+    for (int c = 0; c < kUnknowns; ++c) {
+      X(2 * i, c) = (row[c] * weight).real();
+      X(2 * i + 1, c) = (row[c] * weight).imag();
+      Z(2 * i, c) = (instrument[c] * weight).real();
+      Z(2 * i + 1, c) = (instrument[c] * weight).imag();
+    }
+    z(2 * i) = (rhs * weight).real();
+    z(2 * i + 1) = (rhs * weight).imag();
+  }
+  // Instrumental variables: the encoder's noise in X's b column would bias b
+  // down (errors in variables: at 23 % friction on 4000 counts, by half); the
+  // simulated body's position, free of that noise and correlated with X, is
+  // the instrument. theta = (Z^T X)^{-1} Z^T z, covariance
+  // sigma^2 (Z^T X)^{-1} Z^T Z (X^T Z)^{-1}.
+  const Eigen::VectorXd scale = X.colwise().norm().transpose().cwiseMax(1e-300);
+  const Eigen::MatrixXd Xs = X * scale.cwiseInverse().asDiagonal();
+  const Eigen::MatrixXd Zs = Z * (Z.colwise().norm().transpose().cwiseMax(1e-300)).cwiseInverse().asDiagonal();
+  const Eigen::MatrixXd ZX = Zs.transpose() * Xs;
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(ZX);
+  const Eigen::VectorXd theta_s = lu.solve(Zs.transpose() * z);
+  const Eigen::VectorXd res = z - Xs * theta_s;
+  // The residual is not white across the band (the weight makes the lowest
+  // bins' equation error the encoder's error plus what the simulation misses
+  // there), so the covariance is the heteroscedasticity-consistent sandwich
+  // (White 1980): each bin's own squared residual, shared by its two rows.
+  Eigen::VectorXd r2(z.size());
+  for (Eigen::Index i = 0; i + 1 < z.size(); i += 2) r2(i) = r2(i + 1) = 0.5 * (res(i) * res(i) + res(i + 1) * res(i + 1));
+  const double dof = static_cast<double>(z.size()) / (static_cast<double>(z.size()) - kUnknowns);
+  const Eigen::MatrixXd ZXi = lu.inverse();
+  const Eigen::MatrixXd cov_s = dof * ZXi * (Zs.transpose() * r2.asDiagonal() * Zs) * ZXi.transpose();
+  Idim r;
+  r.b = theta_s(0) / scale(0);
+  r.fc = theta_s(1) / scale(1);
+  r.b_std = std::sqrt(cov_s(0, 0)) / scale(0);
+  r.fc_std = std::sqrt(cov_s(1, 1)) / scale(1);
+  r.b_fc_cov = cov_s(0, 1) / (scale(0) * scale(1));
+  r.rows = static_cast<int>(bins.size());
+  r.decimation = 1;
+  return r;
+}
+
+// One round of the simulation-based IDIM: the rigid body (m, b, F_c, offset)
+// simulated from the torque, then regressed (the offset from the time-domain
+// rows, b and F_c from the frequency domain).
+struct Round {
+  Idim id;
+  Sliding sl;
+};
+
+Round IdimRound(const Motion& mo, const std::vector<cd>& Y, const std::vector<double>& U, const model::Plant& p,
+                double b, double fc_sim, double offset, double fs, double fc, double min_speed_fraction) {
+  Round out;
+  out.sl = SimulateRigidBody(U, fs, p.m, std::max(b, 1e-9 * p.m * fs), std::max(fc_sim, 0.0), offset, mo.v.front());
+  std::vector<double> um(U.size());
+  for (size_t j = 0; j < U.size(); ++j) um[j] = U[j] * out.sl.moving[j];
+  const Idim td = SolveIdim(mo, HeldBandLimited(um, fs, fc), HeldBandLimited(out.sl.sign, fs, fc),
+                            HeldBandLimited(out.sl.moving, fs, fc), p.m, fs, fc, min_speed_fraction);
+  for (size_t j = 0; j < U.size(); ++j) um[j] = (U[j] + td.offset) * out.sl.moving[j];
+  out.id = FrequencyIdim(Y, um, out.sl, p, std::max(b, 1e-9 * p.m * fs), fs, fc);
+  out.id.offset = td.offset;
+  out.id.offset_std = td.offset_std;
+  return out;
+}
+
+// The simulation-based IDIM's fixed point: (b, F_c) = G(b, F_c), G being
+// IdimRound's estimate from the body simulated with (b, F_c). On a noise-free
+// log the true parameters are a fixed point. Plain iteration contracts only
+// by |G'|, which is close to 1 where friction's damping is many times b (it
+// took > 300 rounds at 23 % friction); so it is solved by Newton's method on
+// F = G(x) - x, x = (b, F_c), with a forward-difference Jacobian, each step
+// limited to b/4..4b and F_c >= 0. The covariance is that of the fixed point:
+// a perturbation dG of the regression moves it by (I - G')^{-1} dG, so the
+// rows' covariance C becomes J^{-1} C J^{-T} with J = G' - I (the rows' own
+// std alone, which treats the simulated regressors as exact, was 10-400x
+// too small on the tests' logs).
+Sliding SimulatedIdim(const Motion& mo, const std::vector<cd>& Y, const std::vector<double>& U, const model::Plant& p,
+                      double m_std, double b_sim, double fs, double fc, double min_speed_fraction, Idim* id) {
+  Eigen::Vector2d x(std::max(b_sim > 0 ? b_sim : id->b, 1e-9 * p.m * fs), std::max(id->fc, 0.0));
+  double offset = id->offset;
+  auto round = [&](const Eigen::Vector2d& at) {
+    return IdimRound(mo, Y, U, p, at(0), at(1), offset, fs, fc, min_speed_fraction);
+  };
+  // Two plain rounds bring a far seed (the detection's b) near.
+  for (int i = 0; i < 2; ++i) {
+    const Round r0 = round(x);
+    x = Eigen::Vector2d(std::max(r0.id.b, 0.25 * x(0)), std::max(r0.id.fc, 0.0));
+    offset = r0.id.offset;
+  }
+  const double fc_floor = 1e-6 * x(0);  // a level below which F_c is 0 to the tolerance
+  auto residual = [&](const Round& at, const Eigen::Vector2d& where) {
+    return Eigen::Vector2d(at.id.b - where(0), at.id.fc - where(1));
+  };
+  auto merit = [&](const Eigen::Vector2d& F, const Eigen::Vector2d& where) {
+    return std::hypot(F(0) / where(0), F(1) / std::max(where(1), fc_floor));
+  };
+  Round r = round(x);
+  Eigen::Vector2d F = residual(r, x);
+  Eigen::Matrix2d J = -Eigen::Matrix2d::Identity();
+  for (int step = 0; step < 30; ++step) {
+    offset = r.id.offset;
+    if (merit(F, x) <= 1e-5) break;
+    for (int j = 0; j < 2; ++j) {
+      const double h = 1e-3 * (j == 0 ? x(0) : std::max(x(1), 1e3 * fc_floor));
+      Eigen::Vector2d xj = x;
+      xj(j) += h;
+      J.col(j) = (residual(round(xj), xj) - F) / h;
+    }
+    // Newton's step, halved until the residual falls; a plain round
+    // (x = G(x)) if it never does.
+    Eigen::Vector2d dx = J.fullPivLu().solve(-F);
+    bool moved = false;
+    for (double t = 1.0; dx.allFinite() && t >= 0.125; t *= 0.5) {
+      Eigen::Vector2d xt = x + t * dx;
+      xt(0) = std::clamp(xt(0), 0.25 * x(0), 4.0 * x(0));
+      xt(1) = std::max(xt(1), 0.0);
+      const Round rt = round(xt);
+      const Eigen::Vector2d Ft = residual(rt, xt);
+      if (merit(Ft, xt) < merit(F, x)) {
+        x = xt, r = rt, F = Ft, moved = true;
+        break;
+      }
+    }
+    if (!moved) {
+      x = Eigen::Vector2d(std::clamp(r.id.b, 0.25 * x(0), 4.0 * x(0)), std::max(r.id.fc, 0.0));
+      r = round(x);
+      F = residual(r, x);
+    }
+  }
+  *id = r.id;
+  id->b = x(0);
+  id->fc = x(1);
+  Eigen::Matrix2d C;
+  C << r.id.b_std * r.id.b_std, r.id.b_fc_cov, r.id.b_fc_cov, r.id.fc_std * r.id.fc_std;
+  const Eigen::Matrix2d Ji = J.inverse();
+  if (Ji.allFinite()) {
+    // m is held at the refit's value: its std moves the fixed point by
+    // -J^{-1} dG/dm std(m) (forward difference), added as independent.
+    Eigen::Vector2d dm = Eigen::Vector2d::Zero();
+    if (m_std > 0) {
+      model::Plant pm = p;
+      const double h = 1e-3 * p.m;
+      pm.m += h;
+      const Round rm = IdimRound(mo, Y, U, pm, x(0), x(1), offset, fs, fc, min_speed_fraction);
+      dm = -Ji * (Eigen::Vector2d(rm.id.b - r.id.b, rm.id.fc - r.id.fc) / h) * m_std;
+    }
+    const Eigen::Matrix2d Cx = Ji * C * Ji.transpose() + dm * dm.transpose();
+    id->b_std = std::sqrt(Cx(0, 0));
+    id->fc_std = std::sqrt(Cx(1, 1));
+    id->b_fc_cov = Cx(0, 1);
+  }
+  // F_c >= 0 (model/friction.h): a negative estimate (noise about 0) is 0,
+  // its std kept.
+  id->fc = std::max(id->fc, 0.0);
+  return r.sl;
 }
 
 // Step 3: the input of the linear part, in the motor's time: on the plant's
@@ -298,6 +491,7 @@ FrictionFitResult FitFriction(const std::vector<double>& input, const std::vecto
   const std::vector<double> U = PlantTime(input, plant.delay_samples);
   Motion mo = Differentiate(output, fs, plant, r.cutoff_hz);
   Idim id = DetectionIdim(mo, U, plant.m, fs, r.cutoff_hz, o.min_speed_fraction);
+  const std::vector<cd> Y = DetrendedSpectrum(output);
   r.detection_coulomb = id.fc;
   r.detection_coulomb_std = id.fc_std;
   r.detected = id.fc > o.detection_z * id.fc_std;
@@ -328,7 +522,8 @@ FrictionFitResult FitFriction(const std::vector<double>& input, const std::vecto
   FitResult refit;
   for (int it = 0; it < o.iterations; ++it) {
     const double b_sim = it > 0 && refit.std_errors.b < id.b_std ? plant.b : 0.0;
-    const Sliding sl = SimulatedIdim(mo, U, plant.m, b_sim, fs, r.cutoff_hz, o.min_speed_fraction, it == 0 ? 6 : 2, &id);
+    const double m_std = it == 0 ? linear.std_errors.m : refit.std_errors.m;
+    const Sliding sl = SimulatedIdim(mo, Y, U, plant, m_std, b_sim, fs, r.cutoff_hz, o.min_speed_fraction, &id);
     keep(id);
     fo.init = plant;
     refit = FitModel(ident::EstimateFrequencyResponse(LinearPartInput(U, sl, plant.delay_samples, id), output, fs,

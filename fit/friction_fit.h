@@ -34,6 +34,17 @@
 // Why not an output-error fit of the nonlinear model: a stick-slip simulation
 // per cost evaluation is slow, and its cost is not smooth in F_c.
 //
+// Step 2 (since 2026-12-02) is solved in the frequency domain: the same
+// equation per DFT bin below the cutoff, divided by the encoder error's gain
+// j w (m j w + b) / prod M_i (an output-error weighting that puts b's weight
+// at the rigid-body corner, where b shows, instead of in the differentiated
+// encoder's noise), with the simulated body's position as the instrument of
+// b's column (no errors in variables), a transient of three real terms, and
+// the offset from the time-domain rows. b and F_c are the fixed point of
+// "simulate with (b, F_c), regress", found by a safeguarded Newton method;
+// their covariance is the fixed point's (friction_fit.cc, SimulatedIdim),
+// with m's std propagated.
+//
 // Step 2's regressor sign(v) comes from the rigid body with friction simulated
 // exactly from the measured torque (events at v = 0; incrementally stable, so
 // it follows the device), not from the band-limited velocity: under a white
