@@ -63,6 +63,7 @@ int main(int argc, char** argv) {
   zwidth::app::GuardNumericFlags(&app);
   zwidth::app::OrganizeHelp(app);  // after every command: topics, examples, --help-all, completion
   try {
+    zwidth::app::CheckListFlags(app, argc, argv);
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);

@@ -123,6 +123,11 @@ void CheckLog(const PyLog& l) {
   if (!(l.sample_rate_hz > 0.0 && std::isfinite(l.sample_rate_hz))) {
     throw InputError("sample_rate_hz = " + G(l.sample_rate_hz) + ": must be finite and > 0 [Hz]");
   }
+  // The readers' range (io/log.cc, log_text.cc): a log saved at 5 Hz would be one zwidth refuses.
+  if (l.sample_rate_hz <= 10.0 * (1.0 + 1e-9) || l.sample_rate_hz > 1e6) {
+    throw InputError("sample_rate_hz = " + G(l.sample_rate_hz) + " Hz: the readers take 10 Hz..1 MHz (10 excluded), "
+                     "the rates of a device log; is it the period? then pass 1 / period");
+  }
 }
 
 std::string LogRepr(const PyLog& l) {

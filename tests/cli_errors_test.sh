@@ -84,7 +84,7 @@ expect fit-bad-delay "delay-samples 'soon'" "$T/o19.json" -- "$ZW" fit "$T/good.
 "$ZW" estimate "$T/good.h5" -o "$T/frf.h5" 2>/dev/null
 head -c 3000 "$T/frf.h5" > "$T/frf_trunc.h5"
 expect frf-h5-truncated "frf_trunc.h5.*(truncated|corrupt|cannot)" "$T/o20.json" -- "$ZW" fit "$T/frf_trunc.h5" -o "$T/o20.json"
-expect frf-h5-wrong-rate "reach 499\.7[0-9]* Hz, the Nyquist frequency of 50 Hz; wrong --rate" "$T/o21.json" -- "$ZW" fit "$T/frf.h5" --rate 100 -o "$T/o21.json"
+expect frf-h5-wrong-rate "reach 499\.7[0-9]* Hz, above the Nyquist frequency of 50 Hz; wrong --rate" "$T/o21.json" -- "$ZW" fit "$T/frf.h5" --rate 100 -o "$T/o21.json"
 "$ZW" estimate "$T/good.h5" -o "$T/frf.csv" 2>/dev/null
 awk -F, 'NR==3{$11="1e300"}1' OFS=, "$T/frf.csv" > "$T/frf_navg.csv"
 expect frf-csv-bad-count "num_averages = .* is not a whole number" "$T/o24.json" -- "$ZW" fit "$T/frf_navg.csv" -o "$T/o24.json"
