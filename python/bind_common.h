@@ -137,9 +137,11 @@ inline py::object SquareArray(const std::vector<double>& v) {
 }
 inline py::object CovarianceOf(const io::ModelFile& mf) { return SquareArray(mf.log_covariance); }
 
-// The CLI's --period rule (apps::ResolvePeriod): the given period when not
-// None (must be finite and > 0), else the model's sample_period_s, else 1 ms.
-double ResolvePeriod(const std::optional<double>& period_s, const io::ModelFile& model);
+// The CLI's --period rule (io::ResolveModelPeriod): the given period when not
+// None (in [1e-6, 0.1] s), else the model's sample_period_s, else 1 ms; the
+// model's delay converted to it (a UserWarning says so, in Python's words).
+// Under the GIL.
+double ResolvePeriod(const std::optional<double>& period_s, io::ModelFile* model);
 
 void BindModel(py::module_& m);
 void BindIdent(py::module_& m);
