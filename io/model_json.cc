@@ -147,6 +147,9 @@ json PlantToJson(const model::Plant& p) {
 
 }  // namespace
 
+// Also names NaN and Infinity outside strings: Python's json.dump writes them
+// (allow_nan=True by default), and nlohmann's "syntax error ... truncated or
+// malformed" hid the real problem.
 void CheckJsonDepth(const std::string& text, const std::string& source, int max_depth) {
   int depth = 0;
   bool in_string = false;
@@ -161,6 +164,10 @@ void CheckJsonDepth(const std::string& text, const std::string& source, int max_
     }
     if (c == '"') {
       in_string = true;
+    } else if ((c == 'N' && text.compare(i, 3, "NaN") == 0) || (c == 'I' && text.compare(i, 8, "Infinity") == 0)) {
+      throw InputError(source + ": line " + std::to_string(line) + ": " + (c == 'N' ? "NaN" : "Infinity") +
+                       " is not a JSON number (Python's json.dump writes it unless allow_nan=False): give a "
+                       "finite number");
     } else if (c == '[' || c == '{') {
       if (++depth > max_depth) {
         throw InputError(source + ": line " + std::to_string(line) + ": JSON nested deeper than " +

@@ -46,6 +46,14 @@ expect frf-rate-flag "--rate = 1e\+09 Hz|--rate.*\[10, 1e6\]" "$T/m5.json" -- "$
 expect frf-suu-neg "S_uu = -1.*>= 0" "$T/m6.json" -- "$ZW" fit "$T/suu_neg.csv" -o "$T/m6.json"
 "$ZW" fit "$T/frf.csv" -o "$T/good.json" >/dev/null 2>&1 && ok "the untouched response still fits" || bad "the untouched response refused"
 
+# ---- NaN and Infinity in a JSON file (Python's json.dump writes them): named, not "malformed"
+printf '{"objects":[{"name":"a","K":NaN,"B":0.001}]}' > "$T/nan_scene.json"
+expect scene-nan "line 1: NaN is not a JSON number" "" -- "$ZW" check "$T/nan_scene.json" --model "$M" --delay 2
+$PY -c "import json,sys; m=json.load(open(sys.argv[1])); m['b']=float('inf'); json.dump(m, open(sys.argv[2],'w'))" "$M" "$T/inf_model.json"
+expect model-inf "Infinity is not a JSON number" "$T/o9" -- "$ZW" boundary "$T/inf_model.json" -o "$T/o9"
+printf '{"objects":[{"name":"NaN Infinity","K":1.5,"B":0.01}]}' > "$T/nan_name.json"
+"$ZW" check "$T/nan_name.json" --model "$M" --delay 2 >/dev/null 2>&1 && ok "NaN inside a string is a name" || bad "NaN inside a string refused"
+
 # ---- the texts under a German locale: byte for byte the C locale's
 if locale -a 2>/dev/null | grep -qi '^de_DE\.utf-\?8$'; then
   printf '{"objects":[{"name":"wall","K":1.5,"B":0.01}]}' > "$T/scene.json"
