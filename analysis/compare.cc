@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "io/stability_files.h"
+#include "model/c_locale.h"
 
 namespace zwidth::analysis {
 namespace {
@@ -75,6 +76,7 @@ void CompareFriction(const io::ModelFile& model, const io::ModelFile& ref, bool 
 }  // namespace
 
 std::string ParameterTable(const io::ModelFile& mf, bool linear) {
+  const ScopedCLocale c_locale;  // printf's %g writes '.' whatever the caller's locale
   std::ostringstream os;
   char line[160];
   std::snprintf(line, sizeof line, "%-8s %14s %12s  %s\n", "param", "value", "std", "unit");
@@ -113,7 +115,7 @@ ModelComparison CompareModels(const io::ModelFile& model, const io::ModelFile& r
   if (ms.summaries.size() != delays.size() || ms.stds.size() != delays.size() || ref_sums.size() != delays.size()) {
     throw std::invalid_argument("CompareModels: one summary per delay expected");
   }
-
+  const ScopedCLocale c_locale;  // printf's %g writes '.' whatever the caller's locale
   std::ostringstream os;
   nlohmann::json j;
   j["parameters"] = nlohmann::json::array();

@@ -15,11 +15,15 @@ constexpr size_t kRowsPerTask = 50;
 
 }  // namespace
 
-PlantStability AnalysePlantStability(const io::ModelFile& model, double T, const std::vector<int>& delays,
+PlantStability AnalysePlantStability(const io::ModelFile& fitted, double T, const std::vector<int>& delays,
                                      const stability::LoopOptions& loop, const stability::BGridOptions& grid) {
+  io::ModelFile model = fitted;  // its delay counted in samples of T (the CLI's --period rule)
+  std::string note;
+  io::ResolveModelPeriod(T, &model, &note);
   // One sampled plant (and one set of perturbed plants for the delta method)
   // shared by every delay.
   PlantStability r(stability::SampledPlant(model.plant, T, loop.hand));
+  r.period_note = std::move(note);
   const stability::SampledPlant& sampled = r.sampled;
   r.delays = delays;
   r.has_std = !model.log_covariance.empty();

@@ -26,10 +26,16 @@ struct PlantStability {
   std::vector<double> b_grid;                       // B values of the rows [N m s/rad]
   std::vector<io::BoundaryRow> rows;                // [delay][B], delay-major
   int margin_disagreements = 0;                     // rows where margin()'s reading differs
+  // What io::ResolveModelPeriod converted: the model's delay_samples counted
+  // in samples of period_s when the model was fitted at another period; "".
+  std::string period_note;
 };
 
-// Throws InputError for an invalid delay, loop or grid (MakeBGrid's messages),
-// after the summaries (the grid's default range comes from them).
+// The model is used at period_s as the CLI's --period uses it
+// (io::ResolveModelPeriod): a delay fitted at another period is converted
+// when the ratio is whole (period_note says so), else refused (InputError).
+// Throws InputError for an invalid period, delay, loop or grid (MakeBGrid's
+// messages), after the summaries (the grid's default range comes from them).
 PlantStability AnalysePlantStability(const io::ModelFile& model, double period_s, const std::vector<int>& delays,
                                      const stability::LoopOptions& loop, const stability::BGridOptions& grid);
 

@@ -217,7 +217,7 @@ RunAnalysis Analyse(RunInput input, const RunOptions& o) {
   if (input.fit.status != fit::FitStatus::kConverged) throw ComputationError(input.fit.message);
   Laps laps;
   input.response.frf.used_by_fit = input.fit.band.used;
-  const double T = 1.0 / input.response.frf.sample_rate_hz;
+  const double T = input.response.frf.period_s();
   if (o.figures && !(o.report_filter_hz < 0.5 / T)) {  // before the Z-width, not at the figures
     std::ostringstream msg;
     msg << "RunOptions::report_filter_hz " << o.report_filter_hz << " Hz must be below the log's Nyquist frequency "

@@ -117,7 +117,7 @@ void FrequencyDomain(const model::StateSpace& sd, const io::Log& log, const Vali
   }
   r->band = ident::SelectExcitedBand(frf, o.band);
   const model::DiscreteResponse g(sd);
-  const double T = 1.0 / frf.sample_rate_hz;
+  const double T = frf.period_s();
   double chi2 = 0.0;
   int used = 0;
   r->normalised_misfit.assign(frf.f_hz.size(), std::numeric_limits<double>::quiet_NaN());
@@ -190,7 +190,7 @@ ValidationResult Validate(const io::ModelFile& model, const io::Log& log, const 
   if (log.input.size() <= static_cast<size_t>(2 * options.max_lag + 1)) {
     throw InputError("validate: the log is shorter than the correlation's lags");
   }
-  const double T = 1.0 / log.info.sample_rate_hz;
+  const double T = log.period_s();
   io::ModelFile m = model;
   io::ConvertDelayToPeriod(&m, T, "the model");  // the delay counted in the log's samples
   const model::StateSpace sd = model::DiscretizeZoh(m.plant, T);
@@ -226,7 +226,7 @@ nlohmann::ordered_json ValidationToJson(const ValidationResult& r) {
 std::string ValidationTraceCsv(const io::Log& log, const ValidationResult& r) {
   std::string s = "t,u,y,y_sim,e\n";
   char line[160];
-  const double T = 1.0 / log.info.sample_rate_hz;
+  const double T = log.period_s();
   for (size_t k = 0; k < r.simulated.size(); ++k) {
     std::snprintf(line, sizeof line, "%.10g,%.10g,%.10g,%.10g,%.6g\n", k * T, log.input[k], log.output[k],
                   r.simulated[k], log.output[k] - r.simulated[k]);

@@ -53,7 +53,7 @@ analysis::RunInput EstimateAndFit(const RunFlags& f, const analysis::RunOptions&
   in.whole_record = f.est.whole_record;
   *t_total_ms = timer.Lap("estimate (read + Welch)");
   // The reference's delay is counted in its own period: in the log's (or refused).
-  if (in.reference) app::ConvertDelayToPeriod(&*in.reference, 1.0 / in.response.frf.sample_rate_hz, "the reference");
+  if (in.reference) app::ConvertDelayToPeriod(&*in.reference, in.response.frf.period_s(), "the reference");
   std::exception_ptr ref_error;
   std::optional<analysis::ReferenceStability> ref;
   {
@@ -62,7 +62,7 @@ analysis::RunInput EstimateAndFit(const RunFlags& f, const analysis::RunOptions&
       try {
         ref_thread = std::jthread([&] {
           try {
-            ref = analysis::ReferenceStabilityOf(*in.reference, 1.0 / in.response.frf.sample_rate_hz, o.delays);
+            ref = analysis::ReferenceStabilityOf(*in.reference, in.response.frf.period_s(), o.delays);
           } catch (...) {
             ref_error = std::current_exception();
           }
@@ -106,7 +106,7 @@ void Run(RunFlags& f) {
   double t_total = 0.0;
   in = EstimateAndFit(f, o, std::move(in), &t_total);
   if (f.loop.hands.size() > 1) throw InputError("run takes one --hand (boundary takes several)");
-  o.loop = ResolveLoops(f.loop, 1.0 / in.response.frf.sample_rate_hz)[0];
+  o.loop = ResolveLoops(f.loop, in.response.frf.period_s())[0];
   const analysis::RunAnalysis a = analysis::Analyse(std::move(in), o);
   const std::string fit_report = FitReport(a.input.fit);  // the CLI's wording, for the terminal and report.html
   const report::RunReport rep = report::WriteRunReport(a, folder, {.draw_figures = true, .png = f.png, .fit_report = fit_report, .command_line = CommandLine()});

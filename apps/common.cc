@@ -143,10 +143,10 @@ double StageTimer::Lap(const std::string& stage) {
 }
 
 double ResolvePeriod(double flag, io::ModelFile* mf) {
-  if (std::isnan(flag)) return mf->sample_period_s ? *mf->sample_period_s : 0.001;
-  if (const std::string why = io::SamplePeriodProblem(flag, "--period"); !why.empty()) throw InputError(why);
-  app::ConvertDelayToPeriod(mf, flag, "the model");
-  return flag;
+  std::string note;
+  const double T = io::ResolveModelPeriod(std::isnan(flag) ? std::nullopt : std::optional<double>(flag), mf, &note);
+  if (!note.empty()) std::fprintf(stderr, "note: %s\n", WithFlags(note).c_str());
+  return T;
 }
 
 void ConvertDelayToPeriod(io::ModelFile* mf, double T, const std::string& what) {

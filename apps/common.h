@@ -101,6 +101,11 @@ void ConvertDelayToPeriod(io::ModelFile* mf, double T, const std::string& what);
 // declared) the one check of a typed number: an empty value, NaN or an
 // infinity is refused naming the flag (exit 2), as are non-numbers.
 void GuardNumericFlags(CLI::App* app);
+// CLI11 drops the empty items of a delimited list (`--delays 2,,4` read as
+// 2,4) before any check sees them, so the command line itself is read first:
+// an empty item in the value of any option of `app` (or its subcommands) that
+// has a delimiter is an InputError naming the flag and the item.
+void CheckListFlags(const CLI::App& app, int argc, char** argv);
 
 // Thrown by a subcommand to end with a documented exit status other than 0
 // (check: 3 when an object is unstable) once its output is complete.

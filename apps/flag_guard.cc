@@ -1,9 +1,12 @@
 // One validator for every number typed on the command line (issue 30).
 #include <cmath>
 #include <cstdlib>
+#include <set>
 #include <string>
 
 #include "apps/common.h"
+#include "io/printable.h"
+#include "model/error.h"
 
 namespace zwidth::app {
 namespace {
@@ -24,7 +27,50 @@ std::string CheckNumber(const std::string& value, bool floating) {
   return "";
 }
 
+// The long names ("--delays") of the options of `app` and its subcommands
+// that split their value at a delimiter.
+void ListFlagNames(const CLI::App& app, std::set<std::string>* names) {
+  for (const CLI::Option* opt : app.get_options()) {
+    if (opt->get_delimiter() == '\0') continue;
+    for (const std::string& n : opt->get_lnames()) names->insert("--" + n);
+  }
+  for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) ListFlagNames(*sub, names);
+}
+
+// The 1-based index of the first empty (or blank) item of `value` split at
+// ',', or 0 when there is none.
+size_t EmptyItem(const std::string& value) {
+  size_t item = 1, start = 0;
+  for (;; ++item) {
+    const size_t end = value.find(',', start);
+    const std::string piece = value.substr(start, end == std::string::npos ? std::string::npos : end - start);
+    if (piece.find_first_not_of(" \t") == std::string::npos) return item;
+    if (end == std::string::npos) return 0;
+    start = end + 1;
+  }
+}
+
 }  // namespace
+
+void CheckListFlags(const CLI::App& app, int argc, char** argv) {
+  std::set<std::string> names;
+  ListFlagNames(app, &names);
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--") return;  // positional arguments follow
+    const size_t eq = arg.find('=');
+    const std::string name = arg.substr(0, eq);
+    if (!names.count(name)) continue;
+    if (eq == std::string::npos && i + 1 >= argc) return;  // CLI11 reports the missing value
+    const std::string value = eq == std::string::npos ? argv[++i] : arg.substr(eq + 1);
+    if (value.empty()) continue;  // one empty value: the numeric check names it
+    if (const size_t item = EmptyItem(value)) {
+      throw InputError(name + " '" + io::Printable(value) + "': item " + std::to_string(item) +
+                       " of the comma-separated list is empty; give a number between each pair of commas "
+                       "(e.g. " + name + " 2,4)");
+    }
+  }
+}
 
 void GuardNumericFlags(CLI::App* app) {
   for (CLI::Option* opt : app->get_options()) {

@@ -36,10 +36,14 @@ int CheckStdout(int code) {
 int main(int argc, char** argv) {
   // A signal that ends the command removes its temporary files first.
   zwidth::io::InstallCleanupSignalHandlers();
-  // One OpenBLAS thread (unless the user chose): the fit's matrices are small,
-  // and OpenBLAS's pool, created when the fit plugin loads, could not start
-  // its threads under a tight `ulimit -v` and then waited for them at exit.
-  ::setenv("OPENBLAS_NUM_THREADS", "1", 0);
+  // One OpenBLAS thread, whatever the environment says: the fit's matrices are
+  // small (tens of parameters), so a pool buys nothing, and each pool thread
+  // starts by reserving its own 128 MiB buffer. Under `ulimit -v 150000` that
+  // mmap() fails and OpenBLAS 0.3.21 retries it for ever; at exit, its library
+  // destructor (blas_thread_shutdown_) joins that thread, so `fit` wrote its
+  // output and never exited (gdb backtrace, OPENBLAS_NUM_THREADS=8). Set before
+  // any BLAS is mapped: the fit plugin that brings it is dlopen()ed later.
+  ::setenv("OPENBLAS_NUM_THREADS", "1", 1);
   CLI::App app{"zwidth: haptic device identification and Z-width (stable K, B) analysis"};
   app.require_subcommand(1);
   zwidth::app::SetCommandLine(argc, argv);
@@ -59,6 +63,7 @@ int main(int argc, char** argv) {
   zwidth::app::GuardNumericFlags(&app);
   zwidth::app::OrganizeHelp(app);  // after every command: topics, examples, --help-all, completion
   try {
+    zwidth::app::CheckListFlags(app, argc, argv);
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);

@@ -3,6 +3,7 @@
 // linking them does not pull in Ceres; the fit comes from a plugin, fit/fit_api.h).
 #include <cmath>
 #include <cstdio>
+#include <locale>
 #include <sstream>
 #include <string>
 
@@ -47,6 +48,7 @@ std::string ToString(FitStatus s) {
 
 std::string FitResult::BriefReport() const {
   std::ostringstream os;
+  os.imbue(std::locale::classic());  // '.' decimals whatever std::locale::global says
   os << "fit " << ToString(status) << ": chi2/dof " << chi2_per_dof << ", fit " << nrmse_fit_percent
      << "% (NRMSE of H; unweighted, so a large misfit where |H| is small hardly shows), worst misfit at "
      << worst_misfit_hz << " Hz, " << starts_tried << " starts, " << iterations << " iterations";

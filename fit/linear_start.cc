@@ -135,7 +135,7 @@ std::optional<model::Plant> LinearRationalStart(const ident::FrequencyResponse& 
   const int dd = 2 * n + 1;  // D'(s) monic of degree 2n + 1, N(s) of degree 2n
   const int unknowns = dd + 2 * n + 1;
   if (n < 1 || static_cast<int>(2 * nb) <= unknowns + 4) return std::nullopt;
-  const double T = 1.0 / frf.sample_rate_hz;
+  const double T = frf.period_s();
   const double w0 = kTwoPi * frf.f_hz.back();
   auto weight = [&](size_t k) {  // 1 / (w s_k): F = s H below has std w s_k
     const double s = std::max(frf.H_std[k], 1e-3 * std::abs(frf.H[k]));

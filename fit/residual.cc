@@ -16,7 +16,7 @@ namespace zwidth::fit::internal {
 // Every `stride`-th bin (stride > 1 for the cheap screening of starts).
 Bins MakeBins(const ident::FrequencyResponse& frf, int delay, double floor, int stride) {
   Bins b;
-  b.period_s = 1.0 / frf.sample_rate_hz;
+  b.period_s = frf.period_s();
   for (size_t k = 0; k < frf.f_hz.size(); k += stride) {
     const double theta = 2.0 * std::numbers::pi * frf.f_hz[k] * b.period_s;
     double s = std::max(frf.H_std[k], floor * std::abs(frf.H[k]));

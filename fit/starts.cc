@@ -14,7 +14,7 @@ namespace zwidth::fit::internal {
 // Rigid body from the lowest 5% of the band: 1/G(jw) = -m w^2 + j b w, after
 // undoing the ZOH's half-sample and the input delay's phase.
 model::Plant EstimateRigid(const ident::FrequencyResponse& frf, int delay) {
-  const double T = 1.0 / frf.sample_rate_hz;
+  const double T = frf.period_s();
   const double f_lo = frf.f_hz.front(), f_hi = frf.f_hz.back();
   const double limit = f_lo + 0.05 * (f_hi - f_lo);
   double sm_num = 0, sm_den = 0, sb_num = 0, sb_den = 0;
@@ -59,7 +59,7 @@ std::vector<model::Plant> AutomaticStarts(const ident::FrequencyResponse& frf, i
   const model::Plant rigid = EstimateRigid(frf, delay);
   std::vector<model::Plant> starts;
   if (n == 0) { starts.push_back(rigid); return starts; }
-  const double T = 1.0 / frf.sample_rate_hz;
+  const double T = frf.period_s();
   const double nyq_w = std::numbers::pi / T;
   // R = H / G_rigid,d: the sections' product, with unit gain at low frequency.
   model::ZohModalForm<double> rf;

@@ -47,6 +47,9 @@ struct WelchOptions {
 
 struct FrequencyResponse {
   double sample_rate_hz = 0.0;
+  // The sample period T = 1 / sample_rate_hz [s] of the log it was estimated
+  // from: the one place it is computed (issue 24).
+  double period_s() const { return 1.0 / sample_rate_hz; }
   int window_length = 0;
   int num_averages = 0;            // Welch segments averaged
   double effective_averages = 0;   // Welch (1967) equivalent independent averages

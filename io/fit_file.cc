@@ -34,7 +34,7 @@ ModelFile FittedModelFile(const fit::FitResult& r, const ident::FrequencyRespons
   mf.plant.name = "fitted from " + shown;
   mf.std_errors = r.std_errors;
   mf.log_covariance = r.log_covariance;
-  mf.sample_period_s = 1.0 / frf.sample_rate_hz;
+  mf.sample_period_s = frf.period_s();
   mf.fit = {{"status", fit::ToString(r.status)},
             {"source", shown},
             {"quality", fit::ToString(r.quality)},

@@ -87,6 +87,12 @@ ident::FrequencyResponse ReadCsv(const std::string& path) {
   r.bin_correlation = 1.0;
   size_t line_no = 1;
   std::vector<double> v;
+  // The columns that hold one value for the whole response, repeated on every
+  // row: a row that disagrees is refused (the last row silently won before).
+  const std::pair<int, const char*> constants[] = {{i_rate, "sample_rate_hz"}, {i_navg, "num_averages"},
+                                                   {i_neff, "effective_averages"}, {i_kappa, "bin_correlation"}};
+  std::vector<double> first_row;
+  size_t first_line = 0;
   while (std::getline(in, line)) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -130,9 +136,30 @@ ident::FrequencyResponse ReadCsv(const std::string& path) {
     if (i_navg >= 0) r.num_averages = Count(v[i_navg], path, "num_averages");
     if (i_neff >= 0) r.effective_averages = v[i_neff];
     if (i_kappa >= 0) r.bin_correlation = v[i_kappa];
+    if (first_row.empty()) {
+      first_row = v;
+      first_line = line_no;
+    }
+    for (const auto& [i, name] : constants) {
+      if (i >= 0 && v[i] != first_row[i]) {
+        throw InputError(path + ": line " + std::to_string(line_no) + ": " + name + " = " + Num(v[i]) +
+                         " differs from " + Num(first_row[i]) + " on line " + std::to_string(first_line) +
+                         ": a response has one " + name + "; repair the file (rows of two responses mixed?)");
+      }
+    }
   }
   if (r.f_hz.empty()) throw InputError(path + ": no data rows");
   return r;
+}
+
+// The rates a log may have (io/log.h: 10 Hz..1 MHz), from a file as from a
+// flag or a Python argument: 0.001 is a period typed for a rate.
+void CheckRate(double rate, const std::string& source, const std::string& name) {
+  if (rate >= 10.0 && rate <= 1e6) return;
+  throw InputError(source + ": " + name + " = " + Num(rate) + " Hz: a sample rate must lie in [10, 1e6] Hz" +
+                   (rate > 0.0 && rate <= 0.1 ? " (is it the period? for " + Num(rate) + " s the rate is " +
+                                                    Num(1.0 / rate) + " Hz)"
+                                              : ""));
 }
 
 // A response reaches at most Nyquist (a Welch estimate's last bin is Nyquist
@@ -161,6 +188,10 @@ void CheckBinValues(const ident::FrequencyResponse& r, const std::string& path) 
       throw InputError(where + "coherence = " + Num(r.coherence[k]) + " is outside [0, 1]");
     }
     if (!(r.f_hz[k] >= 0.0)) throw InputError(where + "a frequency must be >= 0");
+    const double suu = k < r.S_uu.size() ? r.S_uu[k] : 0.0, syy = k < r.S_yy.size() ? r.S_yy[k] : 0.0;
+    if (!(suu >= 0.0 && syy >= 0.0)) {
+      throw InputError(where + "S_uu = " + Num(suu) + ", S_yy = " + Num(syy) + ": a power spectral density is >= 0");
+    }
   }
 }
 
@@ -177,6 +208,7 @@ void Finish(ident::FrequencyResponse& r, const std::string& path, double rate) {
   if (!(r.sample_rate_hz > 0.0) || !std::isfinite(r.sample_rate_hz)) {
     throw InputError(path + ": no sample_rate_hz column or attribute; pass ReadFrequencyResponse::sample_rate_hz (the log's sample rate)");
   }
+  CheckRate(r.sample_rate_hz, path, rate > 0.0 ? "ReadFrequencyResponse::sample_rate_hz" : "the file's sample_rate_hz");
   CheckBelowNyquist(r, path, "ReadFrequencyResponse::sample_rate_hz");
 }
 
@@ -235,7 +267,7 @@ void CheckResponseValues(const ident::FrequencyResponse& r, const std::string& s
   }
   CheckBinValues(r, source);  // the reader's per-bin rules: H_std > 0, coherence in [0, 1], f >= 0
   if (r.num_averages < 1) bad("num_averages = " + std::to_string(r.num_averages) + " must be >= 1");
-  if (!(r.sample_rate_hz > 0.0 && std::isfinite(r.sample_rate_hz))) bad("sample_rate_hz = " + Num(r.sample_rate_hz) + " must be finite, > 0");
+  CheckRate(r.sample_rate_hz, source, "sample_rate_hz");
   CheckBelowNyquist(r, source, "sample_rate_hz");
 }
 

@@ -65,6 +65,7 @@ struct LogInfo {
   std::string source;
   size_t num_samples = 0;
   double sample_rate_hz = 0.0;
+  double period_s() const { return 1.0 / sample_rate_hz; }  // the sample period T [s]
   // How the file was read, e.g. "text, ';'-separated, header at line 3
   // (comment): t, torque, position; columns 1, 2, 3".
   std::string layout;
@@ -90,6 +91,7 @@ struct Log {
   LogInfo info;
   std::vector<double> input;   // N m (or the unit of the selected column)
   std::vector<double> output;  // rad
+  double period_s() const { return info.period_s(); }  // the sample period T [s]
 };
 Log ReadLog(const std::string& path, const LogSelect& select = {});
 

@@ -414,7 +414,7 @@ void ResolveRate(const std::string& path, const LogSelect& sel, const TimeChecke
   if (rate_given) {
     info.sample_rate_hz = sel.sample_rate_hz;
     if (ct >= 0 && rows >= 2) {
-      const double T = 1.0 / sel.sample_rate_hz;
+      const double T = info.period_s();
       const double jitter = std::max(std::abs(times.MaxInterval() - T), std::abs(times.MinInterval() - T));
       std::ostringstream os;
       os.precision(3);
@@ -436,7 +436,7 @@ void ResolveRate(const std::string& path, const LogSelect& sel, const TimeChecke
       std::ostringstream os;
       os.precision(4);
       os << path << ": the time " << time_col_name << " implies a sample rate of " << info.sample_rate_hz
-         << " Hz (mean interval " << 1.0 / info.sample_rate_hz << " s), implausible for a device log: ";
+         << " Hz (mean interval " << info.period_s() << " s), implausible for a device log: ";
       if (info.sample_rate_hz * 1e3 >= 10.0 && info.sample_rate_hz * 1e3 <= 1e6) {
         os << "is it in milliseconds? pass LogSelect::time_unit ms (" << info.sample_rate_hz * 1e3 << " Hz)";
       } else if (info.sample_rate_hz * 1e6 >= 10.0 && info.sample_rate_hz * 1e6 <= 1e6) {

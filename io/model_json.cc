@@ -147,6 +147,9 @@ json PlantToJson(const model::Plant& p) {
 
 }  // namespace
 
+// Also names NaN and Infinity outside strings: Python's json.dump writes them
+// (allow_nan=True by default), and nlohmann's "syntax error ... truncated or
+// malformed" hid the real problem.
 void CheckJsonDepth(const std::string& text, const std::string& source, int max_depth) {
   int depth = 0;
   bool in_string = false;
@@ -161,6 +164,10 @@ void CheckJsonDepth(const std::string& text, const std::string& source, int max_
     }
     if (c == '"') {
       in_string = true;
+    } else if ((c == 'N' && text.compare(i, 3, "NaN") == 0) || (c == 'I' && text.compare(i, 8, "Infinity") == 0)) {
+      throw InputError(source + ": line " + std::to_string(line) + ": " + (c == 'N' ? "NaN" : "Infinity") +
+                       " is not a JSON number (Python's json.dump writes it unless allow_nan=False): give a "
+                       "finite number");
     } else if (c == '[' || c == '{') {
       if (++depth > max_depth) {
         throw InputError(source + ": line " + std::to_string(line) + ": JSON nested deeper than " +
@@ -267,7 +274,9 @@ std::string SamplePeriodProblem(double T, const std::string& name) {
   os << name << " = " << T << " s: a sample period must lie in [1e-06, 0.1] s (a rate of 10 Hz..1 MHz); " << name
      << " is the period T in seconds";
   const bool rate = T >= 10.0 && T <= 1e6, ms = T > 0.1 && T <= 100.0;
-  const std::string give = name.rfind("--", 0) == 0 ? "pass " + name + " " : "write ";
+  // A flag or a caller's argument (ModelPeriod::period_s) is passed, a file's field written.
+  const bool passed = name.rfind("--", 0) == 0 || name.find("::") != std::string::npos;
+  const std::string give = passed ? "pass " + name + " " : "write ";
   if (rate) os << ", not the rate: for " << T << " Hz " << give << 1.0 / T;
   if (ms) os << (rate ? "; " : ": ") << "for " << T << " ms " << give << T * 1e-3;
   return os.str();
@@ -391,6 +400,15 @@ std::string ConvertDelayToPeriod(ModelFile* mf, double T, const std::string& wha
                 "at that rate, or edit its delay_samples (and sample_period_s) if you mean another delay",
                 what.c_str(), d, Tm, d * Tm, q, T);
   throw InputError(buf);
+}
+
+double ResolveModelPeriod(std::optional<double> period_s, ModelFile* mf, std::string* note) {
+  note->clear();
+  if (!period_s) return mf->sample_period_s ? *mf->sample_period_s : 0.001;
+  const std::string why = SamplePeriodProblem(*period_s, "ModelPeriod::period_s");
+  if (!why.empty()) throw InputError(why);
+  *note = ConvertDelayToPeriod(mf, *period_s, "the model");
+  return *period_s;
 }
 
 json ModelToJson(const ModelFile& mf) {

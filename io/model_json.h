@@ -93,6 +93,15 @@ void CheckDuplicateKeys(const std::string& text, const std::string& source);
 // kMaxDelaySamples. `what` names the model in the texts ("the model").
 std::string ConvertDelayToPeriod(ModelFile* model, double T, const std::string& what);
 
+// The period a model is used at, the one rule of the CLI's --period, Python's
+// period_s and the C++ API (analysis::AnalysePlantStability): `period_s` when
+// given, checked like a file's sample_period_s (SamplePeriodProblem), else the
+// model's sample_period_s, else 1 ms; the model's delay is then converted to
+// it (ConvertDelayToPeriod, whose note is returned in *note, "" when nothing
+// was converted). Messages name the argument ModelPeriod::period_s
+// (io/option_names.h: --period, period_s).
+double ResolveModelPeriod(std::optional<double> period_s, ModelFile* model, std::string* note);
+
 nlohmann::json ModelToJson(const ModelFile& model);
 void WriteModelJson(const std::string& path, const ModelFile& model);
 

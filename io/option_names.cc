@@ -74,6 +74,7 @@ const std::vector<OptionName>& OptionNames() {
       {"RunOptions::delays", "--delays", ""},
       {"RunOptions::report_filter_hz", "--report-filter-hz", ""},
       {"RelayOptions::period_s", "--period", "period_s"},
+      {"ModelPeriod::period_s", "--period", "period_s"},
       {"RelayOptions::delay_samples", "--delay", "delay_samples"},
       {"RelayOptions::damping", "--damping", "damping"},
       {"RelayOptions::amplitude", "--amplitude", "amplitude"},

@@ -212,7 +212,7 @@ SimulatedLog SimulateNonlinearLog(const Plant& plant_in, const SimulateOptions& 
   Plant plant;
   SimulatedLog log = SimulatedTorque(plant_in, o, &plant);
   const size_t n = log.torque.size();
-  StickSlipPlant device(ContinuousStateSpace(plant), friction, 1.0 / o.sample_rate_hz);
+  StickSlipPlant device(ContinuousStateSpace(plant), friction, o.period_s());
   log.position.resize(n);
   const size_t delay = static_cast<size_t>(plant.delay_samples);
   for (size_t t = 0; t < n; ++t) {

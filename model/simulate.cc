@@ -81,7 +81,7 @@ SimulatedLog SimulatedTorque(const Plant& plant_in, const SimulateOptions& o, Pl
 SimulatedLog SimulateLog(const Plant& plant_in, const SimulateOptions& o) {
   Plant plant;
   SimulatedLog log = SimulatedTorque(plant_in, o, &plant);
-  const StateSpace d = DiscretizeZoh(plant, 1.0 / o.sample_rate_hz);
+  const StateSpace d = DiscretizeZoh(plant, o.period_s());
   log.position = SimulateDiscrete(d, log.torque);
   ApplySensor(o, &log.position);
   return log;

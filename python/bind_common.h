@@ -26,6 +26,7 @@
 #include <locale.h>
 
 #include "io/model_json.h"
+#include "model/c_locale.h"
 
 namespace zwidth::python {
 
@@ -121,25 +122,10 @@ void DefValue(py::class_<T, Options...>& cls, Get get, Set set) {
   cls.attr("__hash__") = py::none();  // mutable or array-valued: unhashable, as NumPy arrays
 }
 
-// The C locale for this thread while it lives: text the library writes or
-// reads (printf's %g, strtod) is the same under a German locale that Python's
-// locale.setlocale chose, and other threads keep theirs (uselocale).
-class ScopedCLocale {
- public:
-  ScopedCLocale() : c_(newlocale(LC_ALL_MASK, "C", nullptr)), old_(c_ ? uselocale(c_) : nullptr) {}
-  ~ScopedCLocale() {
-    if (c_) {
-      uselocale(old_);
-      freelocale(c_);
-    }
-  }
-  ScopedCLocale(const ScopedCLocale&) = delete;
-  ScopedCLocale& operator=(const ScopedCLocale&) = delete;
-
- private:
-  locale_t c_;
-  locale_t old_;
-};
+// The C locale for this thread while it lives (model/c_locale.h): text the
+// library writes or reads is the same under a German locale that Python's
+// locale.setlocale chose.
+using zwidth::ScopedCLocale;
 
 // A row-major n x n covariance (log space) as an (n, n) array, None when empty.
 inline py::object SquareArray(const std::vector<double>& v) {
@@ -151,9 +137,11 @@ inline py::object SquareArray(const std::vector<double>& v) {
 }
 inline py::object CovarianceOf(const io::ModelFile& mf) { return SquareArray(mf.log_covariance); }
 
-// The CLI's --period rule (apps::ResolvePeriod): the given period when not
-// None (must be finite and > 0), else the model's sample_period_s, else 1 ms.
-double ResolvePeriod(const std::optional<double>& period_s, const io::ModelFile& model);
+// The CLI's --period rule (io::ResolveModelPeriod): the given period when not
+// None (in [1e-6, 0.1] s), else the model's sample_period_s, else 1 ms; the
+// model's delay converted to it (a UserWarning says so, in Python's words).
+// Under the GIL.
+double ResolvePeriod(const std::optional<double>& period_s, io::ModelFile* model);
 
 void BindModel(py::module_& m);
 void BindIdent(py::module_& m);

@@ -22,6 +22,7 @@ struct PyLog {
   std::string source;
   double sample_rate_hz = 0.0;
   std::vector<double> u, y;
+  double period_s() const { return 1.0 / sample_rate_hz; }
 };
 
 ident::WelchOptions WelchFrom(int window_length, double overlap, const std::string& window,
@@ -126,6 +127,11 @@ void CheckLog(const PyLog& l) {
   if (!(l.sample_rate_hz > 0.0 && std::isfinite(l.sample_rate_hz))) {
     throw InputError("sample_rate_hz = " + G(l.sample_rate_hz) + ": must be finite and > 0 [Hz]");
   }
+  // The readers' range (io/log.cc, log_text.cc): a log saved at 5 Hz would be one zwidth refuses.
+  if (l.sample_rate_hz <= 10.0 * (1.0 + 1e-9) || l.sample_rate_hz > 1e6) {
+    throw InputError("sample_rate_hz = " + G(l.sample_rate_hz) + " Hz: the readers take 10 Hz..1 MHz (10 excluded), "
+                     "the rates of a device log; is it the period? then pass 1 / period");
+  }
 }
 
 std::string LogRepr(const PyLog& l) {
@@ -149,6 +155,7 @@ void BindLog(py::module_& m) {
            "u [N m] and y [rad]: 1-D arrays of finite numbers of the same length; sample_rate_hz [Hz] > 0.")
       .def_readonly("source", &PyLog::source, "the file it was read from ('' when made in memory)")
       .def_readonly("sample_rate_hz", &PyLog::sample_rate_hz, "[Hz]")
+      .def_property_readonly("period_s", &PyLog::period_s, "sample period 1 / sample_rate_hz [s]")
       .def_property_readonly("num_samples", [](const PyLog& l) { return l.u.size(); })
       .def_property_readonly("t", [](const PyLog& l) {
         std::vector<double> t(l.u.size());
@@ -262,6 +269,8 @@ void BindFrequencyResponse(py::module_& m) {
            },
            py::arg("path"), "Writes it as `zwidth estimate -o` does (CSV or HDF5 by extension).");
   cls.def_readonly("sample_rate_hz", &ident::FrequencyResponse::sample_rate_hz, "[Hz]")
+      .def_property_readonly("period_s", &ident::FrequencyResponse::period_s,
+                             "sample period 1 / sample_rate_hz [s] of the log it was estimated from")
       .def_readonly("window_length", &ident::FrequencyResponse::window_length, "samples per segment")
       .def_readonly("num_averages", &ident::FrequencyResponse::num_averages, "Welch segments averaged")
       .def_readonly("effective_averages", &ident::FrequencyResponse::effective_averages,

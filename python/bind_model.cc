@@ -102,16 +102,19 @@ py::array_t<std::complex<double>> Response(const io::ModelFile& mf, const Double
     for (py::ssize_t k = 0; k < n; ++k) h[k] = model::ContinuousResponse(mf.plant, kTwoPi * f[k]);
     return out;
   }
-  const double T = ResolvePeriod(period_s, mf);
+  io::ModelFile used = mf;  // its delay counted in samples of T
+  const double T = ResolvePeriod(period_s, &used);
   py::gil_scoped_release release;
-  const model::DiscreteResponse resp(model::DiscretizeZoh(mf.plant, T));
+  const model::DiscreteResponse resp(model::DiscretizeZoh(used.plant, T));
   for (py::ssize_t k = 0; k < n; ++k) h[k] = resp.AtTheta(kTwoPi * f[k] * T);
   return out;
 }
 
 py::tuple StateSpaceOf(const io::ModelFile& mf, std::optional<double> period_s) {
   mf.plant.Validate();
-  const model::StateSpace s = period_s ? model::WithDelayStates(model::DiscretizeZoh(mf.plant, ResolvePeriod(period_s, mf)))
+  io::ModelFile used = mf;  // its delay counted in samples of the period
+  const double T = period_s ? ResolvePeriod(period_s, &used) : 0.0;  // before used.plant is read
+  const model::StateSpace s = period_s ? model::WithDelayStates(model::DiscretizeZoh(used.plant, T))
                                 : model::ContinuousStateSpace(mf.plant);
   Eigen::MatrixXd B = s.B, C = s.C, D = Eigen::MatrixXd::Constant(1, 1, s.D);
   return py::make_tuple(s.A, B, C, D);
@@ -157,7 +160,9 @@ void DefModelConstructionAndFiles(py::class_<io::ModelFile>& cls) {
              CheckedJson(mf);
              ScopedCLocale c;
              io::ForgetNotedInputs();
-             io::ExportModel(mf, f, period_s ? ResolvePeriod(period_s, mf) : 0.0, path);
+             io::ModelFile used = mf;  // as `zwidth export --period`: the delay converted
+             const double T = period_s ? ResolvePeriod(period_s, &used) : 0.0;
+             io::ExportModel(used, f, T, path);
            },
            py::arg("path"), py::arg("format"), py::arg("period_s") = py::none(),
            "Exports like `zwidth export` (format json | hdf5 | matlab | python | statespace); "

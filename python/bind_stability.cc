@@ -73,7 +73,7 @@ DoubleArray Gains(const py::object& v, const char* name) {
 double Gain(double v, const char* name) { return Gains(py::float_(v), name).data()[0]; }
 
 void Build(PyZWidth* p) {
-  const double T = ResolvePeriod(p->period_arg, p->model);
+  const double T = ResolvePeriod(p->period_arg, &p->model);  // p->model: its delay in samples of T
   p->loop = LoopFrom(p->velocity_filter_hz, p->hand, T);
   py::gil_scoped_release release;
   p->z = std::make_unique<stability::ZWidth>(p->model.plant, T, p->delay_samples, p->loop, p->options);
@@ -503,7 +503,8 @@ void BindRelay(py::module_& m) {
            std::optional<std::tuple<double, double, double>> hand) {
           CheckDelay(delay_samples, "delay_samples");
           stability::RelayOptions o;
-          o.period_s = ResolvePeriod(period_s, model);
+          io::ModelFile used = model;  // its delay counted in samples of o.period_s
+          o.period_s = ResolvePeriod(period_s, &used);
           o.delay_samples = delay_samples;
           o.damping = damping;
           o.amplitude = amplitude;
@@ -513,7 +514,7 @@ void BindRelay(py::module_& m) {
           stability::RelayResult r;
           {
             py::gil_scoped_release release;
-            r = stability::SimulateRelay(model.plant, o);
+            r = stability::SimulateRelay(used.plant, o);
           }
           if (r.status == stability::RelayStatus::kNoOscillation) throw ComputationError("the relay loop did not oscillate");
           return r;
@@ -535,7 +536,8 @@ void BindCheck(py::module_& m) {
            std::optional<double> velocity_filter_hz, std::optional<std::tuple<double, double, double>> hand,
            double marginal_sigmas) {
           CheckDelay(delay_samples, "delay_samples");
-          const double T = ResolvePeriod(period_s, model);
+          io::ModelFile used = model;  // its delay counted in samples of T
+          const double T = ResolvePeriod(period_s, &used);
           const stability::LoopOptions loop = LoopFrom(velocity_filter_hz, hand, T);
           const std::vector<io::SceneObject> objs = SceneFrom(scene);
           analysis::SceneCheckOptions o;
@@ -543,7 +545,7 @@ void BindCheck(py::module_& m) {
           nlohmann::json out;
           {
             py::gil_scoped_release release;
-            const analysis::SceneCheck sc = analysis::CheckScene(model.plant, model.log_covariance, T, delay_samples,
+            const analysis::SceneCheck sc = analysis::CheckScene(used.plant, used.log_covariance, T, delay_samples,
                                                                  {loop}, objs, o);
             out = analysis::SceneCheckJson(sc, objs, delay_samples, T, o);
           }

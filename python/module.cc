@@ -6,6 +6,7 @@
 
 
 #include "build_info.h"
+#include "io/model_json.h"
 #include "io/option_names.h"
 #include "model/cancel.h"
 #include "model/error.h"
@@ -36,12 +37,13 @@ py::object JsonToPython(const nlohmann::json& j) {
   }
 }
 
-double ResolvePeriod(const std::optional<double>& period_s, const io::ModelFile& model) {
-  if (!period_s) return model.sample_period_s ? *model.sample_period_s : 0.001;
-  if (!(*period_s > 0.0 && std::isfinite(*period_s))) {
-    throw InputError("period_s = " + std::to_string(*period_s) + " s: must be finite and > 0");
+double ResolvePeriod(const std::optional<double>& period_s, io::ModelFile* model) {
+  std::string note;
+  const double T = io::ResolveModelPeriod(period_s, model, &note);
+  if (!note.empty() && PyErr_WarnEx(PyExc_UserWarning, io::WithKeywords(note).c_str(), 1) != 0) {
+    throw py::error_already_set();  // warnings configured as errors
   }
-  return *period_s;
+  return T;
 }
 
 namespace {

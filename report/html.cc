@@ -10,6 +10,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <locale>
 #include <ctime>
 #include <map>
 #include <set>
@@ -166,6 +167,7 @@ void ZWidthTable(const analysis::RunAnalysis& a, std::ostringstream& h) {
 std::string LoopDescription(const stability::LoopOptions& l) {
   if (!l.HasFilter() && l.hand.IsNone()) return "the paper's loop: raw backward difference, nobody holding the device";
   std::ostringstream d;
+  d.imbue(std::locale::classic());
   d.precision(6);
   if (l.HasFilter()) {
     d << "velocity filter F(z) with b =";
@@ -313,6 +315,7 @@ void ComparisonSection(const analysis::RunAnalysis& a, std::ostringstream& h) {
 
 std::string LoopCaption(const analysis::RunAnalysis& a) {
   std::ostringstream c;
+  c.imbue(std::locale::classic());
   c << "Blue: the (B, K) the device renders stably with the raw backward difference; orange: with a "
     << a.options.report_filter_hz << " Hz first-order velocity low-pass. Lines: the passivity boundary K_P(B) "
     << "(Colgate and Schenkel, with the model's damping b = " << a.input.model.plant.b << "): below it the wall stays "
@@ -356,6 +359,7 @@ void ProvenanceSection(const analysis::RunAnalysis& a, const std::string& comman
 std::string RunHtml(const analysis::RunAnalysis& a, const std::map<std::string, std::string>& svgs,
                     const std::string& fit_report, const std::string& command_line) {
   std::ostringstream h;
+  h.imbue(std::locale::classic());  // '.' decimals, no grouping, whatever std::locale::global says
   h << "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>zwidth report</title><style>" << kStyle
     << internal::kDygraphCss << "</style></head><body>\n<h1>zwidth report</h1>\n";
   VerdictSection(a, h);

@@ -12,6 +12,7 @@
 #include "io/frf_file.h"
 #include "io/printable.h"
 #include "io/stability_files.h"
+#include "model/c_locale.h"
 #include "report/report_internal.h"
 
 namespace zwidth::report {
@@ -81,6 +82,7 @@ FiguresStatus StatusOf(int gnuplot_exit) {
 
 RunReport WriteRunReport(const analysis::RunAnalysis& a, const io::OutputFolder& folder,
                          const RunReportOptions& options) {
+  const ScopedCLocale c_locale;  // the numbers of every file below, whatever the caller's locale
   const fs::path out(folder.temp_path());
   const fs::path fig = out / "figures";
   RunReport r;

@@ -43,7 +43,7 @@ ident::LocalEstimate Local(const model::SimulatedLog& log, ident::LocalMethod m)
 
 // max over bins in [f_lo, f_hi] of |H - G| / |G|.
 double MaxRelativeError(const ident::FrequencyResponse& r, double f_lo, double f_hi) {
-  const model::DiscreteResponse exact(model::DiscretizeZoh(model::PhantomTable1(), 1.0 / r.sample_rate_hz));
+  const model::DiscreteResponse exact(model::DiscretizeZoh(model::PhantomTable1(), r.period_s()));
   double worst = 0.0;
   for (size_t k = 0; k < r.f_hz.size(); ++k) {
     if (r.f_hz[k] < f_lo || r.f_hz[k] > f_hi) continue;

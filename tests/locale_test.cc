@@ -15,6 +15,9 @@
 
 #include <gtest/gtest.h>
 
+#include "analysis/compare.h"
+#include "analysis/run.h"
+#include "fit/fit.h"
 #include "io/export.h"
 #include "io/frf_file.h"
 #include "io/log.h"
@@ -91,6 +94,44 @@ TEST_F(GermanLocale, ModelJsonRoundTrips) {
   const ModelFile back = ReadModelJson(dir_ / "model.json");
   EXPECT_EQ(back.plant.m, mf.plant.m);
   EXPECT_EQ(back.plant.modes.at(0).omega, mf.plant.modes.at(0).omega);
+}
+
+// The texts the library prints (compare's table, the parameter table, a fit's
+// brief report) under German C and C++ locales equal the C locale's, byte for
+// byte (before: compare wrote 0,001168 and the brief report 1.234,57).
+struct Texts {
+  std::string compare, parameters, brief;
+  bool operator==(const Texts&) const = default;
+};
+
+Texts MakeTexts() {
+  ModelFile model = Table1Model(), ref = Table1Model();
+  model.plant.m *= 1.0123;  // decimals on both sides
+  model.plant.b *= 1000.5;  // > 1000: a grouping locale writes 5.843,...
+  const std::vector<int> delays = {2, 4};
+  Texts t;
+  t.compare = analysis::CompareModels(model, ref, delays, analysis::SummarizeDelays(model, 1e-3, delays),
+                                      analysis::ReferenceStabilityOf(ref, 1e-3, delays).summaries)
+                  .text;
+  t.parameters = analysis::ParameterTable(model);
+  fit::FitResult r;
+  r.status = fit::FitStatus::kConverged;
+  r.chi2_per_dof = 1234.5678;
+  r.nrmse_fit_percent = 97.25;
+  r.worst_misfit_hz = 0.125;
+  t.brief = r.BriefReport();
+  return t;
+}
+
+TEST_F(GermanLocale, CompareParameterTableAndBriefReportAreTheCLocales) {
+  const Texts de = MakeTexts();
+  std::locale::global(std::locale::classic());
+  std::setlocale(LC_ALL, "C");
+  const Texts c = MakeTexts();
+  EXPECT_EQ(de.compare, c.compare);
+  EXPECT_EQ(de.parameters, c.parameters);
+  EXPECT_EQ(de.brief, c.brief);
+  EXPECT_NE(c.brief.find("1234.57"), std::string::npos) << c.brief;
 }
 
 }  // namespace

@@ -183,7 +183,7 @@ def to_frd(frf):
     dt = 1 / sample_rate_hz)."""
     import numpy as np
     control = _control()
-    return control.frd(frf.H, 2 * np.pi * frf.f_hz, dt=1.0 / frf.sample_rate_hz)
+    return control.frd(frf.H, 2 * np.pi * frf.f_hz, dt=frf.period_s)
 
 
 def from_frd(frd, sample_rate_hz=None, num_averages=1):

@@ -30,7 +30,7 @@ def bode(frf, result=None, axes=None, sigmas=2.0, all_bins=False):
                      alpha=0.3, label=f"+-{sigmas:g} sigma")
     ph.semilogx(fk, np.degrees(np.unwrap(np.angle(Hk))))
     if result is not None:
-        G = result.model.response(fk, period_s=1.0 / frf.sample_rate_hz)
+        G = result.model.response(fk, period_s=frf.period_s)
         mag.loglog(fk, np.abs(G), "k", label=f"fitted model ({result.quality})")
         ph.semilogx(fk, np.degrees(np.unwrap(np.angle(G))), "k")
     mag.set(ylabel="|H|")
