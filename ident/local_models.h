@@ -14,7 +14,9 @@
 //   LRM  G = N(r)/D(r), T = M(r)/D(r), D(0) = 1, linearised as
 //        D(r) Y = N(r) U + M(r) + residual (N, M of order R, D of order R_D).
 // The estimate is G(k) = g_0 (LPM) or n_0 (LRM). Columns are scaled (r by n,
-// then each to unit norm) before Eigen's Householder QR.
+// then each to unit norm); the transient's real columns are projected out
+// per bin and the rest solved by a small Householder QR (docs/estimators.md,
+// "The solver").
 //
 // The rigid body. Eq. (1)'s 1/(m s^2 + b s) is a double pole at z = 1 in the
 // sampled plant (and in T: a drift of the position over the record), steep

@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "analysis/logs_estimate.h"
+#include "ident/local_models.h"
 #include "io/atomic_file.h"
 #include "io/option_names.h"
 #include "io/frf_file.h"
@@ -40,8 +41,9 @@ ident::WelchOptions WelchFrom(int window_length, double overlap, const std::stri
   if (!ident::FromString(detrend, &o.detrend)) {
     throw InputError("detrend '" + detrend + "' is not one of none, mean, linear");
   }
-  if (!ident::FromString(estimator, &o.estimator)) {
-    throw InputError("estimator '" + estimator + "' is not one of h1, h2");
+  ident::LocalMethod local;
+  if (!ident::FromString(estimator, &o.estimator) && !ident::FromString(estimator, &local)) {
+    throw InputError("estimator '" + estimator + "' is not one of h1, h2, lpm, lrm");
   }
   std::string why;
   if (!o.IsValid(&why)) throw InputError(why);
@@ -65,12 +67,58 @@ ident::FrequencyResponse Estimate(const std::vector<double>& u, const std::vecto
   return est.Finish(sample_rate_hz);
 }
 
+// The local options of `--estimator lpm|lrm` (and --local-*), or nothing for
+// Welch's h1/h2. As the CLI (apps/common.cc), a local estimate takes the
+// whole record: the Welch segment keywords must keep their defaults.
+struct LocalArgs {
+  int half_width = ident::LocalModelOptions{}.half_width;
+  int order = ident::LocalModelOptions{}.order;
+  int denominator_order = ident::LocalModelOptions{}.denominator_order;
+  int differences = ident::LocalModelOptions{}.differences;
+};
+
+std::optional<ident::LocalModelOptions> LocalFrom(const std::string& estimator, const ident::WelchOptions& welch,
+                                                   const LocalArgs& a) {
+  ident::LocalModelOptions o;
+  if (!ident::FromString(estimator, &o.method)) return std::nullopt;
+  if (welch.window_length != ident::WelchOptions{}.window_length || welch.overlap != ident::WelchOptions{}.overlap) {
+    throw InputError("estimator='" + estimator + "' fits a local model on the whole log: drop window_length and "
+                     "overlap (Welch keywords)");
+  }
+  o.half_width = a.half_width;
+  o.order = a.order;
+  o.denominator_order = a.denominator_order;
+  o.differences = a.differences;
+  o.fmin_hz = welch.fmin_hz;
+  o.fmax_hz = welch.fmax_hz;
+  std::string why;
+  if (!o.IsValid(&why)) throw InputError(why);
+  return o;
+}
+
+// Welch's estimate, or the local one (one run, open loop) when `local` is set.
+ident::FrequencyResponse EstimateEither(const std::vector<double>& u, const std::vector<double>& y,
+                                        double sample_rate_hz, const ident::WelchOptions& o,
+                                        const std::optional<ident::LocalModelOptions>& local) {
+  if (!local) return Estimate(u, y, sample_rate_hz, o);
+  if (u.size() != y.size()) {
+    throw InputError("u has " + std::to_string(u.size()) + " samples and y " + std::to_string(y.size()) +
+                     ": they must have the same length");
+  }
+  py::gil_scoped_release release;
+  return ident::EstimateLocal({{u, y, {}}}, sample_rate_hz, *local).frf;
+}
+
 constexpr const char* kWelchDoc = R"doc(
 Welch-averaged frequency response y/u, as `zwidth estimate` computes it:
 window_length samples per segment (>= 16), overlap fraction in [0, 1),
 window 'hann' | 'hamming' | 'rect' (periodic), detrend 'none' | 'mean' |
 'linear' per segment, estimator 'h1' (S_uy/S_uu) | 'h2' (S_yy/S_yu), and the
-band [fmin, fmax] Hz kept (default fmax inf: up to Nyquist, as the CLI).)doc";
+band [fmin, fmax] Hz kept (default fmax inf: up to Nyquist, as the CLI).
+estimator 'lpm' | 'lrm': the local polynomial / rational method on the
+whole record (docs/estimators.md), with local_half_width (0: the method's
+default), local_order, local_denominator_order (LRM) and local_differences,
+as --local-*; window_length and overlap must then keep their defaults.)doc";
 
 // A LogSelect from read_log's and estimate's selector keywords.
 io::LogSelect SelectFrom(const std::string& input_column, const std::string& output_column,
@@ -107,7 +155,10 @@ auto WelchArgs() {
   const ident::WelchOptions d;
   return std::make_tuple(py::arg("window_length") = d.window_length, py::arg("overlap") = d.overlap,
                          py::arg("window") = "hann", py::arg("detrend") = "linear", py::arg("estimator") = "h1",
-                         py::arg("fmin") = d.fmin_hz, py::arg("fmax") = d.fmax_hz);
+                         py::arg("fmin") = d.fmin_hz, py::arg("fmax") = d.fmax_hz,
+                         py::arg("local_half_width") = LocalArgs{}.half_width, py::arg("local_order") = LocalArgs{}.order,
+                         py::arg("local_denominator_order") = LocalArgs{}.denominator_order,
+                         py::arg("local_differences") = LocalArgs{}.differences);
 }
 
 // m.def(name, f, args..., extra...) with the keyword arguments given as a tuple.
@@ -323,16 +374,26 @@ void BindFrequencyResponse(py::module_& m) {
 void BindEstimate(py::module_& m) {
   DefWith(m, "estimate",
         [](const std::string& path, int window_length, double overlap, const std::string& window,
-           const std::string& detrend, const std::string& estimator, double fmin, double fmax,
-           const std::string& input_column, const std::string& output_column, const std::string& time_column,
+           const std::string& detrend, const std::string& estimator, double fmin, double fmax, int local_half_width,
+           int local_order, int local_denominator_order, int local_differences, const std::string& input_column, const std::string& output_column, const std::string& time_column,
            const std::string& input_dataset, const std::string& output_dataset, const std::string& time_dataset,
            double rate, double input_scale, double output_scale, const std::string& time_unit,
            const std::string& delimiter) {
           const ident::WelchOptions o = WelchFrom(window_length, overlap, window, detrend, estimator, fmin, fmax);
           const io::LogSelect s = SelectFrom(input_column, output_column, time_column, input_dataset, output_dataset,
                                              time_dataset, rate, input_scale, output_scale, time_unit, delimiter);
+          const auto local =
+              LocalFrom(estimator, o, {local_half_width, local_order, local_denominator_order, local_differences});
           py::gil_scoped_release release;
           ScopedCLocale c;
+          if (local) {  // the whole log (as the CLI's EstimateLocalFromLogs)
+            const io::Log log = io::ReadLog(path, s);
+            try {
+              return ident::EstimateLocal({{log.input, log.output, {}}}, log.info.sample_rate_hz, *local).frf;
+            } catch (const InputError& e) {
+              throw InputError(path + ": " + e.what());
+            }
+          }
           // The CLI's streaming pass (apps/common.cc EstimateFromLog): memory for a few windows.
           ident::WelchEstimator est(o);
           const io::LogInfo info =
@@ -349,19 +410,24 @@ void BindEstimate(py::module_& m) {
   DefWith(m, "estimate",
         [](const py::array& u, const py::array& y, double sample_rate_hz, int window_length, double overlap,
            const std::string& window, const std::string& detrend, const std::string& estimator, double fmin,
-           double fmax) {
+           double fmax, int local_half_width, int local_order, int local_denominator_order, int local_differences) {
           const ident::WelchOptions o = WelchFrom(window_length, overlap, window, detrend, estimator, fmin, fmax);
+          const auto local =
+              LocalFrom(estimator, o, {local_half_width, local_order, local_denominator_order, local_differences});
           const std::vector<double> uv = Samples(u, "u");  // u's message first
-          return Estimate(uv, Samples(y, "y"), sample_rate_hz, o);
+          return EstimateEither(uv, Samples(y, "y"), sample_rate_hz, o, local);
         },
         std::tuple_cat(std::make_tuple(py::arg("u"), py::arg("y"), py::arg("sample_rate_hz")), WelchArgs()),
         kWelchDoc);
   DefWith(m, "estimate",
         [](const PyLog& log, int window_length, double overlap, const std::string& window,
-           const std::string& detrend, const std::string& estimator, double fmin, double fmax) {
+           const std::string& detrend, const std::string& estimator, double fmin, double fmax, int local_half_width,
+           int local_order, int local_denominator_order, int local_differences) {
           const ident::WelchOptions o = WelchFrom(window_length, overlap, window, detrend, estimator, fmin, fmax);
+          const auto local =
+              LocalFrom(estimator, o, {local_half_width, local_order, local_denominator_order, local_differences});
           try {
-            return Estimate(log.u, log.y, log.sample_rate_hz, o);
+            return EstimateEither(log.u, log.y, log.sample_rate_hz, o, local);
           } catch (const InputError& e) {  // as the CLI: the file first
             if (log.source.empty()) throw;
             throw InputError(log.source + ": " + e.what());
