@@ -115,8 +115,17 @@ std::string JoinPaths(const std::vector<std::string>& paths) {
 }
 
 namespace {
+thread_local bool t_quiet = false;
+}  // namespace
+
+QuietMessages::QuietMessages() : was_quiet_(t_quiet) { t_quiet = true; }
+QuietMessages::~QuietMessages() { t_quiet = was_quiet_; }
+bool MessagesQuiet() { return t_quiet; }
+
+namespace {
 
 void PrintRead(const io::LogInfo& info) {
+  if (t_quiet) return;
   const std::string source = io::Printable(info.source);
   std::fprintf(stderr, "%s: %zu samples at %g Hz; %s\n", source.c_str(), info.num_samples, info.sample_rate_hz,
                io::Printable(info.layout).c_str());
@@ -128,7 +137,7 @@ void PrintRead(const io::LogInfo& info) {
 // Samples after the last whole segment are not used: say so.
 void WarnDropped(const std::string& path, size_t n_samples, const ident::WelchOptions& o) {
   const size_t n = o.window_length, step = n - o.overlap_samples();
-  if (n_samples < n) return;  // Welch refuses it with a message
+  if (n_samples < n || t_quiet) return;  // Welch refuses it with a message
   const size_t segments = (n_samples - n) / step + 1;
   const size_t dropped = n_samples - ((segments - 1) * step + n);
   if (dropped == 0) return;
@@ -151,7 +160,7 @@ void CheckRecordFlags(const EstimateFlags& flags) {
     throw InputError("--period-samples " + std::to_string(flags.period_samples) +
                      ": needs --whole-record and a period of at least 16 samples");
   }
-  if (flags.whole_record && flags.detrend == "linear") {
+  if (flags.whole_record && flags.detrend == "linear" && !t_quiet) {
     std::fprintf(stderr,
                  "warning: --detrend linear with --whole-record: each rectangular segment (a whole record or period) "
                  "loses its straight-line fit, and for a periodic response that fit is not a drift but part of the "
@@ -266,6 +275,7 @@ std::vector<ident::RunSpectra> LogRuns(const std::string& path, const EstimateFl
 
 // "<method> from N runs, M segments[; median coherences]" on stderr.
 void PrintCombined(const ident::CombinedResponse& r) {
+  if (t_quiet) return;
   std::fprintf(stderr, "%s from %d run%s, %d segments", ident::ToString(r.method).c_str(), r.num_runs,
                r.num_runs > 1 ? "s" : "", r.frf.num_averages);
   if (r.method == ident::CombinedMethod::kJoint) {
@@ -327,9 +337,9 @@ LogsEstimate EstimateLocalFromLogs(const std::vector<std::string>& paths, const 
     }
   }
   ident::LocalEstimate est = ident::EstimateLocal(runs, rate, o);
-  for (const std::string& w : est.warnings) std::fprintf(stderr, "warning: %s\n", WithFlags(w).c_str());
+  for (const std::string& w : est.warnings) if (!t_quiet) std::fprintf(stderr, "warning: %s\n", WithFlags(w).c_str());
   out.response = ident::ToCombined(std::move(est), o.method, static_cast<int>(runs.size()));
-  std::fprintf(stderr, "%s (%s) from %zu run%s, %d bins per local window, %d residual degrees of freedom\n",
+  if (!t_quiet) std::fprintf(stderr, "%s (%s) from %zu run%s, %d bins per local window, %d residual degrees of freedom\n",
                ident::ToString(out.response.method).c_str(), out.response.frf.estimator.c_str(), runs.size(),
                runs.size() > 1 ? "s" : "", 2 * o.HalfWidth() + 1, out.response.frf.num_averages);
   return out;
@@ -399,7 +409,7 @@ double ResolvePeriod(double flag, io::ModelFile* mf) {
 
 void ConvertDelayToPeriod(io::ModelFile* mf, double T, const std::string& what) {
   const std::string note = io::ConvertDelayToPeriod(mf, T, what);
-  if (!note.empty()) std::fprintf(stderr, "note: %s\n", note.c_str());
+  if (!note.empty() && !t_quiet) std::fprintf(stderr, "note: %s\n", note.c_str());
 }
 
 namespace {

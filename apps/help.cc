@@ -120,6 +120,11 @@ constexpr OptionTopic kOptionTopics[] = {
     {"", "png", "Output", ""},
     {"", "format", "Output", "json hdf5 matlab python statespace"},
     {"", "units", "Output", "rotary linear"},
+    // batch: many units, one table
+    {"batch", "manifest", "Batch", ""},
+    {"batch", "unit-folders", "Batch", ""},
+    {"batch", "jobs", "Batch", ""},
+    {"batch", "restart", "Batch", ""},
 };
 
 const OptionTopic* TopicOf(std::string_view command, const CLI::Option& opt) {
@@ -169,6 +174,10 @@ constexpr Example kExamples[] = {
      "the velocity low-pass cut-off that maximises K_CR^max"},
     {"run", "zwidth run log.h5 --reference table1 --no-figures -o out",
      "estimate, fit, Z-width, comparison and report.html in out/ (without figures: no gnuplot)"},
+    {"batch", "zwidth batch 'line/*.h5' -o fleet.csv",
+     "run's estimate, fit and Z-width per log into one table; run it again to resume"},
+    {"batch", "zwidth batch --manifest units.csv --unit-folders units -o fleet.csv",
+     "units from a CSV (serial,path,rate,...), each unit's run files in units/<serial>/"},
 };
 
 // man: for help2man, whose "Examples:" line would start the EXAMPLES section
