@@ -5,6 +5,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <tuple>
 #include <exception>
 #include <limits>
 #include <mutex>
@@ -31,7 +33,8 @@ std::string Full(double v) {
 // Where a column sits: the fixed ones first, then the rigid body, the modes
 // by index, the delays by value; each std after its value.
 const std::vector<std::string>& FixedColumns() {
-  static const std::vector<std::string> c = {"serial", "logs", "status", "error", "input_hash", "sample_rate_hz",
+  static const std::vector<std::string> c = {"serial", "logs", "status", "error", "verdict", "verdict_reasons",
+                                             "p_min", "input_hash", "sample_rate_hz",
                                              "fit_quality", "fit_reasons", "warnings", "m", "m_std", "b", "b_std",
                                              "delay_samples", "modes"};
   return c;
@@ -71,7 +74,79 @@ Cells ErrorRow(const io::BatchEntry& unit, const std::string& hash, const std::s
   return {{"serial", unit.serial}, {"logs", unit.path}, {"status", status}, {"error", what}, {"input_hash", hash}};
 }
 
+// Columns a spec may name: the rigid body's and the modes' numbers and the figures per delay.
+bool SpecColumn(const std::string& col, const std::vector<int>& delays) {
+  if (col == "m" || col == "b") return true;
+  const auto [group, index, field] = Rank(col);
+  if (group == 1) return index >= 1 && field % 2 == 0;  // a value, not its std
+  if (group == 2) {
+    return field % 2 == 0 && std::find(delays.begin(), delays.end(), index) != delays.end();
+  }
+  return false;
+}
+
 }  // namespace
+
+BatchSpec ParseBatchSpec(const std::string& text, const std::vector<int>& delays) {
+  BatchSpec s;
+  s.text = text;
+  const size_t ge = text.find(">="), le = text.find("<=");
+  const size_t at = ge != std::string::npos ? ge : le;
+  auto bad = [&](const std::string& what) {
+    std::string d;
+    for (int x : delays) d += (d.empty() ? "" : ", ") + std::string("d") + std::to_string(x) + "_K_cr_max";
+    return InputError("spec '" + text + "': " + what + "; write COLUMN>=BOUND or COLUMN<=BOUND with a column of "
+                      "the table: m, b, mode<i>_{omega,c,v,d}, d<delay>_{K_cr_at_zero_B,K_cr_max,B_t,B_max,"
+                      "B_max_from_zero} for a delay of the run (" + d + ")");
+  };
+  if (at == std::string::npos || (ge != std::string::npos && le != std::string::npos)) throw bad("no single >= or <=");
+  s.at_least = at == ge;
+  s.column = text.substr(0, at);
+  while (!s.column.empty() && s.column.back() == ' ') s.column.pop_back();
+  while (!s.column.empty() && s.column.front() == ' ') s.column.erase(0, 1);
+  if (!SpecColumn(s.column, delays)) throw bad("no column '" + s.column + "'");
+  const std::string num = text.substr(at + 2);
+  char* end = nullptr;
+  s.bound = std::strtod(num.c_str(), &end);
+  while (end && *end == ' ') ++end;
+  if (num.empty() || end == num.c_str() || *end != '\0' || !std::isfinite(s.bound)) {
+    throw bad("the bound '" + num + "' is not a finite number");
+  }
+  return s;
+}
+
+void ApplySpecs(const std::vector<BatchSpec>& specs, Cells* cells) {
+  if (specs.empty()) return;
+  Cells& c = *cells;
+  if (c["status"] != "ok") {
+    c["verdict"] = "error";
+    return;
+  }
+  double p_min = 1.0;
+  std::string reasons;
+  for (const BatchSpec& s : specs) {
+    auto value_of = [&](const std::string& col) {
+      auto it = c.find(col);
+      return it == c.end() || it->second.empty() ? std::numeric_limits<double>::quiet_NaN() : std::strtod(it->second.c_str(), nullptr);
+    };
+    const double v = value_of(s.column), sd = value_of(s.column + "_std");
+    const bool met = s.at_least ? v >= s.bound : v <= s.bound;  // false for nan (a mode the unit lacks)
+    double p = met ? 1.0 : 0.0;
+    if (std::isfinite(v) && std::isfinite(sd) && sd > 0) {
+      const double z = (s.at_least ? v - s.bound : s.bound - v) / sd;
+      p = 0.5 * std::erfc(-z / std::sqrt(2.0));  // Phi(z)
+    }
+    p_min = std::min(p_min, p);
+    if (p < 0.95) {
+      char b[160];
+      std::snprintf(b, sizeof b, " (value %.6g, std %.3g, P = %.3g)", v, sd, p);
+      reasons += (reasons.empty() ? "" : "; ") + s.text + (met ? " met within noise" : " not met") + b;
+    }
+  }
+  c["verdict"] = p_min >= 0.95 ? "pass" : p_min <= 0.05 ? "fail" : "marginal";
+  c["verdict_reasons"] = reasons;
+  c["p_min"] = Full(p_min);
+}
 
 bool BatchOptions::IsValid(std::string* why) const {
   if (threads < 0) {
@@ -200,6 +275,7 @@ BatchResult RunBatch(const std::vector<io::BatchEntry>& units, const BatchOption
     } catch (const std::exception& e) {
       row = ErrorRow(unit, hash, "computation_error", e.what());
     }
+    ApplySpecs(options.specs, &row);
     finished(i, std::move(row), false);
   };
   const size_t threads = std::min<size_t>(units.size(), options.threads > 0 ? options.threads : NumThreads());

@@ -19,7 +19,29 @@
 
 namespace zwidth::analysis {
 
+// One end-of-line spec on a column of the table: "d2_K_cr_max>=1.5" (K_CR^max
+// at delay 2 at least 1.5 N m/rad), "m<=2e-4". A unit meets it with the
+// probability P = Phi((value - bound) / std) for >= (Phi((bound - value) / std)
+// for <=), its std the column's "_std" (the delta method); no std: P = 1 when
+// the value meets it, else 0.
+struct BatchSpec {
+  std::string column;          // a numeric column: m, b, mode<i>_<field>, d<d>_<figure> (a delay of the run)
+  bool at_least = true;        // >= (else <=)
+  double bound = 0.0;          // finite
+  std::string text;            // as given
+};
+// Parses "COLUMN>=BOUND" or "COLUMN<=BOUND"; InputError naming the spec and
+// the columns it may name (delays: the run's).
+BatchSpec ParseBatchSpec(const std::string& text, const std::vector<int>& delays);
+// The verdict of a row's cells (status ok) against the specs: sets "verdict"
+// (pass: every spec met with P >= 0.95; fail: some spec with P <= 0.05;
+// marginal: else, within noise of a limit), "verdict_reasons" (each spec not
+// surely met, with value, std and P) and "p_min" (the least P). Nothing
+// without specs.
+void ApplySpecs(const std::vector<BatchSpec>& specs, std::map<std::string, std::string>* cells);
+
 struct BatchOptions {
+  std::vector<BatchSpec> specs;  // end-of-line specs (ApplySpecs); none: no verdict columns
   RunOptions run;            // per unit, as `run`'s (figures are not computed)
   int threads = 0;           // units at once, >= 0; 0 = NumThreads() (model/parallel.h)
   std::string options_key;   // the options as text: hashed with each unit's log bytes (io::HashInputs)
@@ -64,6 +86,7 @@ struct BatchResult {
 // The row's cells, by column (FormatBatchCsv writes them; %.17g, so a cell
 // reads back as the double `run` wrote):
 //   serial, logs, status (ok | input_error | computation_error), error,
+//   verdict, verdict_reasons, p_min (with specs),
 //   input_hash, sample_rate_hz, fit_quality, fit_reasons (codes, ';'), warnings (' | '),
 //   m, m_std, b, b_std, delay_samples, modes, mode<i>_{omega,c,v,d}[_std] (i from 1),
 //   per delay d: d<d>_{K_cr_at_zero_B, K_cr_max, B_t, B_max}[_std], d<d>_B_max_from_zero.

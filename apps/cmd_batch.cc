@@ -35,6 +35,7 @@ struct BatchFlags {
   RunFlags run;
   std::vector<std::string> logs;
   std::string manifest, table, unit_folders;
+  std::vector<std::string> specs;
   int jobs = 0;
   bool restart = false;
 };
@@ -132,6 +133,7 @@ void Batch(BatchFlags& b, const CLI::App* cmd) {
   analysis::RunInput ref;  // the reference, read once
   analysis::BatchOptions o;
   o.run = ResolveRunOptions(&f, &ref);
+  for (const std::string& s : b.specs) o.specs.push_back(analysis::ParseBatchSpec(s, o.run.delays));
   const std::vector<io::BatchEntry> units = b.manifest.empty() ? io::EntriesFromArguments(b.logs) : io::ReadManifest(b.manifest);
   std::vector<std::string> inputs;
   for (const io::BatchEntry& e : units) {
@@ -215,6 +217,9 @@ void AddBatchCommand(CLI::App& app) {
       ->required();
   cmd->add_option("--unit-folders", b->unit_folders, "also write each unit's run files (no figures) into FOLDER/<serial>");
   cmd->add_option("--jobs", b->jobs, "units at once (default, and at most: the cores available)")->capture_default_str();
+  cmd->add_option("--spec", b->specs,
+                  "end-of-line spec, repeatable: COLUMN>=BOUND or COLUMN<=BOUND (d2_K_cr_max>=1.5, m<=2e-4): "
+                  "a verdict per unit (pass, marginal: within noise of a limit, fail) from the value and its std");
   cmd->add_flag("--restart", b->restart, "compute every unit, ignoring the rows of an existing table");
   AddRunAnalysisFlags(cmd, &b->run);
   cmd->callback([b, cmd] { Batch(*b, cmd); });

@@ -125,6 +125,7 @@ constexpr OptionTopic kOptionTopics[] = {
     {"batch", "unit-folders", "Batch", ""},
     {"batch", "jobs", "Batch", ""},
     {"batch", "restart", "Batch", ""},
+    {"batch", "spec", "Batch", ""},
 };
 
 const OptionTopic* TopicOf(std::string_view command, const CLI::Option& opt) {

@@ -112,6 +112,17 @@ ZWIDTH_NUM_THREADS=2 "$ZW" batch "$T/u[1-3].csv" "$T/u4.h5" "$T/bad.csv" -o "$T/
 ZWIDTH_NUM_THREADS=2 "$ZW" batch "$T/u[1-3].csv" "$T/u4.h5" "$T/bad.csv" -o "$T/j2.csv" --jobs 2 "${FLAGS[@]}" 2>"$T/err"
 cmp -s "$T/j1.csv" "$T/j2.csv" && grep -q "on 2 threads" "$T/err" && ok "--jobs 1 and --jobs 2: the same table" || { bad "threads"; cat "$T/err"; }
 
+# End-of-line specs: from u1's own K_CR^max at delay 2 and its std, a bound 6 std below passes, 6 above
+# fails, at the value is marginal (P = 0.5); the corrupt log's verdict is error; a spec on no column: exit 2.
+read v sd < <($PY -c "import csv,sys; r=next(r for r in csv.DictReader(open(sys.argv[1])) if r['serial']==sys.argv[2]); print(r['d2_K_cr_max'], r['d2_K_cr_max_std'])" "$T/j1.csv" "$T/u1.csv")
+for want in pass fail marginal; do
+  bound=$($PY -c "import sys; v,s=map(float,sys.argv[1:3]); print(repr({'pass': v-6*s, 'fail': v+6*s, 'marginal': v}['$want']))" "$v" "$sd")
+  "$ZW" batch "$T/u1.csv" "$T/bad.csv" -o "$T/spec_$want.csv" --spec "d2_K_cr_max>=$bound" "${FLAGS[@]}" 2>/dev/null
+  got=$($PY -c "import csv,sys; print(' '.join(r['verdict'] for r in csv.DictReader(open(sys.argv[1]))))" "$T/spec_$want.csv")
+  [ "$got" = "$want error" ] && ok "--spec d2_K_cr_max>=$bound: $got" || bad "--spec $want: got '$got'"
+done
+expect "a spec on a delay not run" "d8_K_cr_max.*no column" "$T/spec_bad" -- "$ZW" batch "$T/u1.csv" -o "$T/spec_bad.csv" --spec "d8_K_cr_max>=1" "${FLAGS[@]}"
+
 # 5. A manifest: serials, relative paths, a unit's own log flag (output-scale) equal to run with that flag.
 mkdir -p "$T/line"; cp "$T/u1.csv" "$T/u3.csv" "$T/line/"
 printf 'serial,path,output-scale\nSN-001,u1.csv,2\nSN-002,u3.csv,\nSN-003,missing.csv,\n' >"$T/line/units.csv"
