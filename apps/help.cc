@@ -175,10 +175,9 @@ constexpr Example kExamples[] = {
      "the velocity low-pass cut-off that maximises K_CR^max"},
     {"run", "zwidth run log.h5 --reference table1 --no-figures -o out",
      "estimate, fit, Z-width, comparison and report.html in out/ (without figures: no gnuplot)"},
-    {"batch", "zwidth batch 'line/*.h5' -o fleet.csv",
-     "run's estimate, fit and Z-width per log into one table; run it again to resume"},
-    {"batch", "zwidth batch --manifest units.csv --unit-folders units -o fleet.csv",
-     "units from a CSV (serial,path,rate,...), each unit's run files in units/<serial>/"},
+    {"batch", "zwidth batch log.h5 fresh.h5 -o fleet.csv",
+     "run's estimate, fit and Z-width per log (paths, quoted globs or --manifest units.csv) into one table; "
+     "the same command again resumes"},
 };
 
 // man: for help2man, whose "Examples:" line would start the EXAMPLES section
