@@ -17,6 +17,7 @@
 #include "apps/common.h"
 #include "apps/fit_support.h"
 #include "apps/loop_flags.h"
+#include "apps/run_flags.h"
 #include "io/atomic_file.h"
 #include "model/error.h"
 #include "report/run_report.h"
@@ -24,29 +25,16 @@
 namespace zwidth::app {
 namespace {
 
-struct RunFlags {
-  std::vector<std::string> logs;
-  std::string outdir, reference, units = "rotary";
-  std::vector<int> delays = {2, 4, 8};
-  EstimateFlags est;
-  FitFlags fit;
-  stability::BGridOptions grid;
-  bool force = false;
-  bool no_figures = false;
-  bool png = false;
-  double report_filter_hz = 50.0;
-  LoopFlags loop;
-};
-
 void PrintStage(const std::string& name, double ms) { std::fprintf(stderr, "  %-28s %9.3f ms\n", name.c_str(), ms); }
 
-// The estimate and the fit (timed into *t_total_ms), as analysis::RunInput.
+}  // namespace
+
 // With a reference, its Z-width (which needs only the log's period) is
 // computed on a thread of its own while the fit runs: the fit leaves a core
 // idle while it converges from one start.
 analysis::RunInput EstimateAndFit(const RunFlags& f, const analysis::RunOptions& o, analysis::RunInput in,
-                                  double* t_total_ms) {
-  StageTimer timer;
+                                  double* t_total_ms, bool reference_thread) {
+  StageTimer timer(!MessagesQuiet());
   LogsEstimate est = EstimateFromLogs(f.logs, f.est, true);
   in.response = std::move(est.response);
   in.total_samples = est.total_samples;
@@ -58,7 +46,7 @@ analysis::RunInput EstimateAndFit(const RunFlags& f, const analysis::RunOptions&
   std::optional<analysis::ReferenceStability> ref;
   {
     std::jthread ref_thread;
-    if (in.reference) {
+    if (in.reference && reference_thread) {
       try {
         ref_thread = std::jthread([&] {
           try {
@@ -80,24 +68,36 @@ analysis::RunInput EstimateAndFit(const RunFlags& f, const analysis::RunOptions&
   return in;
 }
 
-void Run(RunFlags& f) {
-  f.fit.Resolve(f.est.welch.fmin_hz, f.est.welch.fmax_hz);
+analysis::RunOptions ResolveRunOptions(RunFlags* f, analysis::RunInput* in) {
+  f->fit.Resolve(f->est.welch.fmin_hz, f->est.welch.fmax_hz);
   analysis::RunOptions o;
-  o.linear = LinearUnits(f.units);
-  o.delays = f.delays;
-  o.grid = f.grid;
-  o.report_filter_hz = f.report_filter_hz;
-  o.figures = !f.no_figures;
-  for (int d : f.delays) if (d < 0) throw InputError("--delays must be >= 0");
+  o.linear = LinearUnits(f->units);
+  o.delays = f->delays;
+  o.grid = f->grid;
+  o.report_filter_hz = f->report_filter_hz;
+  o.figures = !f->no_figures;
+  for (int d : f->delays) if (d < 0) throw InputError("--delays must be >= 0");
+  if (!f->reference.empty()) {
+    in->reference = ReadReference(f->reference, &in->reference_is_table1);
+    in->reference_name = f->reference;
+  }
+  if (f->loop.hands.size() > 1) throw InputError("run takes one --hand (boundary takes several)");
+  std::string why;  // before anything is read or written
+  if (!o.IsValid(&why)) throw InputError(why);
+  return o;
+}
+
+void ResolveRunLoop(const RunFlags& f, double period_s, analysis::RunOptions* o) {
+  o->loop = ResolveLoops(f.loop, period_s)[0];
+}
+
+namespace {
+
+void Run(RunFlags& f) {
   analysis::RunInput in;
   in.logs = f.logs;
   in.source = JoinPaths(f.logs);
-  if (!f.reference.empty()) {
-    in.reference = ReadReference(f.reference, &in.reference_is_table1);
-    in.reference_name = f.reference;
-  }
-  std::string why;  // before anything is read or written
-  if (!o.IsValid(&why)) throw InputError(why);
+  analysis::RunOptions o = ResolveRunOptions(&f, &in);
   // Everything is built in a temporary sibling folder and moved into place
   // at the end (io::OutputFolder): a failure or a signal leaves nothing, and
   // two runs into one folder cannot mix.
@@ -105,8 +105,7 @@ void Run(RunFlags& f) {
   std::fprintf(stderr, "zwidth run %s -> %s\n", io::Printable(in.source).c_str(), io::Printable(f.outdir).c_str());
   double t_total = 0.0;
   in = EstimateAndFit(f, o, std::move(in), &t_total);
-  if (f.loop.hands.size() > 1) throw InputError("run takes one --hand (boundary takes several)");
-  o.loop = ResolveLoops(f.loop, in.response.frf.period_s())[0];
+  ResolveRunLoop(f, in.response.frf.period_s(), &o);
   const analysis::RunAnalysis a = analysis::Analyse(std::move(in), o);
   const std::string fit_report = FitReport(a.input.fit);  // the CLI's wording, for the terminal and report.html
   const report::RunReport rep = report::WriteRunReport(a, folder, {.draw_figures = true, .png = f.png, .fit_report = fit_report, .command_line = CommandLine()});
@@ -133,14 +132,7 @@ void Run(RunFlags& f) {
 
 }  // namespace
 
-void AddRunCommand(CLI::App& app) {
-  auto f = std::make_shared<RunFlags>();
-  CLI::App* cmd = app.add_subcommand("run", "estimate, fit, compare, Z-width boundary and an HTML report");
-  cmd->add_option("logs", f->logs, "log files (text, .mat, .h5): runs of one device, spectra averaged")->required();
-  cmd->add_option("-o,--output", f->outdir, "output folder: new, or existing and empty (its parent must exist)")->required();
-  cmd->add_flag("--force", f->force, "write into a non-empty output folder, replacing zwidth's files there");
-  cmd->add_flag("--no-figures", f->no_figures, "no figures/ folder, no gnuplot: the data files and the report only");
-  cmd->add_flag("--png", f->png, "also draw every figure as PNG (the report uses the SVGs)")->excludes("--no-figures");
+void AddRunAnalysisFlags(CLI::App* cmd, RunFlags* f) {
   cmd->add_option("--reference", f->reference, "compare with: table1 (the paper's PHANToM, built in) or a model JSON (default: no comparison)");
   cmd->add_option("--delays", f->delays, "loop delays [samples]")->delimiter(',')->capture_default_str();
   f->fit.modes = "auto";  // run chooses the order unless told
@@ -154,6 +146,17 @@ void AddRunCommand(CLI::App& app) {
   AddLoopFlags(cmd, &f->loop);
   AddEstimateFlags(cmd, &f->est);
   AddUnitsFlag(cmd, &f->units);
+}
+
+void AddRunCommand(CLI::App& app) {
+  auto f = std::make_shared<RunFlags>();
+  CLI::App* cmd = app.add_subcommand("run", "estimate, fit, compare, Z-width boundary and an HTML report");
+  cmd->add_option("logs", f->logs, "log files (text, .mat, .h5): runs of one device, spectra averaged")->required();
+  cmd->add_option("-o,--output", f->outdir, "output folder: new, or existing and empty (its parent must exist)")->required();
+  cmd->add_flag("--force", f->force, "write into a non-empty output folder, replacing zwidth's files there");
+  cmd->add_flag("--no-figures", f->no_figures, "no figures/ folder, no gnuplot: the data files and the report only");
+  cmd->add_flag("--png", f->png, "also draw every figure as PNG (the report uses the SVGs)")->excludes("--no-figures");
+  AddRunAnalysisFlags(cmd, f.get());
   cmd->callback([f] { Run(*f); });
 }
 

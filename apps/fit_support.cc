@@ -240,7 +240,7 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
   }
   if (out) *out = r;
   if (friction_out) *friction_out = ff;
-  for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", io::Printable(WithFlags(w)).c_str());
+  for (const std::string& w : r.warnings) if (!MessagesQuiet()) std::fprintf(stderr, "warning: %s\n", io::Printable(WithFlags(w)).c_str());
   if (r.status != fit::FitStatus::kConverged) throw ComputationError(r.message);
   io::ModelFile mf = io::FittedModelFile(r, frf, o, source);
   if (ff.status == fit::FrictionFitStatus::kFitted) {

@@ -139,6 +139,12 @@ constexpr OptionTopic kOptionTopics[] = {
     {"", "png", "Output", ""},
     {"", "format", "Output", "json hdf5 matlab python statespace"},
     {"", "units", "Output", "rotary linear"},
+    // batch: many units, one table
+    {"batch", "manifest", "Batch", ""},
+    {"batch", "unit-folders", "Batch", ""},
+    {"batch", "jobs", "Batch", ""},
+    {"batch", "restart", "Batch", ""},
+    {"batch", "spec", "Batch", ""},
 };
 
 const OptionTopic* TopicOf(std::string_view command, const CLI::Option& opt) {
@@ -190,6 +196,9 @@ constexpr Example kExamples[] = {
      "the velocity low-pass cut-off that maximises K_CR^max"},
     {"run", "zwidth run log.h5 --reference table1 --no-figures -o out",
      "estimate, fit, Z-width, comparison and report.html in out/ (without figures: no gnuplot)"},
+    {"batch", "zwidth batch log.h5 fresh.h5 -o fleet.csv",
+     "run's estimate, fit and Z-width per log (paths, quoted globs or --manifest units.csv) into one table; "
+     "the same command again resumes"},
 };
 
 // man: for help2man, whose "Examples:" line would start the EXAMPLES section

@@ -57,6 +57,7 @@ int main(int argc, char** argv) {
   zwidth::app::AddStabilityCommands(app);
   zwidth::app::AddExportCommand(app);
   zwidth::app::AddRunCommand(app);
+  zwidth::app::AddBatchCommand(app);
   zwidth::app::AddExciteCommand(app);
   zwidth::app::AddValidateCommand(app);
   zwidth::app::AddWallCommand(app);

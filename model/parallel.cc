@@ -17,6 +17,7 @@ namespace zwidth {
 namespace {
 
 std::atomic<int> g_num_threads{0};  // SetNumThreads; 0 = not set
+thread_local bool t_serial = false;  // a ScopedSerialThread lives on this thread
 
 // The cgroup's CPU quota in CPUs, rounded up (v2 cpu.max "quota period", v1
 // cfs_quota_us / cfs_period_us); 0 when none or unreadable.
@@ -54,7 +55,11 @@ void SetNumThreads(int n) {
   g_num_threads.store(n);
 }
 
+ScopedSerialThread::ScopedSerialThread() : was_serial_(t_serial) { t_serial = true; }
+ScopedSerialThread::~ScopedSerialThread() { t_serial = was_serial_; }
+
 int NumThreads() {
+  if (t_serial) return 1;
   if (const int n = g_num_threads.load(); n > 0) return n;
   if (const char* env = std::getenv("ZWIDTH_NUM_THREADS"); env && *env) {
     char* end = nullptr;

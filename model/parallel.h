@@ -28,8 +28,24 @@ int AvailableCpus();
 // module's set_num_threads), else the environment's ZWIDTH_NUM_THREADS (a
 // whole number >= 1; anything else is an InputError), else AvailableCpus().
 // SetNumThreads(0) returns to the default; n < 0 is an InputError.
+// ScopedSerialThread (below) makes it 1 on its thread.
 void SetNumThreads(int n);
 int NumThreads();
+
+// While one lives, NumThreads() is 1 on the thread that made it (and only
+// there): a ParallelFor it calls runs on that thread alone. A batch that runs
+// one unit per thread (analysis/batch.h) keeps the process at its own count
+// of threads this way instead of each unit's ParallelFor adding its own.
+class ScopedSerialThread {
+ public:
+  ScopedSerialThread();
+  ~ScopedSerialThread();
+  ScopedSerialThread(const ScopedSerialThread&) = delete;
+  ScopedSerialThread& operator=(const ScopedSerialThread&) = delete;
+
+ private:
+  bool was_serial_;
+};
 
 template <class F>
 void ParallelFor(size_t n, F&& f) {

@@ -92,6 +92,26 @@ TEST(ParallelFor, ThreadsFollowSetNumThreadsThenTheEnvironmentThenTheCores) {
   EXPECT_THROW(SetNumThreads(-1), InputError);
 }
 
+TEST(ParallelFor, AScopedSerialThreadRunsItsLoopsAloneAndOtherThreadsAsBefore) {
+  SetNumThreads(3);
+  {
+    ScopedSerialThread serial;
+    EXPECT_EQ(NumThreads(), 1);
+    EXPECT_EQ(ThreadsUsed(16), 1u);
+    {
+      ScopedSerialThread nested;
+      EXPECT_EQ(NumThreads(), 1);
+    }
+    EXPECT_EQ(NumThreads(), 1);  // the outer scope still holds
+    int elsewhere = 0;
+    std::thread([&] { elsewhere = NumThreads(); }).join();
+    EXPECT_EQ(elsewhere, 3);  // per thread only
+  }
+  EXPECT_EQ(NumThreads(), 3);
+  EXPECT_EQ(ThreadsUsed(16), 3u);
+  SetNumThreads(0);
+}
+
 TEST(ParallelFor, StopsEveryThreadWhenTheCancelCheckSaysSo) {
   static std::atomic<int> checks{0};
   SetCancelCheck([] { return ++checks >= 3; });

@@ -212,6 +212,9 @@ FrequencyResponse.from_frd = staticmethod(from_frd)
 
 
 def __getattr__(name):
+    if name == "batch":  # zwidth.batch: `zwidth batch` on threads or a dask.distributed Client
+        from ._batch import batch
+        return batch
     if name == "plot":  # zwidth.plot imports matplotlib only when used
         import importlib
         return importlib.import_module(".plot", __name__)

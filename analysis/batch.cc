@@ -1,0 +1,317 @@
+#include "analysis/batch.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <tuple>
+#include <exception>
+#include <limits>
+#include <mutex>
+#include <new>
+#include <thread>
+#include <utility>
+
+#include "model/cancel.h"
+#include "model/error.h"
+#include "model/parallel.h"
+#include "build_info.h"
+
+namespace zwidth::analysis {
+namespace {
+
+using Cells = std::map<std::string, std::string>;
+
+std::string Full(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
+}
+
+// Where a column sits: the fixed ones first, then the rigid body, the modes
+// by index, the delays by value; each std after its value.
+const std::vector<std::string>& FixedColumns() {
+  static const std::vector<std::string> c = {"serial", "logs", "status", "error", "verdict", "verdict_reasons",
+                                             "p_min", "input_hash", "sample_rate_hz",
+                                             "fit_quality", "fit_reasons", "warnings", "m", "m_std", "b", "b_std",
+                                             "delay_samples", "modes"};
+  return c;
+}
+const std::vector<std::string>& ModeFields() {
+  static const std::vector<std::string> f = {"omega", "omega_std", "c", "c_std", "v", "v_std", "d", "d_std"};
+  return f;
+}
+const std::vector<std::string>& DelayFields() {
+  static const std::vector<std::string> f = {"K_cr_at_zero_B", "K_cr_at_zero_B_std", "K_cr_max", "K_cr_max_std",
+                                             "B_t", "B_t_std", "B_max", "B_max_std", "B_max_from_zero"};
+  return f;
+}
+
+// (group, index, field) of a column; unknown columns last, by name.
+std::tuple<int, long, long> Rank(const std::string& col) {
+  const auto& fixed = FixedColumns();
+  if (auto it = std::find(fixed.begin(), fixed.end(), col); it != fixed.end()) return {0, 0, it - fixed.begin()};
+  auto indexed = [&](char prefix, const std::vector<std::string>& fields, int group) -> std::optional<std::tuple<int, long, long>> {
+    if (col.size() < 3 || col[0] != prefix) return std::nullopt;
+    size_t k = prefix == 'm' ? 4 : 1;  // "mode<i>_" or "d<d>_"
+    if (prefix == 'm' && col.rfind("mode", 0) != 0) return std::nullopt;
+    size_t end = k;
+    while (end < col.size() && std::isdigit(static_cast<unsigned char>(col[end]))) ++end;
+    if (end == k || end >= col.size() || col[end] != '_' || end - k > 9) return std::nullopt;
+    const std::string field = col.substr(end + 1);
+    auto it = std::find(fields.begin(), fields.end(), field);
+    if (it == fields.end()) return std::nullopt;
+    return std::tuple<int, long, long>{group, std::stol(col.substr(k, end - k)), it - fields.begin()};
+  };
+  if (auto r = indexed('m', ModeFields(), 1)) return *r;
+  if (auto r = indexed('d', DelayFields(), 2)) return *r;
+  return {3, 0, 0};
+}
+
+Cells ErrorRow(const io::BatchEntry& unit, const std::string& hash, const std::string& status, const std::string& what) {
+  return {{"serial", unit.serial}, {"logs", unit.path}, {"status", status}, {"error", what}, {"input_hash", hash}};
+}
+
+// Columns a spec may name: the rigid body's and the modes' numbers and the figures per delay.
+bool SpecColumn(const std::string& col, const std::vector<int>& delays) {
+  if (col == "m" || col == "b") return true;
+  const auto [group, index, field] = Rank(col);
+  if (group == 1) return index >= 1 && field % 2 == 0;  // a value, not its std
+  if (group == 2) {
+    return field % 2 == 0 && std::find(delays.begin(), delays.end(), index) != delays.end();
+  }
+  return false;
+}
+
+}  // namespace
+
+BatchSpec ParseBatchSpec(const std::string& text, const std::vector<int>& delays) {
+  BatchSpec s;
+  s.text = text;
+  const size_t ge = text.find(">="), le = text.find("<=");
+  const size_t at = ge != std::string::npos ? ge : le;
+  auto bad = [&](const std::string& what) {
+    std::string d;
+    for (int x : delays) d += (d.empty() ? "" : ", ") + std::string("d") + std::to_string(x) + "_K_cr_max";
+    return InputError("spec '" + text + "': " + what + "; write COLUMN>=BOUND or COLUMN<=BOUND with a column of "
+                      "the table: m, b, mode<i>_{omega,c,v,d}, d<delay>_{K_cr_at_zero_B,K_cr_max,B_t,B_max,"
+                      "B_max_from_zero} for a delay of the run (" + d + ")");
+  };
+  if (at == std::string::npos || (ge != std::string::npos && le != std::string::npos)) throw bad("no single >= or <=");
+  s.at_least = at == ge;
+  s.column = text.substr(0, at);
+  while (!s.column.empty() && s.column.back() == ' ') s.column.pop_back();
+  while (!s.column.empty() && s.column.front() == ' ') s.column.erase(0, 1);
+  if (!SpecColumn(s.column, delays)) throw bad("no column '" + s.column + "'");
+  const std::string num = text.substr(at + 2);
+  char* end = nullptr;
+  s.bound = std::strtod(num.c_str(), &end);
+  while (end && *end == ' ') ++end;
+  if (num.empty() || end == num.c_str() || *end != '\0' || !std::isfinite(s.bound)) {
+    throw bad("the bound '" + num + "' is not a finite number");
+  }
+  return s;
+}
+
+void ApplySpecs(const std::vector<BatchSpec>& specs, Cells* cells) {
+  if (specs.empty()) return;
+  Cells& c = *cells;
+  if (c["status"] != "ok") {
+    c["verdict"] = "error";
+    return;
+  }
+  double p_min = 1.0;
+  std::string reasons;
+  for (const BatchSpec& s : specs) {
+    auto value_of = [&](const std::string& col) {
+      auto it = c.find(col);
+      return it == c.end() || it->second.empty() ? std::numeric_limits<double>::quiet_NaN() : std::strtod(it->second.c_str(), nullptr);
+    };
+    const double v = value_of(s.column), sd = value_of(s.column + "_std");
+    const bool met = s.at_least ? v >= s.bound : v <= s.bound;  // false for nan (a mode the unit lacks)
+    double p = met ? 1.0 : 0.0;
+    if (std::isfinite(v) && std::isfinite(sd) && sd > 0) {
+      const double z = (s.at_least ? v - s.bound : s.bound - v) / sd;
+      p = 0.5 * std::erfc(-z / std::sqrt(2.0));  // Phi(z)
+    }
+    p_min = std::min(p_min, p);
+    if (p < 0.95) {
+      char b[160];
+      std::snprintf(b, sizeof b, " (value %.6g, std %.3g, P = %.3g)", v, sd, p);
+      reasons += (reasons.empty() ? "" : "; ") + s.text + (met ? " met within noise" : " not met") + b;
+    }
+  }
+  c["verdict"] = p_min >= 0.95 ? "pass" : p_min <= 0.05 ? "fail" : "marginal";
+  c["verdict_reasons"] = reasons;
+  c["p_min"] = Full(p_min);
+}
+
+bool BatchOptions::IsValid(std::string* why) const {
+  if (threads < 0) {
+    *why = "BatchOptions::threads = " + std::to_string(threads) + ": must be >= 0 (0 for the cores available)";
+    return false;
+  }
+  return run.IsValid(why);
+}
+
+double BatchProgress::rate_per_s() const {
+  return computed > 0 && elapsed_s > 0 ? static_cast<double>(computed) / elapsed_s
+                                       : std::numeric_limits<double>::quiet_NaN();
+}
+double BatchProgress::seconds_left() const { return static_cast<double>(total - done) / rate_per_s(); }
+
+Cells BatchRowOf(const io::BatchEntry& unit, const std::string& input_hash, const RunAnalysis& a) {
+  Cells c = ErrorRow(unit, input_hash, "ok", "");
+  const io::ModelFile& mf = a.input.model;
+  const model::Plant& p = mf.plant;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::optional<model::Plant>& s = mf.std_errors;
+  c["sample_rate_hz"] = Full(a.input.response.frf.sample_rate_hz);
+  c["fit_quality"] = fit::ToString(a.input.fit.quality);
+  std::string reasons, warnings;
+  for (const fit::QualityReason& q : a.input.fit.reasons) reasons += (reasons.empty() ? "" : ";") + q.code;
+  for (const std::string& w : a.input.fit.warnings) warnings += (warnings.empty() ? "" : " | ") + w;
+  c["fit_reasons"] = reasons;
+  c["warnings"] = warnings;
+  c["m"] = Full(p.m);
+  c["m_std"] = Full(s ? s->m : nan);
+  c["b"] = Full(p.b);
+  c["b_std"] = Full(s ? s->b : nan);
+  c["delay_samples"] = std::to_string(p.delay_samples);
+  c["modes"] = std::to_string(p.modes.size());
+  for (size_t i = 0; i < p.modes.size(); ++i) {
+    const model::Mode& m = p.modes[i];
+    const bool has = s && i < s->modes.size();
+    const std::string k = "mode" + std::to_string(i + 1) + "_";
+    const double v[] = {m.omega, has ? s->modes[i].omega : nan, m.c, has ? s->modes[i].c : nan,
+                        m.v, has ? s->modes[i].v : nan, m.d, has ? s->modes[i].d : nan};
+    for (size_t f = 0; f < ModeFields().size(); ++f) c[k + ModeFields()[f]] = Full(v[f]);
+  }
+  const PlantStability& st = a.stability;
+  for (size_t i = 0; i < st.delays.size(); ++i) {
+    const stability::DelaySummary& d = st.summaries[i];
+    const stability::SummaryStd sd = st.has_std ? st.stds[i] : stability::SummaryStd{};
+    const std::string k = "d" + std::to_string(st.delays[i]) + "_";
+    const double v[] = {d.K_cr_at_zero_B, sd.K_cr_at_zero_B, d.K_cr_max, sd.K_cr_max, d.B_t, sd.B_t,
+                        d.B_max, sd.B_max, d.B_max_from_zero};
+    for (size_t f = 0; f < DelayFields().size(); ++f) c[k + DelayFields()[f]] = Full(v[f]);
+  }
+  return c;
+}
+
+std::vector<std::string> BatchColumns(const std::vector<Cells>& rows) {
+  std::vector<std::string> cols = FixedColumns();
+  for (const Cells& r : rows) {
+    for (const auto& [k, v] : r) {
+      if (std::find(cols.begin(), cols.end(), k) == cols.end()) cols.push_back(k);
+    }
+  }
+  std::stable_sort(cols.begin(), cols.end(), [](const std::string& a, const std::string& b) {
+    const auto ra = Rank(a), rb = Rank(b);
+    return ra != rb ? ra < rb : (std::get<0>(ra) == 3 && a < b);
+  });
+  return cols;
+}
+
+io::BatchTable BatchTableOf(const std::vector<std::optional<Cells>>& rows) {
+  io::BatchTable t;
+  for (const auto& r : rows) if (r) t.rows.push_back(*r);
+  t.columns = BatchColumns(t.rows);
+  return t;
+}
+
+BatchResult RunBatch(const std::vector<io::BatchEntry>& units, const BatchOptions& options,
+                     const BatchEstimateFit& estimate_fit, const BatchUnitDone& unit_done,
+                     const BatchOnProgress& on_progress) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError(why);
+  RunOptions run = options.run;
+  run.figures = false;
+  std::map<std::string, const Cells*> previous;  // serial -> row
+  for (const Cells& r : options.previous.rows) {
+    if (auto it = r.find("serial"); it != r.end()) previous[it->second] = &r;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<std::optional<Cells>> rows(units.size());
+  BatchProgress progress;
+  progress.total = units.size();
+  std::mutex mu;
+  auto finished = [&](size_t i, Cells row, bool resumed) {
+    std::lock_guard<std::mutex> lock(mu);
+    ++progress.done;
+    progress.resumed += resumed;
+    progress.computed += !resumed;
+    progress.failed += row["status"] != "ok";
+    rows[i] = std::move(row);
+    progress.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (on_progress) on_progress(progress, rows);
+  };
+  auto one = [&](size_t i) {
+    const io::BatchEntry& unit = units[i];
+    std::string key = options.options_key + "\nzwidth " + build_info::kVersion;
+    for (const auto& [flag, value] : unit.flags) key += "\n--" + flag + "=" + value;
+    const std::string hash = io::HashInputs({unit.path}, key);
+    if (auto it = previous.find(unit.serial); it != previous.end() && !hash.empty()) {
+      auto h = it->second->find("input_hash");
+      if (h != it->second->end() && h->second == hash) return finished(i, *it->second, true);
+    }
+    Cells row;
+    try {
+      RunOptions unit_options = run;
+      RunInput in = estimate_fit(unit, &unit_options);
+      RunAnalysis a = Analyse(std::move(in), unit_options);
+      if (unit_done) unit_done(unit, a);
+      row = BatchRowOf(unit, hash, a);
+    } catch (const Cancelled&) {
+      throw;  // the batch stops (the rows so far were handed to on_progress)
+    } catch (const InputError& e) {
+      row = ErrorRow(unit, hash, "input_error", e.what());
+    } catch (const ComputationError& e) {
+      row = ErrorRow(unit, hash, "computation_error", e.what());
+    } catch (const std::bad_alloc&) {
+      row = ErrorRow(unit, hash, "computation_error", "out of memory");
+    } catch (const std::exception& e) {
+      row = ErrorRow(unit, hash, "computation_error", e.what());
+    }
+    ApplySpecs(options.specs, &row);
+    finished(i, std::move(row), false);
+  };
+  const size_t threads = std::min<size_t>(units.size(), options.threads > 0 ? options.threads : NumThreads());
+  std::atomic<size_t> next{0};
+  std::exception_ptr stop;  // a cancel (PollCancel) or an error of on_progress: ends the batch
+  std::mutex stop_mu;
+  auto work = [&] {
+    std::optional<ScopedSerialThread> serial;
+    if (threads > 1) serial.emplace();
+    for (size_t i; (i = next.fetch_add(1)) < units.size();) {
+      try {
+        PollCancel();
+        one(i);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(stop_mu);
+        if (!stop) stop = std::current_exception();
+        next.store(units.size());
+      }
+    }
+  };
+  {
+    std::vector<std::jthread> pool;
+    for (size_t t = 1; t < threads; ++t) {
+      try {
+        pool.emplace_back(work);
+      } catch (const std::system_error&) {
+        break;  // fewer threads: the ones running do the rest
+      }
+    }
+    work();
+  }  // joined
+  if (stop) std::rethrow_exception(stop);
+  BatchResult out;
+  out.table = BatchTableOf(rows);
+  out.progress = progress;
+  return out;
+}
+
+}  // namespace zwidth::analysis

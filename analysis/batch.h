@@ -1,0 +1,105 @@
+// `zwidth batch` as data: many units (a device's log each), each estimated,
+// fitted and analysed as `run` does it (analysis::Analyse after the caller's
+// estimate and fit), into one table of text cells, one row per unit. A unit
+// that fails is a row with its error and never stops the others; a unit whose
+// inputs and options hash as in a previous table is taken from it (resume).
+// Units run on `threads` threads, each unit's own work on its thread alone
+// (ScopedSerialThread), so the process stays at that count; each unit writes
+// only its slot, so the table never depends on timing. Prints nothing.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "analysis/run.h"
+#include "io/batch_table.h"
+
+namespace zwidth::analysis {
+
+// One end-of-line spec on a column of the table: "d2_K_cr_max>=1.5" (K_CR^max
+// at delay 2 at least 1.5 N m/rad), "m<=2e-4". A unit meets it with the
+// probability P = Phi((value - bound) / std) for >= (Phi((bound - value) / std)
+// for <=), its std the column's "_std" (the delta method); no std: P = 1 when
+// the value meets it, else 0.
+struct BatchSpec {
+  std::string column;          // a numeric column: m, b, mode<i>_<field>, d<d>_<figure> (a delay of the run)
+  bool at_least = true;        // >= (else <=)
+  double bound = 0.0;          // finite
+  std::string text;            // as given
+};
+// Parses "COLUMN>=BOUND" or "COLUMN<=BOUND"; InputError naming the spec and
+// the columns it may name (delays: the run's).
+BatchSpec ParseBatchSpec(const std::string& text, const std::vector<int>& delays);
+// The verdict of a row's cells (status ok) against the specs: sets "verdict"
+// (pass: every spec met with P >= 0.95; fail: some spec with P <= 0.05;
+// marginal: else, within noise of a limit), "verdict_reasons" (each spec not
+// surely met, with value, std and P) and "p_min" (the least P). Nothing
+// without specs.
+void ApplySpecs(const std::vector<BatchSpec>& specs, std::map<std::string, std::string>* cells);
+
+struct BatchOptions {
+  std::vector<BatchSpec> specs;  // end-of-line specs (ApplySpecs); none: no verdict columns
+  RunOptions run;            // per unit, as `run`'s (figures are not computed)
+  int threads = 0;           // units at once, >= 0; 0 = NumThreads() (model/parallel.h)
+  std::string options_key;   // the options as text: hashed with each unit's log bytes (io::HashInputs)
+  // A previous table (e.g. this batch's output from an interrupted run): a
+  // unit whose serial has a row there with the same input_hash is taken from
+  // it instead of being computed. Empty: every unit is computed.
+  io::BatchTable previous;
+  bool IsValid(std::string* why) const;
+};
+
+// The caller's estimate and fit of one unit (reading the log with its flags
+// and fitting, as `run` does; apps/cmd_batch.cc): the RunInput Analyse takes,
+// on a copy of BatchOptions::run that it may complete from the log (the
+// loop's period). Throws InputError / ComputationError for the unit's row.
+using BatchEstimateFit = std::function<RunInput(const io::BatchEntry&, RunOptions* options)>;
+// Called on the unit's thread after its analysis (e.g. to write its folder);
+// an exception makes the unit's row an error.
+using BatchUnitDone = std::function<void(const io::BatchEntry&, const RunAnalysis&)>;
+
+struct BatchProgress {
+  size_t total = 0;     // units in the batch
+  size_t done = 0;      // units finished (computed, failed or resumed)
+  size_t computed = 0;  // of done: computed now (ok or failed)
+  size_t failed = 0;    // of done: rows with an error (resumed ones included)
+  size_t resumed = 0;   // of done: taken from the previous table
+  double elapsed_s = 0.0;
+  // Units per second computed now and the seconds left at that rate (nan before the first).
+  double rate_per_s() const;
+  double seconds_left() const;
+};
+// Called after each unit under one lock (never two at once), with the rows
+// finished so far (nullopt: not yet): a caller shows progress and saves the
+// table now and then (BatchTableOf) so an interruption loses little.
+using BatchOnProgress =
+    std::function<void(const BatchProgress&, const std::vector<std::optional<std::map<std::string, std::string>>>&)>;
+
+struct BatchResult {
+  io::BatchTable table;  // one row per unit, in the units' order
+  BatchProgress progress;
+};
+
+// The row's cells, by column (FormatBatchCsv writes them; %.17g, so a cell
+// reads back as the double `run` wrote):
+//   serial, logs, status (ok | input_error | computation_error), error,
+//   verdict, verdict_reasons, p_min (with specs),
+//   input_hash, sample_rate_hz, fit_quality, fit_reasons (codes, ';'), warnings (' | '),
+//   m, m_std, b, b_std, delay_samples, modes, mode<i>_{omega,c,v,d}[_std] (i from 1),
+//   per delay d: d<d>_{K_cr_at_zero_B, K_cr_max, B_t, B_max}[_std], d<d>_B_max_from_zero.
+// Columns in that order (BatchColumns) over the rows given.
+std::map<std::string, std::string> BatchRowOf(const io::BatchEntry& unit, const std::string& input_hash,
+                                              const RunAnalysis& a);
+std::vector<std::string> BatchColumns(const std::vector<std::map<std::string, std::string>>& rows);
+// The table of the rows finished so far (those set), columns by BatchColumns.
+io::BatchTable BatchTableOf(const std::vector<std::optional<std::map<std::string, std::string>>>& rows);
+
+// Throws InputError for invalid options (before any unit); a unit's errors go to its row.
+BatchResult RunBatch(const std::vector<io::BatchEntry>& units, const BatchOptions& options,
+                     const BatchEstimateFit& estimate_fit, const BatchUnitDone& unit_done = {},
+                     const BatchOnProgress& on_progress = {});
+
+}  // namespace zwidth::analysis

@@ -1,0 +1,228 @@
+// zwidth batch: `run`'s estimate, fit and Z-width for many units (a log
+// each), into one table (analysis/batch.h). This file only wires: the units
+// from arguments or a manifest (io/batch_table.h), each unit's log flags over
+// the command's, run's estimate and fit per unit (apps/run_flags.h), the
+// progress on a terminal, the table written atomically now and then.
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "analysis/batch.h"
+#include "apps/common.h"
+#include "apps/run_flags.h"
+#include "io/atomic_file.h"
+#include "io/batch_table.h"
+#include "io/printable.h"
+#include "model/error.h"
+#include "model/parallel.h"
+#include "report/run_report.h"
+
+namespace zwidth::app {
+namespace {
+
+struct BatchFlags {
+  RunFlags run;
+  std::vector<std::string> logs;
+  std::string manifest, table, unit_folders;
+  std::vector<std::string> specs;
+  int jobs = 0;
+  bool restart = false;
+};
+
+// Flags that say where and how fast, not what is computed: left out of the
+// options hashed for resume.
+const std::set<std::string>& NotHashed() {
+  static const std::set<std::string> s = {"logs", "--manifest", "--output", "--unit-folders", "--jobs", "--restart",
+                                          "--help"};
+  return s;
+}
+
+// The options as typed (every flag given, in declaration order): what a
+// unit's inputs are hashed with. A default changed by a new version is
+// caught by the version, hashed beside (analysis::RunBatch).
+std::string OptionsKey(const CLI::App* cmd) {
+  std::string key;
+  for (const CLI::Option* opt : cmd->get_options()) {
+    if (opt->count() == 0 || NotHashed().count(opt->get_name())) continue;
+    key += opt->get_name() + "=";
+    for (const std::string& r : opt->results()) key += r + ",";
+    key += "\n";
+  }
+  return key;
+}
+
+// The unit's log flags (a manifest's columns) over the command's, parsed by
+// run's own declarations (AddLogFlags, GuardNumericFlags): a column is checked
+// as the flag is.
+io::LogSelect UnitSelect(const io::LogSelect& base, const io::BatchEntry& e) {
+  io::LogSelect s = base;
+  if (e.flags.empty()) return s;
+  CLI::App app("the unit's log flags");
+  AddLogFlags(&app, &s);
+  GuardNumericFlags(&app);
+  std::vector<std::string> args;
+  for (const auto& [k, v] : e.flags) args.push_back("--" + k + "=" + v);
+  std::reverse(args.begin(), args.end());  // CLI11 takes them last first
+  try {
+    app.parse(args);
+  } catch (const CLI::ParseError& err) {
+    std::string cols;
+    for (const auto& [k, v] : e.flags) cols += (cols.empty() ? "" : ", ") + k;
+    throw InputError(e.origin + " (columns " + io::Printable(cols) + "): " + err.what() +
+                     "; a manifest's columns after serial and path are log flags without their dashes (rate, "
+                     "input-column, output-column, time-column, input-scale, output-scale, ...), see zwidth run --help");
+  }
+  return s;
+}
+
+// A serial as a folder name: letters, digits, '.', '_' and '-', not starting with '.'.
+void CheckFolderName(const io::BatchEntry& e) {
+  const bool plain = !e.serial.empty() && e.serial[0] != '.' && e.serial.size() <= 200 &&
+                     e.serial.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789._-") ==
+                         std::string::npos;
+  if (!plain) {
+    throw InputError("serial '" + io::Printable(e.serial) + "' (" + e.origin + ") cannot name a folder of --unit-folders: " +
+                     "use letters, digits, '.', '_' and '-' (not first '.'), or give a manifest with such serials");
+  }
+}
+
+// The previous table at `path` (to resume), read without noting it as an
+// input (it is this command's output); none when absent.
+io::BatchTable PreviousTable(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) return {};
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw InputError(io::Printable(path) + " is not a regular file: -o names the table (a .csv file) to write");
+  }
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  io::BatchTable t = io::ParseBatchCsv(ss.str(), io::Printable(path));
+  if (!t.rows.empty() && (std::find(t.columns.begin(), t.columns.end(), "input_hash") == t.columns.end() ||
+                          std::find(t.columns.begin(), t.columns.end(), "serial") == t.columns.end())) {
+    throw InputError(io::Printable(path) + " exists and is not a table of zwidth batch (no serial and input_hash "
+                     "columns): write the table elsewhere, or remove the file");
+  }
+  return t;
+}
+
+std::string Clock(double s) {
+  if (!std::isfinite(s)) return "?";
+  const long t = std::lround(s);
+  char b[32];
+  std::snprintf(b, sizeof b, "%ld:%02ld:%02ld", t / 3600, t / 60 % 60, t % 60);
+  return b;
+}
+
+void Batch(BatchFlags& b, const CLI::App* cmd) {
+  RunFlags& f = b.run;
+  if (b.logs.empty() == b.manifest.empty()) {
+    throw InputError("batch takes logs (paths or quoted globs) or --manifest units.csv, not both and not neither");
+  }
+  analysis::RunInput ref;  // the reference, read once
+  analysis::BatchOptions o;
+  o.run = ResolveRunOptions(&f, &ref);
+  for (const std::string& s : b.specs) o.specs.push_back(analysis::ParseBatchSpec(s, o.run.delays));
+  const std::vector<io::BatchEntry> units = b.manifest.empty() ? io::EntriesFromArguments(b.logs) : io::ReadManifest(b.manifest);
+  std::vector<std::string> inputs;
+  for (const io::BatchEntry& e : units) {
+    UnitSelect(f.est.select, e);  // every column checked before any work
+    if (!b.unit_folders.empty()) CheckFolderName(e);
+    inputs.push_back(e.path);
+  }
+  io::CheckOutputPath(b.table, inputs);
+  if (!b.unit_folders.empty() && !std::filesystem::is_directory(b.unit_folders)) {
+    throw InputError("--unit-folders " + io::Printable(b.unit_folders) + ": not a folder; create it first");
+  }
+  if (b.jobs < 0) throw InputError("--jobs " + std::to_string(b.jobs) + ": must be >= 1 (0: the cores available)");
+  // Units at once: at most the cores (affinity, cgroup quota); each unit's own
+  // work then on its thread alone, the fit's plugin included (it reads
+  // ZWIDTH_NUM_THREADS on each call).
+  const int cores = NumThreads();
+  o.threads = b.jobs > 0 ? std::min(b.jobs, cores) : cores;
+  if (b.jobs > cores) std::fprintf(stderr, "note: --jobs %d: %d core(s) available, %d units at once\n", b.jobs, cores, o.threads);
+  if (o.threads > 1) setenv("ZWIDTH_NUM_THREADS", "1", 1);
+  o.options_key = OptionsKey(cmd);
+  if (!b.restart) o.previous = PreviousTable(b.table);
+
+  const bool terminal = isatty(STDERR_FILENO) == 1;
+  auto last_save = std::chrono::steady_clock::now();
+  auto on_progress = [&](const analysis::BatchProgress& p, const std::vector<std::optional<std::map<std::string, std::string>>>& rows) {
+    if (terminal) {
+      std::fprintf(stderr, "\r\033[Kbatch: %zu/%zu units (%zu failed, %zu resumed), %.2f units/s, %s left", p.done, p.total,
+                   p.failed, p.resumed, p.rate_per_s(), Clock(p.seconds_left()).c_str());
+    }
+    // Saved every 2 s: an interrupted batch resumes from there.
+    if (std::chrono::steady_clock::now() - last_save > std::chrono::seconds(2) && p.done < p.total) {
+      io::WriteTextAtomically(b.table, io::FormatBatchCsv(analysis::BatchTableOf(rows)));
+      last_save = std::chrono::steady_clock::now();
+    }
+  };
+  auto estimate_fit = [&](const io::BatchEntry& e, analysis::RunOptions* uo) {
+    QuietMessages quiet;  // the table holds each unit's warnings
+    RunFlags uf = f;
+    uf.est.select = UnitSelect(f.est.select, e);
+    uf.logs = {e.path};
+    analysis::RunInput in;
+    in.logs = uf.logs;
+    in.source = e.path;
+    in.reference = ref.reference;
+    in.reference_name = ref.reference_name;
+    in.reference_is_table1 = ref.reference_is_table1;
+    double ms = 0.0;
+    in = EstimateAndFit(uf, *uo, std::move(in), &ms, false);
+    ResolveRunLoop(uf, in.response.frf.period_s(), uo);
+    return in;
+  };
+  analysis::BatchUnitDone unit_done;
+  if (!b.unit_folders.empty()) {
+    unit_done = [&](const io::BatchEntry& e, const analysis::RunAnalysis& a) {
+      io::OutputFolder folder((std::filesystem::path(b.unit_folders) / e.serial).string(), true);
+      report::WriteRunReport(a, folder, {.draw_figures = false, .fit_report = FitReport(a.input.fit), .command_line = CommandLine()});
+      folder.Commit();
+    };
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const analysis::BatchResult r = analysis::RunBatch(units, o, estimate_fit, unit_done, on_progress);
+  io::WriteTextAtomically(b.table, io::FormatBatchCsv(r.table));
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (terminal) std::fprintf(stderr, "\n");
+  std::fprintf(stderr, "batch: %zu units, %zu ok, %zu failed, %zu resumed, %zu computed in %.3f s (%.3g units/s on %d thread%s) -> %s\n",
+               r.progress.total, r.progress.total - r.progress.failed, r.progress.failed, r.progress.resumed,
+               r.progress.computed, s, r.progress.computed / s, o.threads, o.threads > 1 ? "s" : "",
+               io::Printable(b.table).c_str());
+  if (r.progress.failed > 0) throw ExitStatus{4};
+}
+
+}  // namespace
+
+void AddBatchCommand(CLI::App& app) {
+  auto b = std::make_shared<BatchFlags>();
+  CLI::App* cmd = app.add_subcommand("batch", "run's estimate, fit and Z-width for many units into one table; resumes");
+  cmd->add_option("logs", b->logs, "one log per unit: paths or quoted globs ('line/*.h5'), the serial is the path");
+  cmd->add_option("--manifest", b->manifest,
+                  "CSV of units: serial,path[,log flags without dashes: rate, input-column, ...], a row per unit");
+  cmd->add_option("-o,--output", b->table, "the table (CSV) to write; an existing one of an earlier batch is resumed")
+      ->required();
+  cmd->add_option("--unit-folders", b->unit_folders, "also write each unit's run files (no figures) into FOLDER/<serial>");
+  cmd->add_option("--jobs", b->jobs, "units at once (default, and at most: the cores available)")->capture_default_str();
+  cmd->add_option("--spec", b->specs,
+                  "end-of-line spec, repeatable: COLUMN>=BOUND or COLUMN<=BOUND (d2_K_cr_max>=1.5, m<=2e-4): "
+                  "a verdict per unit (pass, marginal: within noise of a limit, fail) from the value and its std");
+  cmd->add_flag("--restart", b->restart, "compute every unit, ignoring the rows of an existing table");
+  AddRunAnalysisFlags(cmd, &b->run);
+  cmd->callback([b, cmd] { Batch(*b, cmd); });
+}
+
+}  // namespace zwidth::app

@@ -1,0 +1,58 @@
+// The files of `zwidth batch`: the manifest of units it reads (CSV: serial,
+// path and per-unit log flags), the logs named by paths and globs, the
+// fingerprint of a unit's inputs that a re-run compares to resume, and the
+// result table (CSV, one row per unit, cells as text) it writes and reads
+// back. The table's cells come from analysis/batch.h; here they are text.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace zwidth::io {
+
+// One unit of a batch as named by the user: its key, its log and the log flags
+// of its own (a manifest's extra columns: "rate" -> "1000" for --rate 1000).
+struct BatchEntry {
+  std::string serial;                                      // the table's key, unique in a batch
+  std::string path;                                        // the log
+  std::vector<std::pair<std::string, std::string>> flags;  // column name (a flag without "--"), value as typed
+  std::string origin;                                      // where it was named: "units.csv line 4", "argument 2"
+};
+
+// A manifest: CSV with a header line naming the columns "serial" and "path"
+// (both required, any order) and any others, each a log flag without its
+// dashes; a value left empty keeps the command's flag. A relative path is
+// taken from the manifest's folder. Blank lines are skipped; fields may be
+// quoted as RFC 4180 ("a,b", "say ""x"""). InputError naming the file, line
+// and column for a missing column, a row with another number of fields, an
+// empty serial or path, or a serial given twice.
+std::vector<BatchEntry> ReadManifest(const std::string& path);
+
+// Log arguments: each a path, or a glob (with * ? [) expanded in name order;
+// a glob that matches nothing is an InputError. The serial of each is its
+// path as given or matched. A path given twice (after expansion) is an
+// InputError naming both arguments.
+std::vector<BatchEntry> EntriesFromArguments(const std::vector<std::string>& arguments);
+
+// FNV-1a (64 bits) of `options` then of each file's bytes (size-prefixed), as
+// 16 hex digits: what a re-run compares to skip a unit done with the same
+// inputs and options. "" when a file cannot be read (the unit is then run).
+std::string HashInputs(const std::vector<std::string>& paths, const std::string& options);
+
+// A table of text cells: columns in order, rows as column -> cell (a column
+// a row lacks is written empty).
+struct BatchTable {
+  std::vector<std::string> columns;
+  std::vector<std::map<std::string, std::string>> rows;
+};
+// CSV text: the header, then one line per row; a cell with a comma, quote,
+// CR or LF is quoted (RFC 4180).
+std::string FormatBatchCsv(const BatchTable& table);
+// Parses FormatBatchCsv's text (a previous run's table, to resume);
+// InputError naming `source` and the line for a malformed one.
+BatchTable ParseBatchCsv(const std::string& text, const std::string& source);
+
+}  // namespace zwidth::io

@@ -1,0 +1,98 @@
+"""zwidth.batch (python/zwidth/_batch.py) on threads, on a dask.distributed LocalCluster of two
+worker processes, and `zwidth batch` itself: the same table, byte for byte, with the corrupt log's
+row; then a resume through Python computes nothing.
+
+Logs: `zwidth simulate` of Table I (8 s, seeds 1..3) and a corrupt text log.
+The module is loaded from its file (the compiled extension is not needed) and pickled by
+value for the workers (cloudpickle.register_pickle_by_value).
+Usage: batch_dask_check.py ZWIDTH SRC
+"""
+import importlib.util
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+failures = []
+
+
+def check(ok, what):
+    print(("ok   " if ok else "FAIL ") + what, flush=True)
+    if not ok:
+        failures.append(what)
+
+
+def read(path):
+    with open(path, "rb") as f:
+        return f.read()
+
+
+def main():
+    zw, src = sys.argv[1], sys.argv[2]
+    spec = importlib.util.spec_from_file_location("zwidth_batch_under_test", os.path.join(src, "python/zwidth/_batch.py"))
+    zb = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = zb
+    spec.loader.exec_module(zb)
+
+    with tempfile.TemporaryDirectory() as t:
+        model = os.path.join(src, "datasets/phantom/table1.json")
+        logs = []
+        for s in (1, 2, 3):
+            p = os.path.join(t, f"u{s}.csv")
+            subprocess.run([zw, "simulate", "--model", model, "-o", p, "--seconds", "8", "--seed", str(s)],
+                           check=True, capture_output=True)
+            logs.append(p)
+        bad = os.path.join(t, "bad.csv")
+        with open(bad, "w") as f:
+            f.write("t,torque,position\n0,1,2\n0.001,x,y\n")
+        logs.append(bad)
+        flags = dict(delays=[2, 4], b_points=20, window_length=1024)
+
+        cli = os.path.join(t, "cli.csv")
+        rc = subprocess.run([zw, "batch", *logs, "-o", cli, *zb._flag_args(flags)], capture_output=True).returncode
+        check(rc == 4, f"zwidth batch with a corrupt log exits 4 (got {rc})")
+
+        t0 = time.monotonic()
+        threaded = os.path.join(t, "threads.csv")
+        df = zb.batch(logs, output=threaded, zwidth=zw, threads=2, **flags)
+        t_threads = time.monotonic() - t0
+        check(read(threaded) == read(cli), "zwidth.batch on threads: the table of zwidth batch, byte for byte")
+        rows = df.to_dict("records") if hasattr(df, "to_dict") else df
+        status = {r["serial"]: r["status"] for r in rows}
+        check(status[bad] == "input_error" and sum(v == "ok" for v in status.values()) == 3, f"statuses {status}")
+
+        import cloudpickle
+        from dask.distributed import Client, LocalCluster
+        cloudpickle.register_pickle_by_value(zb)
+        t0 = time.monotonic()
+        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+                Client(cluster) as client:
+            t_start = time.monotonic() - t0
+            t0 = time.monotonic()
+            clustered = os.path.join(t, "cluster.csv")
+            zb.batch(logs, output=clustered, zwidth=zw, client=client, **flags)
+            t_cluster = time.monotonic() - t0
+            pids = set(client.run(os.getpid).values())
+        check(len(pids) == 2 and os.getpid() not in pids, f"two worker processes ({len(pids)})")
+        check(read(clustered) == read(cli), "zwidth.batch on a 2-worker LocalCluster: the same table, byte for byte")
+
+        # Resume through Python: nothing to run, the table unchanged.
+        t0 = time.monotonic()
+        zb.batch(logs, output=clustered, zwidth=zw, **flags)
+        check(read(clustered) == read(cli), "a resumed zwidth.batch leaves the table as it was")
+        print(f"4 units: threads {t_threads:.2f} s, cluster {t_cluster:.2f} s (+ {t_start:.2f} s to start it), "
+              f"resume {time.monotonic() - t0:.2f} s")
+
+        try:
+            zb.batch(logs, output=os.path.join(t, "x.csv"), zwidth=zw, delays="two")
+            check(False, "a bad flag raises BatchError")
+        except zb.BatchError as e:
+            check("--delays" in str(e), f"a bad flag raises BatchError: {str(e)[:100]}")
+
+    print(f"batch_dask: {len(failures)} failed")
+    sys.exit(1 if failures else 0)
+
+
+if __name__ == "__main__":  # the workers are spawned: they import this file and must not run it
+    main()
