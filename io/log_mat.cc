@@ -346,4 +346,9 @@ LogInfo StreamMatInProcess(const std::string& path, const LogSelect& sel, const 
   return info;
 }
 
+// The v5 size checks and the variable list above, for the response reader
+// (io/frf_mat.cc).
+void CheckMatV5Variables(const std::string& path, mat_t* mat) { CheckMatV5File(path, mat); }
+std::string MatVariableNames(mat_t* mat) { return MatVariables(mat); }
+
 }  // namespace zwidth::io::internal
