@@ -8,6 +8,7 @@
 #include "io/atomic_file.h"
 #include "io/hdf5_api.h"
 #include "io/io_internal.h"
+#include "io/provenance.h"
 #include "model/error.h"
 #include "model/state_space.h"
 #include "stability/uncertainty.h"
@@ -257,6 +258,7 @@ nlohmann::json StateSpaceJson(const ModelFile& mf, double T) {
                      {"period_s", T}, {"delay_samples_realised_as_states", mf.plant.delay_samples}};
   }
   j["model"] = ModelToJson(mf);
+  j["provenance"] = ProvenanceJson();
   return j;
 }
 
@@ -291,7 +293,7 @@ void ExportModel(const ModelFile& mf, ExportFormat fmt, double T, const std::str
                      ToString(fmt));
   }
   switch (fmt) {
-    case ExportFormat::kJson: WriteTextAtomically(path, ModelToJson(mf).dump(2) + "\n"); break;
+    case ExportFormat::kJson: WriteModelJson(path, mf); break;
     case ExportFormat::kMatlab: WriteTextAtomically(path, Matlab(mf, T)); break;
     case ExportFormat::kPython: WriteTextAtomically(path, Python(mf, T)); break;
     case ExportFormat::kStateSpace: WriteTextAtomically(path, StateSpaceJson(mf, T).dump(2) + "\n"); break;

@@ -323,6 +323,7 @@ def test_check_equals_cli(cli, table1_json, tmp_path):
     p.write_text(json.dumps(scene))
     run = cli("check", p, "--model", table1_json, "--delay", "2", "--json", check=False)
     ref = json.loads(run.stdout)
+    assert ref.pop("provenance")["command"].startswith("zwidth check")  # the CLI's JSON carries it (issue 26)
     # The CLI exits 3 when an object is unstable (0 when all are stable).
     assert run.returncode == (3 if not all(o["stable"] for o in ref["objects"]) else 0)
     model = zwidth.Model.load(table1_json)
@@ -599,7 +600,9 @@ def test_loop_options_equal_cli(cli, table1_json, tmp_path):
     p = tmp_path / "scene.json"
     p.write_text(json.dumps({"objects": scene}))
     run = cli("check", p, "--model", table1_json, "--delay", "2", "--json", *flags, check=False)
-    assert zwidth.check(scene, model, 2, velocity_filter_hz=50.0, hand=hand) == json.loads(run.stdout)
+    cli_json = json.loads(run.stdout)
+    cli_json.pop("provenance")
+    assert zwidth.check(scene, model, 2, velocity_filter_hz=50.0, hand=hand) == cli_json
     assert run.returncode == 3
     with pytest.raises(zwidth.InputError):
         zwidth.ZWidth(model, delay_samples=2, velocity_filter_hz=600.0)  # above Nyquist
