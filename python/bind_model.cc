@@ -6,6 +6,8 @@
 #include <pybind11/eigen.h>
 
 #include "io/export.h"
+#include "io/printable.h"
+#include "io/provenance.h"
 #include "io/reference_models.h"
 #include "model/error.h"
 #include "model/state_space.h"
@@ -143,6 +145,7 @@ void DefModelConstructionAndFiles(py::class_<io::ModelFile>& cls) {
              CheckedJson(mf);
              ScopedCLocale c;
              io::ForgetNotedInputs();  // each call is its own command: a model loaded earlier may be replaced
+             io::SetInvocation("zwidth.Model.save(" + nlohmann::json(io::Utf8ForJson(path)).dump() + ")");  // provenance
              io::WriteModelJson(path, mf);
            },
            py::arg("path"), "Writes the model JSON (atomically; the CLI reads it back).")
@@ -152,11 +155,13 @@ void DefModelConstructionAndFiles(py::class_<io::ModelFile>& cls) {
                         std::optional<double> period_s) {
              io::ExportFormat f;
              if (!io::FromString(format, &f)) {
-               throw InputError("format '" + format + "' is not one of json, hdf5, matlab, python, statespace");
+               throw InputError("format '" + format + "' is not one of json, hdf5, matlab, python, statespace, mat, mat73");
              }
              CheckedJson(mf);
              ScopedCLocale c;
              io::ForgetNotedInputs();
+             io::SetInvocation("zwidth.Model.export(" + nlohmann::json(io::Utf8ForJson(path)).dump() + ", " +
+                               nlohmann::json(format).dump() + ")");  // provenance
              io::ExportModel(mf, f, period_s ? ResolvePeriod(period_s, mf) : 0.0, path);
            },
            py::arg("path"), py::arg("format"), py::arg("period_s") = py::none(),
