@@ -9,6 +9,8 @@
   to the same model as the log it came from, within the model's std, and fit says that it
   derived the std; the std it derived equals Bendat and Piersol's formula computed here.
 - a CSV with f, H_re, H_im, coherence and num_averages (no H_std) fits to the same model too.
+- a .mat log holding one matrix `data` with its column names `columns` (a cell array or a char
+  matrix) estimates the same response as the CSV log it was made from (1e-12).
 - the .m and .py exports define std_* and covariance equal to model.json's.
 Exit 77 (skipped) without octave, numpy or h5py.
 """
@@ -166,6 +168,25 @@ with open(bad, "w") as f:
 q = subprocess.run([zw, "fit", bad, "--rate", "1000", "-o", os.path.join(tmp, "bad.json")], capture_output=True, text=True)
 report("coherence without averages is refused", q.returncode == 2 and "num_averages" in q.stderr and
        not os.path.exists(os.path.join(tmp, "bad.json")), q.stderr.strip()[:160])
+
+# --- a .mat log as one matrix with named columns --------------------------------
+shutil.copy(log, os.path.join(tmp, "log.csv"))
+octave("""d = dlmread('log.csv', ',', 1, 0);
+data = d; columns = {'t', 'torque', 'position'}; save('-v7', 'cell.mat', 'data', 'columns');
+data = d(:, [2 3 1]); columns = char('torque', 'position', 't'); save('-v7', 'char.mat', 'data', 'columns');
+data = d(:, [3 2]); columns = {'y', 'u'}; save('-v7', 'named.mat', 'data', 'columns');""")
+frf_ref = [float(r["H_re"]) for r in rows] + [float(r["H_im"]) for r in rows]
+for name, extra in [("cell.mat", []), ("char.mat", []),
+                    ("named.mat", ["--input-column", "u", "--output-column", "y", "--time-column", "none", "--rate", "1000"])]:
+    out_csv = os.path.join(tmp, name + ".frf.csv")
+    zwidth("estimate", os.path.join(tmp, name), *extra, "-o", out_csv)
+    got_rows = list(csv.DictReader(open(out_csv)))
+    got_h = [float(r["H_re"]) for r in got_rows] + [float(r["H_im"]) for r in got_rows]
+    report(f"a .mat log as one matrix ({name}) estimates as the CSV log", rel(got_h, frf_ref) <= 1e-12,
+           f"rel {rel(got_h, frf_ref):.1e}")
+q = subprocess.run([zw, "estimate", os.path.join(tmp, "named.mat"), "-o", os.path.join(tmp, "no.csv")], capture_output=True, text=True)
+report("a matrix log without the named column says which columns it has", q.returncode == 2 and "columns: y, u" in q.stderr,
+       q.stderr.strip()[:160])
 
 # --- .m and .py carry std and covariance ----------------------------------------
 mfile, pyfile = os.path.join(tmp, "g.m"), os.path.join(tmp, "g.py")
