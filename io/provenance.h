@@ -28,7 +28,8 @@ std::string Sha256Hex(std::string_view data);
 // Of a file's bytes, read in blocks; InputError when it cannot be read.
 std::string Sha256OfFile(const std::string& path);
 
-// The provenance object above, for the inputs noted so far.
+// The provenance object above, for the inputs noted so far that can still be
+// read (one removed since it was read is left out).
 nlohmann::json ProvenanceJson();
 
 }  // namespace zwidth::io
