@@ -11,6 +11,7 @@
 #include "apps/friction_flags.h"
 #include "apps/loop_flags.h"
 #include "io/printable.h"
+#include "io/provenance.h"
 #include "stability/haptic_loop.h"
 #include "io/atomic_file.h"
 #include "io/model_json.h"
@@ -260,7 +261,8 @@ void AddBoundaryCommand(CLI::App& app) {
     if (bf->monte_carlo > 0 && loops.size() > 1) throw InputError("--monte-carlo takes at most one --hand");
     const BoundaryTable t = ComputeBoundaryTable(mf, T, bf->delays, loops, bf->grid);
     io::WriteBoundaryCsv(bf->out, t.rows);
-    const nlohmann::json js = BoundarySummaryJson(t, mf, T, bf->delays, loops, bf->monte_carlo, bf->seed);
+    nlohmann::json js = BoundarySummaryJson(t, mf, T, bf->delays, loops, bf->monte_carlo, bf->seed);
+    js["provenance"] = io::ProvenanceJson();
     if (!bf->summary.empty()) io::WriteTextAtomically(bf->summary, js.dump(2) + "\n");
     PrintBoundarySummary(t, mf, bf->delays, loops);
   });
@@ -559,6 +561,7 @@ void AddCheckCommand(CLI::App& app) {
                                                   cf->encoder_step, j);
       if (!cf->json) PrintObjectCheck(sc.objects[i], objs[i], note);
     }
+    out["provenance"] = io::ProvenanceJson();
     if (cf->json) std::cout << out.dump() << std::endl;
     const int code = sc.num_unstable > 0 ? 3 : sc.num_marginal > 0 ? 4 : 0;
     if (code != 0 && !cf->json) {

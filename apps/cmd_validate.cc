@@ -5,6 +5,7 @@
 #include "analysis/validate.h"
 #include "apps/common.h"
 #include "io/printable.h"
+#include "io/provenance.h"
 #include "io/atomic_file.h"
 #include "io/model_json.h"
 #include "model/error.h"
@@ -57,7 +58,11 @@ void AddValidateCommand(CLI::App& app) {
     const io::ModelFile mf = io::ReadModelJsonFor(f->model, "validate");
     const io::Log log = io::ReadLog(f->log, f->select);
     const analysis::ValidationResult r = analysis::Validate(mf, log, f->options);
-    if (!f->out.empty()) io::WriteTextAtomically(f->out, analysis::ValidationToJson(r).dump(2) + "\n");
+    if (!f->out.empty()) {
+      nlohmann::ordered_json j = analysis::ValidationToJson(r);
+      j["provenance"] = nlohmann::ordered_json::parse(io::ProvenanceJson().dump());
+      io::WriteTextAtomically(f->out, j.dump(2) + "\n");
+    }
     if (!f->trace.empty()) io::WriteTextAtomically(f->trace, analysis::ValidationTraceCsv(log, r));
     if (f->out != "-") Print(*f, log, r);
   });

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "io/frf_file.h"
+#include "io/provenance.h"
 #include "io/option_names.h"
 #include "io/printable.h"
 #include "model/error.h"
@@ -184,6 +185,7 @@ void SetCommandLine(int argc, char** argv) {
     }
     line += (i ? " " : "") + q;
   }
+  io::SetInvocation(line);  // the provenance of every JSON file written (io/provenance.h)
 }
 
 const std::string& CommandLine() { return StoredCommandLine(); }

@@ -260,8 +260,7 @@ FrequencyResponse WelchEstimator::Finish(double fs) const {
     else h = syy / std::conj(suy);
     const double coh = (suu > 0.0 && syy > 0.0) ? std::norm(suy) / (suu * syy) : 0.0;
     const double c = std::min(coh, 1.0);
-    const double sd = c > 0.0 ? std::abs(h) * std::sqrt((1.0 - c) / (2.0 * neff * c))
-                              : std::numeric_limits<double>::infinity();
+    const double sd = CoherenceStd(std::abs(h), c, neff);
     r.f_hz.push_back(f);
     r.H.push_back(h);
     r.coherence.push_back(coh);
@@ -287,6 +286,12 @@ bool BandOptions::IsValid(std::string* why) const {
   }
   if (!(min_coherence >= 0.0 && min_coherence < 1.0)) return bad("BandOptions::min_coherence must be in [0, 1)");
   return true;
+}
+
+double CoherenceStd(double H_abs, double coherence, double averages) {
+  const double c = std::min(coherence, 1.0);
+  if (!(c > 0.0)) return std::numeric_limits<double>::infinity();
+  return H_abs * std::sqrt((1.0 - c) / (2.0 * averages * c));
 }
 
 ExcitedBand SelectExcitedBand(const FrequencyResponse& frf, const BandOptions& o) {

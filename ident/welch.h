@@ -143,6 +143,13 @@ struct ExcitedBand {
   // below its reference (above 300.2 Hz) ...".
   std::string Describe() const;
 };
+// The per-bin std of H of the comment on FrequencyResponse::H_std (Bendat &
+// Piersol, Random Data, 4th ed., Table 9.6): |H| sqrt((1 - g^2) / (2 n_d g^2))
+// for a coherence g^2 in (0, 1] and n_d independent averages; +inf when
+// g^2 <= 0. The Welch estimator and the response readers (a response made
+// elsewhere that gives the coherence but no std) both use it.
+double CoherenceStd(double H_abs, double coherence, double averages);
+
 ExcitedBand SelectExcitedBand(const FrequencyResponse& frf, const BandOptions& options);
 
 // Whole-signal convenience.

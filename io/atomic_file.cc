@@ -1,5 +1,6 @@
 #include "io/atomic_file.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cctype>
 #include <cerrno>
@@ -90,6 +91,18 @@ std::string Destination(const std::string& path) {
 }  // namespace
 
 void ForgetNotedInputs() { std::lock_guard<std::mutex> lock(g_inputs_mutex); g_inputs.clear(); }
+
+std::vector<std::string> NotedInputs() {
+  std::lock_guard<std::mutex> lock(g_inputs_mutex);
+  std::vector<std::string> out;
+  std::vector<std::pair<dev_t, ino_t>> seen;
+  for (const auto& [path, id] : g_inputs) {
+    if (std::find(seen.begin(), seen.end(), id) != seen.end()) continue;
+    seen.push_back(id);
+    out.push_back(path);
+  }
+  return out;
+}
 
 namespace {
 

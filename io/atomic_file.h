@@ -49,6 +49,9 @@ void WriteAtomically(const std::string& path,
 
 // Forgets the inputs noted so far (a long-lived process: each Python call is its own command).
 void ForgetNotedInputs();
+// The inputs noted so far, in the order first read, each once (the
+// provenance's inputs, io/provenance.h).
+std::vector<std::string> NotedInputs();
 
 // Convenience: the whole content as text.
 void WriteTextAtomically(const std::string& path, const std::string& content);

@@ -8,8 +8,10 @@
 #include "io/atomic_file.h"
 #include "io/hdf5_api.h"
 #include "io/io_internal.h"
+#include "io/provenance.h"
 #include "model/error.h"
 #include "model/state_space.h"
+#include "stability/uncertainty.h"
 
 namespace zwidth::io {
 namespace {
@@ -127,6 +129,44 @@ std::string FrictionVariables(const ModelFile& mf, const char* comment, const ch
   return os.str();
 }
 
+// The standard errors (std_m, std_b, std_w1 ... in .m; std_m, std_b,
+// std_modes in .py; Inf = unknown) and the covariance of the log parameters
+// with its parameter names, after the parameters.
+std::string Uncertainty(const ModelFile& mf, bool python) {
+  const char* c = python ? "#" : "%";
+  const char* end = python ? "" : ";";
+  auto num = [&](double v) { return std::isfinite(v) ? Num(v) : std::string(python ? "float('inf')" : "Inf"); };
+  ClassicStream os;
+  if (mf.std_errors) {
+    const model::Plant& s = *mf.std_errors;
+    os << c << " standard errors of the fit (same units; Inf = unknown)\n"
+       << "std_m = " << num(s.m) << end << "\nstd_b = " << num(s.b) << end << "\n";
+    if (python) {
+      os << "std_modes = [  # (omega, c, v, d)\n";
+      for (const model::Mode& md : s.modes) os << "    (" << num(md.omega) << ", " << num(md.c) << ", " << num(md.v) << ", " << num(md.d) << "),\n";
+      os << "]\n";
+    }
+    for (size_t i = 0; !python && i < s.modes.size(); ++i) {
+      const std::string k = std::to_string(i + 1);
+      os << "std_w" << k << " = " << num(s.modes[i].omega) << "; std_c" << k << " = " << num(s.modes[i].c) << "; std_v"
+         << k << " = " << num(s.modes[i].v) << "; std_d" << k << " = " << num(s.modes[i].d) << ";\n";
+    }
+  }
+  if (!mf.log_covariance.empty()) {
+    const std::vector<std::string> names = stability::LogParameterNames(mf.plant);
+    const int n = static_cast<int>(names.size());
+    const Eigen::MatrixXd C = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+        mf.log_covariance.data(), n, n);
+    os << c << " covariance of the natural logs of the parameters (relative units), rows and columns in the order\n"
+       << c << " of covariance_parameters (model.json 'covariance')\n"
+       << "covariance = " << (python ? "np.array(" + Matrix(C, true) + ")" : Matrix(C, false)) << end << "\n"
+       << "covariance_parameters = " << (python ? "[" : "{");
+    for (int i = 0; i < n; ++i) os << (i ? ", " : "") << (python ? PythonString(names[i]) : MatlabString(names[i]));
+    os << (python ? "]" : "}") << end << "\n";
+  }
+  return os.str();
+}
+
 std::string Matlab(const ModelFile& mf, double T) {
   const model::Plant& p = mf.plant;
   ClassicStream os;
@@ -144,7 +184,7 @@ std::string Matlab(const ModelFile& mf, double T) {
        << ": pole pair w, its damping c, zero pair v, its damping d [rad/s]\n";
   }
   os << "delay_samples = " << p.delay_samples << ";  % input delay of the sampled model [samples]\n"
-     << FrictionVariables(mf, "%", ";") << "G = tf(1, [m b 0]);\n";
+     << FrictionVariables(mf, "%", ";") << Uncertainty(mf, false) << "G = tf(1, [m b 0]);\n";
   for (size_t i = 0; i < p.modes.size(); ++i) {
     const std::string k = std::to_string(i + 1);
     os << "G = G * tf(w" << k << "^2 / v" << k << "^2 * [1 d" << k << " v" << k << "^2], [1 c" << k << " w" << k
@@ -194,7 +234,7 @@ std::string Python(const ModelFile& mf, double T) {
      << "name = " << PythonString(p.name) << "\n"
      << "m = " << Num(p.m) << "  # kg m^2\nb = " << Num(p.b) << "  # N m s/rad\nmodes = [  # (omega, c, v, d) rad/s\n";
   for (const model::Mode& md : p.modes) os << "    (" << Num(md.omega) << ", " << Num(md.c) << ", " << Num(md.v) << ", " << Num(md.d) << "),\n";
-  os << "]\ndelay_samples = " << p.delay_samples << "\n" << FrictionVariables(mf, "#", "") << "\n"
+  os << "]\ndelay_samples = " << p.delay_samples << "\n" << FrictionVariables(mf, "#", "") << Uncertainty(mf, true) << "\n"
      << "G = signal.StateSpace(np.array(" << Matrix(c.A, true) << "),\n    np.array(" << Matrix(c.B, true)
      << "),\n    np.array(" << Matrix(c.C, true) << "),\n    np.array([[" << Num(c.D) << "]]))\n";
   if (T > 0) {
@@ -218,6 +258,7 @@ nlohmann::json StateSpaceJson(const ModelFile& mf, double T) {
                      {"period_s", T}, {"delay_samples_realised_as_states", mf.plant.delay_samples}};
   }
   j["model"] = ModelToJson(mf);
+  j["provenance"] = ProvenanceJson();
   return j;
 }
 
@@ -230,26 +271,39 @@ std::string ToString(ExportFormat f) {
     case ExportFormat::kMatlab: return "matlab";
     case ExportFormat::kPython: return "python";
     case ExportFormat::kStateSpace: return "statespace";
+    case ExportFormat::kMat: return "mat";
+    case ExportFormat::kMat73: return "mat73";
   }
   return "?";
 }
 
 bool FromString(const std::string& s, ExportFormat* f) {
   for (ExportFormat e : {ExportFormat::kJson, ExportFormat::kHdf5, ExportFormat::kMatlab, ExportFormat::kPython,
-                         ExportFormat::kStateSpace}) {
+                         ExportFormat::kStateSpace, ExportFormat::kMat, ExportFormat::kMat73}) {
     if (s == ToString(e)) { *f = e; return true; }
   }
   return false;
 }
 
-void ExportModel(const ModelFile& mf, ExportFormat fmt, double T, const std::string& path) {
+void ExportModel(const ModelFile& mf, ExportFormat fmt, double T, const std::string& path,
+                 const ident::FrequencyResponse* response) {
   mf.plant.Validate();
+  if (response && fmt != ExportFormat::kMat && fmt != ExportFormat::kMat73) {
+    throw InputError("a measured response is exported only in the .mat formats (--format mat or mat73), not " +
+                     ToString(fmt));
+  }
   switch (fmt) {
-    case ExportFormat::kJson: WriteTextAtomically(path, ModelToJson(mf).dump(2) + "\n"); break;
+    case ExportFormat::kJson: WriteModelJson(path, mf); break;
     case ExportFormat::kMatlab: WriteTextAtomically(path, Matlab(mf, T)); break;
     case ExportFormat::kPython: WriteTextAtomically(path, Python(mf, T)); break;
     case ExportFormat::kStateSpace: WriteTextAtomically(path, StateSpaceJson(mf, T).dump(2) + "\n"); break;
     case ExportFormat::kHdf5: WriteAtomically(path, [&](const std::string& tmp) { internal::Hdf5().write_model_hdf5(tmp, mf, T); }); break;
+    case ExportFormat::kMat:
+    case ExportFormat::kMat73:
+      WriteAtomically(path, [&](const std::string& tmp) {
+        internal::Hdf5().write_model_mat(tmp, mf, T, response, fmt == ExportFormat::kMat73);
+      });
+      break;
   }
 }
 

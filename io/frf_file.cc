@@ -54,6 +54,21 @@ int Count(double v, const std::string& path, const char* name) {
 
 constexpr size_t kMaxBins = internal::kMaxFrfBins;
 
+// A column the file does not give (coherence, H_std): FillAbsent decides.
+const double kAbsent = std::nan("");
+
+// The header names of a response made elsewhere (MATLAB, Octave, a script)
+// as those of `zwidth estimate`'s files: f -> f_hz, coh -> coherence,
+// std -> H_std, n_avg -> num_averages, fs -> sample_rate_hz.
+std::string CanonicalColumn(std::string name) {
+  while (!name.empty() && (name.back() == '\r' || name.back() == ' ')) name.pop_back();
+  if (name.size() >= 2 && name.front() == '"' && name.back() == '"') name = name.substr(1, name.size() - 2);
+  static const std::map<std::string, std::string> aliases = {
+      {"f", "f_hz"}, {"coh", "coherence"}, {"std", "H_std"}, {"n_avg", "num_averages"}, {"fs", "sample_rate_hz"}};
+  const auto it = aliases.find(name);
+  return it == aliases.end() ? name : it->second;
+}
+
 ident::FrequencyResponse ReadCsv(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path + ": cannot open frequency-response file");
@@ -64,8 +79,7 @@ ident::FrequencyResponse ReadCsv(const std::string& path) {
   std::vector<std::string_view> fields;
   internal::SplitFields(line, ',', &fields);
   for (std::string_view f : fields) {
-    std::string name(f);
-    while (!name.empty() && (name.back() == '\r' || name.back() == ' ')) name.pop_back();
+    std::string name = CanonicalColumn(std::string(f));
     if (!col.emplace(name, static_cast<int>(num_columns)).second) {
       throw InputError(path + ": line 1: column '" + name + "' appears twice in the header; "
                        "each column name must be unique");
@@ -127,8 +141,8 @@ ident::FrequencyResponse ReadCsv(const std::string& path) {
     }
     r.f_hz.push_back(f);
     r.H.push_back(h);
-    r.coherence.push_back(i_coh >= 0 ? v[i_coh] : 1.0);
-    r.H_std.push_back(i_std >= 0 ? v[i_std] : 1e-3 * std::abs(h));
+    r.coherence.push_back(i_coh >= 0 ? v[i_coh] : kAbsent);
+    r.H_std.push_back(i_std >= 0 ? v[i_std] : kAbsent);
     r.S_uu.push_back(i_suu >= 0 ? v[i_suu] : 0.0);
     r.S_yy.push_back(i_syy >= 0 ? v[i_syy] : 0.0);
     r.S_uy.push_back(0.0);
@@ -195,8 +209,43 @@ void CheckBinValues(const ident::FrequencyResponse& r, const std::string& path) 
   }
 }
 
+// A response made elsewhere may lack the per-bin std or the coherence (NaN
+// here). The std is then derived from the coherence and the averages when the
+// file gives both (ident::CoherenceStd, Bendat & Piersol: |H| sqrt((1 - g^2) /
+// (2 n g^2)), n = effective_averages, else num_averages), else |H| x 1e-3
+// (equal relative weights, no absolute scale); an absent coherence is 1.
+// Returns what was done, "" when the file gave the std.
+std::string FillAbsent(ident::FrequencyResponse& r, const std::string& path) {
+  if (r.f_hz.empty()) return "";
+  const bool no_coh = std::isnan(r.coherence.front()), no_std = std::isnan(r.H_std.front());
+  for (double& c : r.coherence) if (no_coh) c = 1.0;
+  if (!no_std) return "";
+  const double n = r.effective_averages > 0.0 ? r.effective_averages : r.num_averages;
+  if (no_coh) {
+    for (size_t k = 0; k < r.H.size(); ++k) r.H_std[k] = 1e-3 * std::abs(r.H[k]);
+    return path + ": no H_std nor coherence: each bin weighted by |H| x 1e-3 (equal relative weights; the fit's "
+                  "chi2 has no absolute scale)";
+  }
+  if (!(n >= 1.0)) {
+    throw InputError(path + ": the response gives a coherence but no per-bin std (H_std) and no number of averages: "
+                     "add a num_averages column (or variable; the segments the estimate averaged) to derive the std "
+                     "from the coherence, or give H_std");
+  }
+  for (size_t k = 0; k < r.H.size(); ++k) {
+    if (!(r.coherence[k] > 0.0)) {
+      throw InputError(path + ": bin " + std::to_string(k) + " (f = " + Num(r.f_hz[k]) + " Hz): coherence " +
+                       Num(r.coherence[k]) + " gives no std (no linear relation there): drop the bin or give H_std");
+    }
+    r.H_std[k] = ident::CoherenceStd(std::abs(r.H[k]), r.coherence[k], n);
+  }
+  return path + ": H_std derived from the coherence and " + Num(n) + " averages (Bendat & Piersol: |H| sqrt((1 - "
+                "coh) / (2 n coh)))";
+}
+
 // The rate (--rate wins over the file's) and the checks common to both formats.
-void Finish(ident::FrequencyResponse& r, const std::string& path, double rate) {
+void Finish(ident::FrequencyResponse& r, const std::string& path, double rate, std::string* note) {
+  const std::string filled = FillAbsent(r, path);
+  if (note) *note = filled;
   if (!(std::isfinite(r.effective_averages) && r.effective_averages >= 0.0)) {
     throw InputError(path + ": effective_averages = " + Num(r.effective_averages) + " must be finite, >= 0");
   }
@@ -212,19 +261,28 @@ void Finish(ident::FrequencyResponse& r, const std::string& path, double rate) {
   CheckBelowNyquist(r, path, "ReadFrequencyResponse::sample_rate_hz");
 }
 
-ident::FrequencyResponse ReadH5(const std::string& path, bool isolated) {
+// True for a MATLAB .mat file (v5/v7 or v7.3: their 128-byte text header).
+bool IsMatFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char head[6] = {};
+  return in.read(head, sizeof head) && std::memcmp(head, "MATLAB", 6) == 0;
+}
+
+// An HDF5 (/frf) or .mat response, parsed in a child when `isolated`.
+ident::FrequencyResponse ReadPacked(const std::string& path, bool isolated) {
+  const internal::Hdf5Api& h5 = internal::Hdf5();
+  const auto read = IsMatFile(path) ? h5.read_frf_mat_packed : h5.read_frf_hdf5_packed;
   std::string bytes;
   if (isolated) {
-    const internal::Hdf5Api& h5 = internal::Hdf5();
     RunIsolated(
         path,
         [&](const FrameSender& send) {
-          const std::string b = h5.read_frf_hdf5_packed(path);
+          const std::string b = read(path);
           send(b.data(), b.size());
         },
         [&](std::string_view frame) { bytes = frame; });
   } else {
-    bytes = internal::Hdf5().read_frf_hdf5_packed(path);
+    bytes = read(path);
   }
   std::vector<double> v(bytes.size() / sizeof(double));
   std::memcpy(v.data(), bytes.data(), v.size() * sizeof(double));
@@ -247,6 +305,9 @@ ident::FrequencyResponse ReadH5(const std::string& path, bool isolated) {
   r.S_uy.assign(n, 0.0);
   return r;
 }
+
+// HDF5 or .mat (v5 or v7.3): read through the plugin's table.
+bool IsPackedFormat(const std::string& path) { return DetectLogFormat(path) != LogFormat::kCsv; }
 
 }  // namespace
 
@@ -332,13 +393,14 @@ void WriteFrequencyResponse(const std::string& path, const ident::FrequencyRespo
 
 bool IsFrequencyResponseFile(const std::string& path) {
   CheckInputFile(path, "input file");
-  if (DetectLogFormat(path) == LogFormat::kHdf5) {
+  if (IsPackedFormat(path)) {
     bool frf = false;
     const internal::Hdf5Api& h5 = internal::Hdf5();
+    const auto has = IsMatFile(path) ? h5.has_frf_mat_variables : h5.has_frf_group;
     RunIsolated(
         path,
         [&](const FrameSender& send) {
-          const char yes = h5.has_frf_group(path) ? 1 : 0;
+          const char yes = has(path) ? 1 : 0;
           send(&yes, 1);
         },
         [&](std::string_view frame) { frf = frame == std::string_view("\1", 1); });
@@ -347,20 +409,29 @@ bool IsFrequencyResponseFile(const std::string& path) {
   std::ifstream in(path);
   std::string line;
   if (!std::getline(in, line)) return false;
+  // zwidth estimate's header, or one from elsewhere that starts f,...H_re.
+  std::vector<std::string_view> fields;
+  internal::SplitFields(line, ',', &fields);
+  if (fields.empty() || CanonicalColumn(std::string(fields[0])) != "f_hz") return false;
+  for (std::string_view f : fields) if (CanonicalColumn(std::string(f)) == "H_re") return true;
   return line.rfind("f_hz", 0) == 0 || line.rfind("\"f_hz\"", 0) == 0;
 }
 
 ident::FrequencyResponse ReadFrequencyResponse(const std::string& path, double rate) {
+  return ReadFrequencyResponse(path, rate, nullptr);
+}
+
+ident::FrequencyResponse ReadFrequencyResponse(const std::string& path, double rate, std::string* note) {
   CheckInputFile(path, "frequency-response file");
-  ident::FrequencyResponse r = DetectLogFormat(path) == LogFormat::kHdf5 ? ReadH5(path, true) : ReadCsv(path);
-  Finish(r, path, rate);
+  ident::FrequencyResponse r = IsPackedFormat(path) ? ReadPacked(path, true) : ReadCsv(path);
+  Finish(r, path, rate, note);
   return r;
 }
 
 namespace internal {
 ident::FrequencyResponse ReadFrequencyResponseInProcess(const std::string& path, double rate) {
-  ident::FrequencyResponse r = DetectLogFormat(path) == LogFormat::kHdf5 ? ReadH5(path, false) : ReadCsv(path);
-  Finish(r, path, rate);
+  ident::FrequencyResponse r = IsPackedFormat(path) ? ReadPacked(path, false) : ReadCsv(path);
+  Finish(r, path, rate, nullptr);
   return r;
 }
 }  // namespace internal

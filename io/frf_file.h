@@ -17,10 +17,19 @@ void WriteFrequencyResponse(const std::string& path, const ident::FrequencyRespo
 // under /frf), with the sample rate from the file or sample_rate_hz > 0 (which
 // wins). Missing coherence/H_std default to 1 and |H| * 1e-3 (equal relative
 // weights). HDF5 is parsed in a child process (io/isolated.h).
+// Also a response made elsewhere: a CSV whose header names f (or f_hz), H_re,
+// H_im and optionally coherence (coh), H_std (std), num_averages (n_avg),
+// sample_rate_hz (fs); a .mat file (v5/v7 or v7.3) with f and H (complex) and
+// the same optional variables (io/frf_mat.cc). Without H_std, the std is
+// derived from the coherence and the number of averages (Bendat & Piersol:
+// |H| sqrt((1 - coh) / (2 n coh)), ident::CoherenceStd), an InputError when
+// the averages are not given; `note` (may be null) then says so.
 ident::FrequencyResponse ReadFrequencyResponse(const std::string& path, double sample_rate_hz = 0.0);
+ident::FrequencyResponse ReadFrequencyResponse(const std::string& path, double sample_rate_hz, std::string* note);
 
-// True for a frequency-response file: a CSV whose header starts with f_hz, or
-// an HDF5 file with a /frf group.
+// True for a frequency-response file: a CSV whose header starts with f_hz (or
+// f and names H_re), an HDF5 file with a /frf group, or a .mat file with f
+// and H (or H_re) variables.
 bool IsFrequencyResponseFile(const std::string& path);
 
 // Throws InputError naming `source`, the first bin and the value when any

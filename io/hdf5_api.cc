@@ -20,6 +20,9 @@ const Hdf5Api& Hdf5() {
     a.write_model_hdf5 = WriteModelHdf5;
     a.read_frf_hdf5_packed = ReadFrfHdf5Packed;
     a.has_frf_group = HasFrfGroup;
+    a.write_model_mat = WriteModelMat;
+    a.read_frf_mat_packed = ReadFrfMatPacked;
+    a.has_frf_mat_variables = HasFrfMatVariables;
     // Files and what lives in them, not datatypes: the C++ library creates
     // ~125 transient ones (H5::PredType) when it starts, which in the plugin
     // is during the first write.

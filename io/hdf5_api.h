@@ -39,10 +39,18 @@ struct Hdf5Api {
                          const std::vector<double>& y) = nullptr;
   void (*write_frf_hdf5)(const std::string& tmp, const ident::FrequencyResponse& r) = nullptr;
   void (*write_model_hdf5)(const std::string& tmp, const ModelFile& model, double period_s) = nullptr;
+  // The .mat model export (io/export_mat.cc): v5 or v7.3; frf may be null.
+  void (*write_model_mat)(const std::string& tmp, const ModelFile& model, double period_s,
+                          const ident::FrequencyResponse* frf, bool v73) = nullptr;
   // Frequency-response file (io/frf_h5.cc): n, 4 scalars and 7 columns packed
   // as doubles; whether the file has a /frf group (false if unreadable).
   std::string (*read_frf_hdf5_packed)(const std::string& path) = nullptr;
   bool (*has_frf_group)(const std::string& path) = nullptr;
+  // A response in a .mat file (io/frf_mat.cc), packed as read_frf_hdf5_packed
+  // with NaN for an absent coherence or H_std column; whether a .mat file
+  // holds f and H (or H_re) variables.
+  std::string (*read_frf_mat_packed)(const std::string& path) = nullptr;
+  bool (*has_frf_mat_variables)(const std::string& path) = nullptr;
   // HDF5 files, datasets, groups and attributes open now (H5Fget_obj_count).
   long (*open_objects)() = nullptr;
 };
@@ -66,6 +74,10 @@ void WriteFrfHdf5(const std::string& tmp, const ident::FrequencyResponse& r);   
 std::string ReadFrfHdf5Packed(const std::string& path);                                          // frf_h5.cc
 bool HasFrfGroup(const std::string& path);                                                       // frf_h5.cc
 void WriteModelHdf5(const std::string& tmp, const ModelFile& model, double period_s);            // export_h5.cc
+void WriteModelMat(const std::string& tmp, const ModelFile& model, double period_s,
+                   const ident::FrequencyResponse* frf, bool v73);                               // export_mat.cc
+std::string ReadFrfMatPacked(const std::string& path);                                           // frf_mat.cc
+bool HasFrfMatVariables(const std::string& path);                                                // frf_mat.cc
 
 // HDF5 objects open now, without loading anything: 0 while libhdf5 is not
 // loaded (then nothing can be open).

@@ -280,6 +280,65 @@ LogInfo StreamMat73AsHdf5(const std::string& path, const LogSelect& sel, const L
   }
 }
 
+// The text of a char variable (a row, or row `row` of a char matrix), trailing blanks dropped.
+std::string MatText(const matvar_t* v, size_t row = 0) {
+  if (v->class_type != MAT_C_CHAR || v->rank != 2 || !v->data) return "";
+  const size_t rows = v->dims[0], cols = v->dims[1];
+  std::string out;
+  for (size_t c = 0; c < cols && row < rows; ++c) {
+    const size_t at = c * rows + row;
+    const unsigned ch = v->data_type == MAT_T_UINT16 || v->data_type == MAT_T_UTF16
+                            ? static_cast<const uint16_t*>(v->data)[at]
+                            : static_cast<const uint8_t*>(v->data)[at];
+    out += ch < 0x80 ? static_cast<char>(ch) : '?';
+  }
+  while (!out.empty() && (out.back() == ' ' || out.back() == '\0')) out.pop_back();
+  return out;
+}
+
+// A log saved as one matrix with named columns (issue 26): `data` (N x k,
+// double) and `columns` (a cell array of k names, or a k-row char matrix), as
+// Octave's save('-v7', 'log.mat', 'data', 'columns') of data = [t u y],
+// columns = {'t', 'torque', 'position'}; LogSelect's input/output/time_column
+// name the columns. False when the file holds no such pair.
+bool ReadMatColumns(mat_t* mat, const std::string& path, const LogSelect& sel, std::vector<double>* u,
+                    std::vector<double>* y, std::vector<double>* t, bool* have_time) {
+  std::unique_ptr<matvar_t, VarFree> data(Mat_VarRead(mat, "data")), names(Mat_VarRead(mat, "columns"));
+  if (!data || !names) return false;
+  if (data->class_type != MAT_C_DOUBLE || data->rank != 2 || data->isComplex || !data->data) {
+    throw InputError(path + ": variable 'data' must be a real double matrix, one column per signal");
+  }
+  const size_t n = data->dims[0], k = data->dims[1];
+  std::vector<std::string> list;
+  for (size_t j = 0; j < k; ++j) {
+    if (names->class_type == MAT_C_CELL) {
+      const matvar_t* c = Mat_VarGetCell(names.get(), static_cast<int>(j));
+      list.push_back(c ? MatText(c) : "");
+    } else {
+      list.push_back(MatText(names.get(), j));
+    }
+  }
+  std::string all;
+  for (const std::string& l : list) all += (all.empty() ? "" : ", ") + l.substr(0, 24);
+  const double* d = static_cast<const double*>(data->data);
+  auto column = [&](const std::string& name, const char* flag, std::vector<double>* out, bool required) {
+    for (size_t j = 0; j < k; ++j) {
+      if (list[j] != name) continue;
+      out->assign(d + j * n, d + (j + 1) * n);
+      return true;
+    }
+    if (required) {
+      throw InputError(path + ": 'data' has no column '" + name.substr(0, 40) + "' (columns: " + all +
+                       "); choose one with " + flag);
+    }
+    return false;
+  };
+  column(sel.input_column, "LogSelect::input_column", u, true);
+  column(sel.output_column, "LogSelect::output_column", y, true);
+  *have_time = sel.time_column != "none" && column(sel.time_column, "LogSelect::time_column", t, sel.sample_rate_hz <= 0.0);
+  return true;
+}
+
 }  // namespace
 
 LogInfo StreamMatInProcess(const std::string& path, const LogSelect& sel, const LogSink& sink) {
@@ -304,11 +363,15 @@ LogInfo StreamMatInProcess(const std::string& path, const LogSelect& sel, const 
                        " file (variables: " + MatVariables(mat.get()) + "); choose one with " + flag);
     }
   };
-  need(sel.input_column, "LogSelect::input_column", &u);
-  need(sel.output_column, "LogSelect::output_column", &y);
   const bool rate_given = sel.sample_rate_hz > 0.0;
   bool have_time = false;
-  if (sel.time_column != "none") {
+  const bool matrix = !std::unique_ptr<matvar_t, VarFree>(Mat_VarReadInfo(mat.get(), sel.input_column.c_str())) &&
+                      ReadMatColumns(mat.get(), path, sel, &u, &y, &t, &have_time);
+  if (!matrix) {
+    need(sel.input_column, "LogSelect::input_column", &u);
+    need(sel.output_column, "LogSelect::output_column", &y);
+  }
+  if (!matrix && sel.time_column != "none") {
     have_time = ReadMatVector(mat.get(), path, sel.time_column, "LogSelect::time_column", &t);
     if (!have_time && !rate_given) {
       throw InputError(path + ": no time variable '" + sel.time_column.substr(0, 40) + "' (variables: " +
@@ -345,5 +408,10 @@ LogInfo StreamMatInProcess(const std::string& path, const LogSelect& sel, const 
   }
   return info;
 }
+
+// The v5 size checks and the variable list above, for the response reader
+// (io/frf_mat.cc).
+void CheckMatV5Variables(const std::string& path, mat_t* mat) { CheckMatV5File(path, mat); }
+std::string MatVariableNames(mat_t* mat) { return MatVariables(mat); }
 
 }  // namespace zwidth::io::internal

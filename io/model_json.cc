@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "io/atomic_file.h"
+#include "io/provenance.h"
 #include "model/error.h"
 #include "stability/uncertainty.h"
 
@@ -293,8 +294,19 @@ ModelFile ParseModelJson(const std::string& text, const std::string& source) {
   CheckDuplicateKeys(text, source);  // valid JSON: nlohmann kept the last of a repeated key
   if (!j.is_object()) Fail(source, "top level must be a JSON object");
   CheckKeys(j, {"m", "b", "modes", "delay_samples", "sample_period_s", "name", "std", "fit", "covariance",
-                "friction"},
+                "friction", "format_version", "provenance"},
             source, "");
+  if (auto it = j.find("format_version"); it != j.end()) {
+    if (!it->is_number_integer() || it->get<std::int64_t>() < 1) {
+      Fail(source, "key 'format_version' must be a whole number >= 1, got " + it->dump());
+    }
+    if (it->get<std::int64_t>() > kModelFormatVersion) {
+      Fail(source, "format_version " + it->dump() + " is newer than this zwidth reads (" +
+                       std::to_string(kModelFormatVersion) + "): upgrade zwidth, or re-export the model with the "
+                       "zwidth that wrote it");
+    }
+  }
+  if (auto it = j.find("provenance"); it != j.end() && !it->is_object()) Fail(source, "'provenance' must be an object");
   ModelFile mf;
   mf.plant = ParsePlant(j, source, "", false);
   if (auto it = j.find("delay_samples"); it != j.end()) {
@@ -413,6 +425,7 @@ double ResolveModelPeriod(std::optional<double> period_s, ModelFile* mf, std::st
 
 json ModelToJson(const ModelFile& mf) {
   json j;
+  j["format_version"] = kModelFormatVersion;
   if (!mf.plant.name.empty()) j["name"] = mf.plant.name;
   json p = PlantToJson(mf.plant);
   j["m"] = p["m"];
@@ -449,7 +462,9 @@ void WriteModelJson(const std::string& path, const ModelFile& mf) {
   }
   if (mf.friction) finite = finite && mf.friction->IsValid(nullptr);
   if (!finite) throw ComputationError("the model has a non-finite parameter; '" + path + "' was not written");
-  WriteTextAtomically(path, ModelToJson(mf).dump(2) + "\n");
+  json j = ModelToJson(mf);
+  j["provenance"] = ProvenanceJson();
+  WriteTextAtomically(path, j.dump(2) + "\n");
 }
 
 }  // namespace zwidth::io

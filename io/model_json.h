@@ -12,8 +12,13 @@
 //                 "breakaway_pos": 0, "breakaway_neg": 0},   // optional (model/friction.h);
 //      its std in "std.friction" (same keys, null = unknown), and the friction's
 //      parameters are not in "covariance" (which stays the linear part's)
-//    "fit": {...}}                                    // fit metrics, free form
-// Any other key is an error, so that a typo cannot pass silently.
+//    "fit": {...},                                    // fit metrics, free form
+//    "format_version": 1,                             // kModelFormatVersion
+//    "provenance": {...}}                             // io/provenance.h (files only)
+// Any other key is an error, so that a typo cannot pass silently. The schema:
+// docs/schema/model.schema.json. A file without "format_version" (written
+// before it existed) is read as version 1, whose keys it has; a larger
+// version is refused (written by a newer zwidth).
 #pragma once
 
 #include <optional>
@@ -40,6 +45,9 @@ struct ModelFile {
   std::vector<double> log_covariance;
   nlohmann::json fit;  // null when absent
 };
+
+// The version of the model file's format that this zwidth writes and reads.
+inline constexpr int kModelFormatVersion = 1;
 
 // Limits of a model file, refused with an InputError naming the key:
 inline constexpr size_t kMaxModes = 64;            // entries of "modes"
@@ -102,6 +110,7 @@ std::string ConvertDelayToPeriod(ModelFile* model, double T, const std::string& 
 // (io/option_names.h: --period, period_s).
 double ResolveModelPeriod(std::optional<double> period_s, ModelFile* model, std::string* note);
 
+// With "format_version"; WriteModelJson adds the "provenance" (io/provenance.h).
 nlohmann::json ModelToJson(const ModelFile& model);
 void WriteModelJson(const std::string& path, const ModelFile& model);
 

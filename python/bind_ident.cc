@@ -6,11 +6,13 @@
 #include <utility>
 
 #include "analysis/logs_estimate.h"
+#include "analysis/validate.h"
 #include "ident/local_models.h"
 #include "io/atomic_file.h"
 #include "io/option_names.h"
 #include "io/frf_file.h"
 #include "io/log.h"
+#include "io/provenance.h"
 #include "model/error.h"
 #include "model/simulate.h"
 #include "python/bind_common.h"
@@ -549,8 +551,57 @@ same samples.)doc");
 
 }  // namespace
 
+// zwidth.validate: a model on a log it was not fitted to (analysis/validate.h),
+// as `zwidth validate MODEL LOG -o` reports it.
+void BindValidate(py::module_& m) {
+  const analysis::ValidateOptions d;
+  m.def("validate",
+        [](const io::ModelFile& model, const py::object& log, int max_lag, double relative_std_floor) {
+          analysis::ValidateOptions o;
+          o.max_lag = max_lag;
+          o.relative_std_floor = relative_std_floor;
+          io::Log l;
+          if (py::isinstance<py::str>(log)) {
+            const std::string path = log.cast<std::string>();
+            io::ForgetNotedInputs();  // each call is its own command (the provenance's inputs)
+            py::gil_scoped_release release;
+            ScopedCLocale c;
+            l = io::ReadLog(path, io::LogSelect{});
+          } else {
+            const PyLog& p = log.cast<const PyLog&>();
+            CheckLog(p);
+            l.info.source = p.source;
+            l.info.sample_rate_hz = p.sample_rate_hz;
+            l.info.num_samples = p.u.size();
+            l.input = p.u;
+            l.output = p.y;
+          }
+          io::SetInvocation("zwidth.validate(" + (model.plant.name.empty() ? std::string("model") : model.plant.name) +
+                            ", " + (l.info.source.empty() ? std::string("log") : l.info.source) + ")");
+          nlohmann::ordered_json j;
+          {
+            py::gil_scoped_release release;
+            j = analysis::ValidationToJson(analysis::Validate(model, l, o));
+          }
+          j["provenance"] = nlohmann::ordered_json::parse(io::ProvenanceJson().dump());
+          return JsonToPython(nlohmann::json::parse(j.dump()));
+        },
+        py::arg("model"), py::arg("log"), py::arg("max_lag") = d.max_lag,
+        py::arg("relative_std_floor") = d.relative_std_floor,
+        R"doc(Checks a model on a log it was not fitted to, as `zwidth validate MODEL
+LOG -o` does (MATLAB's compare and resid): log is a Log or a log file's path
+(read with the default selectors; use read_log for others). Returns the dict
+`zwidth validate -o` writes: quality 'good'/'poor' with quality_reasons and
+reasons, fit_percent (the simulated output's NRMSE fit %), chi2_per_dof of the
+fresh response against the model in units of its per-bin std with chi2_limit,
+the residual's autocorrelation and cross-correlation with the input against
+correlation_bound (99 %), warnings, and the provenance. Raises InputError for
+a log of another rate than the model's or one too short.)doc");
+}
+
 void BindIdent(py::module_& m) {
   BindLog(m);
+  BindValidate(m);
   BindReadLog(m);
   BindFrequencyResponse(m);
   BindEstimate(m);

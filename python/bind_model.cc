@@ -6,6 +6,8 @@
 #include <pybind11/eigen.h>
 
 #include "io/export.h"
+#include "io/printable.h"
+#include "io/provenance.h"
 #include "io/reference_models.h"
 #include "model/error.h"
 #include "model/state_space.h"
@@ -146,6 +148,7 @@ void DefModelConstructionAndFiles(py::class_<io::ModelFile>& cls) {
              CheckedJson(mf);
              ScopedCLocale c;
              io::ForgetNotedInputs();  // each call is its own command: a model loaded earlier may be replaced
+             io::SetInvocation("zwidth.Model.save(" + nlohmann::json(io::Utf8ForJson(path)).dump() + ")");  // provenance
              io::WriteModelJson(path, mf);
            },
            py::arg("path"), "Writes the model JSON (atomically; the CLI reads it back).")
@@ -155,13 +158,15 @@ void DefModelConstructionAndFiles(py::class_<io::ModelFile>& cls) {
                         std::optional<double> period_s) {
              io::ExportFormat f;
              if (!io::FromString(format, &f)) {
-               throw InputError("format '" + format + "' is not one of json, hdf5, matlab, python, statespace");
+               throw InputError("format '" + format + "' is not one of json, hdf5, matlab, python, statespace, mat, mat73");
              }
              CheckedJson(mf);
              ScopedCLocale c;
              io::ForgetNotedInputs();
              io::ModelFile used = mf;  // as `zwidth export --period`: the delay converted
              const double T = period_s ? ResolvePeriod(period_s, &used) : 0.0;
+             io::SetInvocation("zwidth.Model.export(" + nlohmann::json(io::Utf8ForJson(path)).dump() + ", " +
+                               nlohmann::json(format).dump() + ")");  // provenance
              io::ExportModel(used, f, T, path);
            },
            py::arg("path"), py::arg("format"), py::arg("period_s") = py::none(),

@@ -21,7 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include "analysis/compare.h"
-#include "build_info.h"
+#include "io/provenance.h"
 #include "report/report_internal.h"
 
 namespace zwidth::report {
@@ -338,20 +338,22 @@ void NoFiguresNote(const analysis::RunAnalysis& a, bool have_figures, std::ostri
   }
 }
 
-std::string UtcNow() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char b[32];
-  std::strftime(b, sizeof b, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return b;
-}
-
+// The provenance every JSON file carries (io/provenance.h), with the inputs' SHA-256.
 void ProvenanceSection(const analysis::RunAnalysis& a, const std::string& command_line, std::ostringstream& h) {
-  h << "<h2>Provenance</h2>\n<p class='provenance'>zwidth " << Html(build_info::kVersion) << ", report written "
-    << UtcNow() << (command_line.empty() ? "" : "; command: <code>" + Html(command_line) + "</code>") << "; logs:";
+  const nlohmann::json p = io::ProvenanceJson();
+  const std::string command = command_line.empty() ? p["command"].get<std::string>() : command_line;
+  h << "<h2>Provenance</h2>\n<p class='provenance'>zwidth " << Html(p["zwidth_version"].get<std::string>())
+    << ", report written " << Html(p["utc_date"].get<std::string>())
+    << (command.empty() ? "" : "; command: <code>" + Html(command) + "</code>") << "; logs:";
   for (const auto& l : a.input.logs) h << " <code>" << Html(l) << "</code>";
   h << ".</p>\n";
+  if (!p["inputs"].empty()) {
+    h << "<p class='provenance'>inputs (SHA-256):";
+    for (const auto& in : p["inputs"]) {
+      h << " <code>" << Html(in["path"].get<std::string>()) << "</code> " << Html(in["sha256"].get<std::string>()) << ";";
+    }
+    h << "</p>\n";
+  }
 }
 
 }  // namespace

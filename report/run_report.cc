@@ -11,6 +11,7 @@
 #include "analysis/laps.h"
 #include "io/frf_file.h"
 #include "io/printable.h"
+#include "io/provenance.h"
 #include "io/stability_files.h"
 #include "model/c_locale.h"
 #include "report/report_internal.h"
@@ -49,6 +50,7 @@ std::string SummaryJson(const analysis::RunAnalysis& a) {
   nlohmann::ordered_json top = {{"fit_quality", fit::ToString(in.fit.quality)},
                                 {"fit_quality_reasons", nlohmann::ordered_json::parse(in.model.fit.value("quality_reasons", nlohmann::json::array()).dump())}};
   for (const auto& [k, v] : summary.items()) top[k] = nlohmann::ordered_json::parse(v.dump());
+  top["provenance"] = nlohmann::ordered_json::parse(io::ProvenanceJson().dump());
   return top.dump(2) + "\n";
 }
 

@@ -28,7 +28,7 @@ from . import _signatures
 
 __all__ = ["__version__", "InputError", "ComputationError", "FitQualityWarning", "Model", "Log",
            "FrequencyResponse", "FitResult", "CriticalPoint", "ZWidth", "RelayResult", "read_log",
-           "estimate", "estimate_logs", "simulate", "fit", "relay", "check", "build_info", "set_num_threads",
+           "estimate", "estimate_logs", "simulate", "fit", "relay", "check", "validate", "build_info", "set_num_threads",
            "num_threads", "from_frd", "to_frd"]
 
 
@@ -57,6 +57,7 @@ estimate_logs = _signatures.wrap(_zwidth.estimate_logs)
 simulate = _signatures.wrap(_zwidth.simulate)
 relay = _signatures.wrap(_zwidth.relay)
 check = _signatures.wrap(_zwidth.check)
+validate = _signatures.wrap(_zwidth.validate)
 set_num_threads = _signatures.wrap(_zwidth.set_num_threads)
 num_threads = _signatures.wrap(_zwidth.num_threads)
 
