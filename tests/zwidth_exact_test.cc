@@ -5,7 +5,9 @@
 // form; stability/ and model/state_space.cc realise it the other way round),
 // sampled by Eigen's matrix exponential without balancing, closed by
 // tests/brute_force.h's LoopBruteForce (its own loop matrix with y_{k-1} as a
-// state), stable when every eigenvalue has |z| < 1.
+// state), stable when every eigenvalue has |z| < 1. Where its double
+// eigenvalues disagree with the Z-width, the same brute force in long double
+// decides (the referee of tests/brute_force.h's Classify).
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -42,34 +44,41 @@ model::Plant Family(int n, double w0, double ratio, double zeta) {
 // x1' = -c x1 - w x2 + in, x2' = w x1, out = g ((d - c) x1 + (v^2 - w^2)/w x2 + in),
 // g = w^2 / v^2: (sI - A)^-1 e1 = (s, w) / (s^2 + c s + w^2), so out / in =
 // g (s^2 + d s + v^2) / (s^2 + c s + w^2).
-LoopBruteForce IndependentBrute(const model::Plant& p, int delay, double T, const LoopOptions& loop = {}) {
+// R = long double: the referee (tests/brute_force.h), the same realisation
+// and ZOH in 64-bit-mantissa arithmetic.
+template <typename R = double>
+LoopBruteForceT<R> IndependentBrute(const model::Plant& p, int delay, double T_, const LoopOptions& loop = {}) {
+  using Mat = typename LoopBruteForceT<R>::Mat;
+  using Vec = typename LoopBruteForceT<R>::Vec;
+  using Row = typename LoopBruteForceT<R>::Row;
+  const R T = T_, m = p.m, b = p.b;
   const int n = 2 + 2 * static_cast<int>(p.modes.size());
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, n);
-  Eigen::VectorXd Bc = Eigen::VectorXd::Zero(n);
-  A(0, 1) = 1.0;
-  A(1, 1) = -p.b / p.m;
-  Bc(1) = 1.0 / p.m;
-  Eigen::RowVectorXd out = Eigen::RowVectorXd::Zero(n);
-  out(0) = 1.0;
+  Mat A = Mat::Zero(n, n);
+  Vec Bc = Vec::Zero(n);
+  A(0, 1) = R(1);
+  A(1, 1) = -b / m;
+  Bc(1) = R(1) / m;
+  Row out = Row::Zero(n);
+  out(0) = R(1);
   for (size_t k = 0; k < p.modes.size(); ++k) {
-    const model::Mode& md = p.modes[k];
+    const R w = p.modes[k].omega, c = p.modes[k].c, v = p.modes[k].v, d = p.modes[k].d;
     const int i = 2 + 2 * static_cast<int>(k);
-    A(i, i) = -md.c;
-    A(i, i + 1) = -md.omega;
-    A(i + 1, i) = md.omega;
+    A(i, i) = -c;
+    A(i, i + 1) = -w;
+    A(i + 1, i) = w;
     A.row(i) += out;
-    const double g = md.omega * md.omega / (md.v * md.v);
-    Eigen::RowVectorXd next = g * out;
-    next(i) += g * (md.d - md.c);
-    next(i + 1) += g * (md.v * md.v - md.omega * md.omega) / md.omega;
+    const R g = w * w / (v * v);
+    Row next = g * out;
+    next(i) += g * (d - c);
+    next(i + 1) += g * (v * v - w * w) / w;
     out = next;
   }
-  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n + 1, n + 1);
+  Mat M = Mat::Zero(n + 1, n + 1);
   M.topLeftCorner(n, n) = A * T;
   M.topRightCorner(n, 1) = Bc * T;
-  const Eigen::MatrixXd E = M.exp();
-  return LoopBruteForce(E.topLeftCorner(n, n), E.topRightCorner(n, 1), out, loop.filter_b, loop.filter_a,
-                        delay + p.delay_samples, T);
+  const Mat E = M.exp();
+  return LoopBruteForceT<R>(E.topLeftCorner(n, n), E.topRightCorner(n, 1), out, loop.filter_b, loop.filter_a,
+                            delay + p.delay_samples, T_);
 }
 
 // Smallest K > 0 at which the brute force has a root on the circle: the
@@ -199,7 +208,11 @@ TEST_P(ZWidthFamilies, IntervalsAgreeWithIndependentEigenvaluesOnAGrid) {
   std::printf("%s: %s test, pole shift %.3g, boundary error %.3g\n", c.name.c_str(),
               z.uses_polynomial_test() ? "Schur-Cohn" : "eigenvalue", z.sampled_plant().denominator_pole_shift(),
               z.polynomial_error());
-  const Tally t = Classify(z, [&](double K, double B) { return bf.MaxRoot(K, B); }, p, T, c.delay, g);
+  const LoopBruteForceT<long double> referee = IndependentBrute<long double>(p, c.delay, T, loop);
+  const Tally t = Classify(z, [&](double K, double B) { return bf.MaxRoot(K, B); }, p, T, c.delay, g,
+                           [&](double K, double B) { return referee.MaxRoot(K, B); });
+  std::printf("%s: %ld points, %ld stable, %ld near a boundary, %ld decided by the long double referee\n",
+              c.name.c_str(), t.points, t.stable, t.near_boundary, t.refereed);
   EXPECT_EQ(t.disagree, 0);
   EXPECT_GT(t.stable, 0) << "the grid must reach the stable region";
   EXPECT_LT(t.stable, t.points) << "and the unstable one";
@@ -218,15 +231,16 @@ INSTANTIATE_TEST_SUITE_P(
                       FamilyCase{"sixteen_sections_4pct_zeta001_d20_filter", 16, 300, 1.04, 0.01, 20, true}),
     [](const ::testing::TestParamInfo<FamilyCase>& i) { return i.param.name; });
 #else
-// 32 and 64 sections: minutes each (the eigenvalue test is O(n^3) per
-// region), so in the stress label (zwidth_exact_stress_test).
+// 32 and 64 sections: the eigenvalue test is O(n^3), so in the stress label
+// (zwidth_exact_stress_test). Measured under load 15 on 2 cores: 6.6 s and
+// 39 s (was 10.5 s with one false point, and 361 s). Open (issue 31): 64
+// sections 1 % apart at damping 1e-4 (d = 0) does not finish in 10.8 CPU
+// minutes, 99 % of it in the crossings' Hessenberg solves
+// (model::DiscreteResponse::AtZ), so it is not in the suite yet.
 INSTANTIATE_TEST_SUITE_P(
     ManyModes, ZWidthFamilies,
-    // Open (issue 31): 32 sections 1 % apart at damping 1e-3, d = 3 disagree with the
-    // brute force at one point (B = 1.9e-12, K = 2.3e-9, its largest root 1 - 4e-10),
-    // and 64 sections 1 % apart at damping 1e-4 take over 600 s: not in the suite
-    // until they pass.
-    ::testing::Values(FamilyCase{"sixtyfour_sections_8pct_zeta0025_d2", 64, 300, 1.08, 0.025, 2, false}),
+    ::testing::Values(FamilyCase{"thirtytwo_sections_1pct_zeta1e3_d3", 32, 500, 1.01, 1e-3, 3, false},
+                      FamilyCase{"sixtyfour_sections_8pct_zeta0025_d2", 64, 300, 1.08, 0.025, 2, false}),
     [](const ::testing::TestParamInfo<FamilyCase>& i) { return i.param.name; });
 #endif
 
