@@ -294,9 +294,9 @@ bool BandOptions::IsValid(std::string* why) const {
   }
   if (!(min_coherence >= 0.0 && min_coherence < 1.0)) return bad("BandOptions::min_coherence must be in [0, 1)");
   if (!(noise_coherence_sigmas >= 0.0 && std::isfinite(noise_coherence_sigmas))) {
-    return bad("BandOptions::noise_coherence_sigmas must be finite and >= 0");
+    return bad("the band's noise_coherence_sigmas must be finite and >= 0");
   }
-  if (!(well_excited_ratio >= 0.0 && well_excited_ratio <= 1.0)) return bad("BandOptions::well_excited_ratio must be in [0, 1]");
+  if (!(well_excited_ratio >= 0.0 && well_excited_ratio <= 1.0)) return bad("the band's well_excited_ratio must be in [0, 1]");
   return true;
 }
 
