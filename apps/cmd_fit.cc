@@ -48,10 +48,11 @@ void AddFitCommands(CLI::App& app) {
         }
       }
     }
-    const std::optional<FrictionInput> fin = FrictionInputFor(f->inputs, frf_file, f->est, friction_model);
+    std::optional<FrictionInput> fin = FrictionInputFor(f->inputs, frf_file, f->est, friction_model);
     const ident::FrequencyResponse frf = frf_file
         ? io::ReadFrequencyResponse(f->inputs[0], f->est.select.sample_rate_hz)
         : EstimateFromLogs(f->inputs, f->est, true).response.frf;
+    if (fin && fin->options.welch.window_length == 0) fin->options.welch.window_length = frf.window_length;
     fit::FitResult r;
     fit::FrictionFitResult ff;
     const io::ModelFile mf = FitToModelFile(frf, f->fit.o, source, &r, fin ? &*fin : nullptr, &ff);

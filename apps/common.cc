@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <memory>
 #include <sstream>
 
 #include "io/frf_file.h"
@@ -40,7 +41,9 @@ ident::WelchOptions EstimateFlags::Resolve() const {
     throw InputError("--estimator '" + estimator + "' is not one of h1, h2, lpm, lrm");
   }
   std::string why;
-  if (!o.IsValid(&why)) throw InputError(why);
+  ident::WelchOptions check = o;
+  if (check.window_length == 0) check.window_length = ident::WelchOptions{}.window_length;  // resolved per log
+  if (!check.IsValid(&why)) throw InputError(why);
   return o;
 }
 
@@ -76,7 +79,9 @@ void AddLogFlags(CLI::App* cmd, io::LogSelect* s) {
 void AddEstimateFlags(CLI::App* cmd, EstimateFlags* f) {
   AddLogFlags(cmd, &f->select);
   cmd->add_option("--window", f->window, "hann | hamming | rect (periodic)")->capture_default_str();
-  cmd->add_option("--window-length", f->welch.window_length, "samples per Welch segment")->capture_default_str();
+  cmd->add_option("--window-length", f->welch.window_length,
+                  "samples per Welch segment (default: the power of two nearest 4.096 s at the log's rate, halved until "
+                  "the log holds 3 segments: 4096 at 1 kHz, 16384 at 5 kHz)");
   cmd->add_option("--overlap", f->welch.overlap, "segment overlap fraction in [0, 1)")->capture_default_str();
   cmd->add_option("--detrend", f->detrend,
                   "none | mean | linear, per segment (default linear; mean with --whole-record, where linear biases "
@@ -144,7 +149,7 @@ namespace {
 
 // --whole-record, --period-samples and --window-length that do not go together.
 void CheckRecordFlags(const EstimateFlags& flags) {
-  if (flags.whole_record && flags.welch.window_length != ident::WelchOptions{}.window_length) {
+  if (flags.whole_record && flags.welch.window_length != 0) {
     throw InputError("--whole-record takes each log (or --period-samples) as one segment: drop --window-length");
   }
   if (flags.period_samples != 0 && (!flags.whole_record || flags.period_samples < 16)) {
@@ -176,19 +181,48 @@ io::LogSelect ExcitationSelect(const std::string& path, const EstimateFlags& fla
 }
 
 // Open loop in Welch segments: one streaming pass, memory for a few windows.
-ident::RunSpectra StreamedRun(const std::string& path, const EstimateFlags& flags, const ident::WelchOptions& options,
+// The default window (window_length 0) needs the log's rate and length, known
+// at its end: the first kAutoWindowBuffer samples are held until then; a longer
+// log is estimated with the window of its rate at 1 kHz (4096) as it streams,
+// and read a second time when its rate asks for another one.
+ident::RunSpectra StreamedRun(const std::string& path, const EstimateFlags& flags, ident::WelchOptions o,
                               io::LogInfo* info, std::uint64_t* fingerprint) {
-  ident::WelchEstimator est(options);
+  constexpr size_t kAutoWindowBuffer = size_t{1} << 17;  // 2 MiB of samples
+  const bool auto_window = o.window_length == 0;
+  std::vector<double> held_u, held_y;
+  if (auto_window) held_u.reserve(kAutoWindowBuffer), held_y.reserve(kAutoWindowBuffer);
+  std::unique_ptr<ident::WelchEstimator> est;
+  if (!auto_window) est = std::make_unique<ident::WelchEstimator>(o);
   io::LogFingerprint fp;
   *info = io::StreamLog(path, flags.select, [&](const double* u, const double* y, size_t n) {
-    est.Push(u, y, n);
     fp.Add(u, y, n);
+    if (!est && held_u.size() + n <= kAutoWindowBuffer) {
+      held_u.insert(held_u.end(), u, u + n);
+      held_y.insert(held_y.end(), y, y + n);
+      return;
+    }
+    if (!est) {  // longer than the buffer: the window of a long log at 1 kHz, checked at the end
+      o.window_length = ident::DefaultWindowLength(1000.0, kAutoWindowBuffer);
+      est = std::make_unique<ident::WelchEstimator>(o);
+      est->Push(held_u.data(), held_y.data(), held_u.size());
+      held_u = {}, held_y = {};
+    }
+    est->Push(u, y, n);
   });
   *fingerprint = fp.value();
   PrintRead(*info);
-  WarnDropped(path, info->num_samples, options);
+  if (auto_window) {
+    const int want = ident::DefaultWindowLength(info->sample_rate_hz, info->num_samples);
+    if (!est || want != o.window_length) {
+      o.window_length = want;
+      est = std::make_unique<ident::WelchEstimator>(o);
+      if (!held_u.empty()) est->Push(held_u.data(), held_y.data(), held_u.size());
+      else io::StreamLog(path, flags.select, [&](const double* u, const double* y, size_t n) { est->Push(u, y, n); });
+    }
+  }
+  WarnDropped(path, info->num_samples, o);
   ident::RunSpectra spectra;
-  spectra.uy = est.Finish(info->sample_rate_hz);
+  spectra.uy = est->Finish(info->sample_rate_hz);
   return spectra;
 }
 
@@ -237,6 +271,7 @@ std::vector<ident::RunSpectra> InMemoryRuns(const std::string& path, const Estim
   if (flags.whole_record && flags.period_samples > 0) {
     return PeriodRuns(path, log, r, static_cast<size_t>(flags.period_samples), o);
   }
+  if (o.window_length == 0) o.window_length = ident::DefaultWindowLength(info->sample_rate_hz, info->num_samples);
   if (flags.whole_record) {
     if (log.input.size() > (1u << 24)) throw InputError("a whole record is limited to 2^24 samples");
     o.window_length = static_cast<int>(log.input.size());
@@ -299,7 +334,7 @@ namespace {
 // --estimator lpm|lrm: every log read whole (with its excitation in closed
 // loop), one local estimate over all of them.
 LogsEstimate EstimateLocalFromLogs(const std::vector<std::string>& paths, const EstimateFlags& flags, bool closed) {
-  if (flags.whole_record || flags.period_samples != 0 || flags.welch.window_length != ident::WelchOptions{}.window_length ||
+  if (flags.whole_record || flags.period_samples != 0 || flags.welch.window_length != 0 ||
       flags.welch.overlap != ident::WelchOptions{}.overlap) {
     throw InputError("--estimator " + flags.estimator + " fits a local model on each whole log: drop --whole-record, "
                      "--period-samples, --window-length and --overlap (Welch options)");
@@ -366,6 +401,8 @@ LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const Estim
     for (ident::RunSpectra& run : LogRuns(path, flags, closed, options, &info, &fingerprint)) {
       runs.push_back(std::move(run));
     }
+    // The default window, resolved on the first log, is every run's (runs combine alike).
+    if (options.window_length == 0 && !runs.empty()) options.window_length = runs.front().uy.window_length;
     RefuseRepeatedLog(paths, seen, fingerprint, path);
     seen.push_back(fingerprint);
     out.total_samples += info.num_samples;
