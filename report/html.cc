@@ -140,7 +140,7 @@ std::string PlusMinus(double v, double sd) {
 void ZWidthTable(const analysis::RunAnalysis& a, std::ostringstream& h) {
   const analysis::PlantStability& st = a.stability;
   const Units u = UnitsOf(a);
-  h << "<table class='zw' id='zwidth-table'><tr><th>delay: loop + model = total</th><th>K_CR(B = 0) [" << u.K
+  h << "<table class='zw' id='zwidth-table'><tr><th>loop delay + model delay = total [samples]</th><th>K_CR(B = 0) [" << u.K
     << "]</th><th>B_t [" << u.B << "]</th><th>K_CR^max [" << u.K << "]</th><th>B_max_from_zero [" << u.B
     << "]</th><th>B_max [" << u.B << "]</th></tr>\n";
   for (size_t i = 0; i < st.summaries.size(); ++i) {
