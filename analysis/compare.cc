@@ -144,6 +144,8 @@ ModelComparison CompareModels(const io::ModelFile& model, const io::ModelFile& r
   }
   CompareFriction(model, ref, linear, os, j);
   j["stability"] = nlohmann::json::array();
+  os << "\ndelay: the loop's; each model adds its own input delay (model " << model.plant.delay_samples
+     << ", reference " << ref.plant.delay_samples << " samples)";
   std::snprintf(line, sizeof line, "\n%-6s %-10s %12s %10s %12s %10s\n", "delay", "model", "K_cr(B=0)", "B_t",
                 "K_cr^max", "B_max");
   os << line;
@@ -157,7 +159,10 @@ ModelComparison CompareModels(const io::ModelFile& model, const io::ModelFile& r
       const stability::DelaySummary& s = which == 0 ? ms.summaries[i] : ref_sums[i];
       both[which] = s;
       e[which == 0 ? "model" : "reference"] = io::SummaryToJson(s, which == 0 && ms.has_std ? &sd : nullptr);
-      std::snprintf(line, sizeof line, "%-6d %-10s %12.5g %10.5g %12.5g %10.5g\n", d,
+      io::AddDelays(&e[which == 0 ? "model" : "reference"], d, (which == 0 ? model : ref).plant.delay_samples);
+      char delay[32];
+      std::snprintf(delay, sizeof delay, "%d+%d", d, (which == 0 ? model : ref).plant.delay_samples);
+      std::snprintf(line, sizeof line, "%-6s %-10s %12.5g %10.5g %12.5g %10.5g\n", delay,
                     which == 0 ? "model" : "reference", s.K_cr_at_zero_B, s.B_t, s.K_cr_max, s.B_max);
       os << line;
     }

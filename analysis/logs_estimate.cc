@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <utility>
 
 #include "io/frf_file.h"
@@ -46,7 +47,7 @@ void NoteDropped(const EstimateNote& note, const std::string& path, size_t n_sam
 
 // whole_record, period_samples and the Welch window length that do not go together.
 void CheckRecordOptions(const LogsEstimateOptions& o, const EstimateNote& note) {
-  if (o.whole_record && o.welch.window_length != ident::WelchOptions{}.window_length) {
+  if (o.whole_record && o.welch.window_length != 0) {
     throw InputError("LogsEstimateOptions::whole_record takes each log (or LogsEstimateOptions::period_samples) as "
                      "one segment: drop WelchOptions::window_length");
   }
@@ -81,19 +82,49 @@ io::LogSelect ExcitationSelect(const std::string& path, const LogsEstimateOption
 }
 
 // Open loop in Welch segments: one streaming pass, memory for a few windows.
-ident::RunSpectra StreamedRun(const std::string& path, const LogsEstimateOptions& o, const EstimateNote& note,
+// The default window (window_length 0) needs the log's rate and length, known
+// at its end: the first kAutoWindowBuffer samples are held until then; a longer
+// log is estimated with the window of its rate at 1 kHz (4096) as it streams,
+// and read a second time when its rate asks for another one.
+ident::RunSpectra StreamedRun(const std::string& path, const LogsEstimateOptions& opts, const EstimateNote& note,
                               io::LogInfo* info, std::uint64_t* fingerprint) {
-  ident::WelchEstimator est(o.welch);
+  constexpr size_t kAutoWindowBuffer = size_t{1} << 17;  // 2 MiB of samples
+  ident::WelchOptions o = opts.welch;
+  const bool auto_window = o.window_length == 0;
+  std::vector<double> held_u, held_y;
+  if (auto_window) held_u.reserve(kAutoWindowBuffer), held_y.reserve(kAutoWindowBuffer);
+  std::unique_ptr<ident::WelchEstimator> est;
+  if (!auto_window) est = std::make_unique<ident::WelchEstimator>(o);
   io::LogFingerprint fp;
-  *info = io::StreamLog(path, o.select, [&](const double* u, const double* y, size_t n) {
-    est.Push(u, y, n);
+  *info = io::StreamLog(path, opts.select, [&](const double* u, const double* y, size_t n) {
     fp.Add(u, y, n);
+    if (!est && held_u.size() + n <= kAutoWindowBuffer) {
+      held_u.insert(held_u.end(), u, u + n);
+      held_y.insert(held_y.end(), y, y + n);
+      return;
+    }
+    if (!est) {  // longer than the buffer: the window of a long log at 1 kHz, checked at the end
+      o.window_length = ident::DefaultWindowLength(1000.0, kAutoWindowBuffer);
+      est = std::make_unique<ident::WelchEstimator>(o);
+      est->Push(held_u.data(), held_y.data(), held_u.size());
+      held_u = {}, held_y = {};
+    }
+    est->Push(u, y, n);
   });
   *fingerprint = fp.value();
   NoteRead(note, *info);
-  NoteDropped(note, path, info->num_samples, o.welch);
+  if (auto_window) {
+    const int want = ident::DefaultWindowLength(info->sample_rate_hz, info->num_samples);
+    if (!est || want != o.window_length) {
+      o.window_length = want;
+      est = std::make_unique<ident::WelchEstimator>(o);
+      if (!held_u.empty()) est->Push(held_u.data(), held_y.data(), held_u.size());
+      else io::StreamLog(path, opts.select, [&](const double* u, const double* y, size_t n) { est->Push(u, y, n); });
+    }
+  }
+  NoteDropped(note, path, info->num_samples, o);
   ident::RunSpectra spectra;
-  spectra.uy = est.Finish(info->sample_rate_hz);
+  spectra.uy = est->Finish(info->sample_rate_hz);
   return spectra;
 }
 
@@ -142,6 +173,7 @@ std::vector<ident::RunSpectra> InMemoryRuns(const std::string& path, const LogsE
     return PeriodRuns(path, log, r, static_cast<size_t>(o.period_samples), o.welch, note);
   }
   ident::WelchOptions w = o.welch;
+  if (w.window_length == 0) w.window_length = ident::DefaultWindowLength(info->sample_rate_hz, info->num_samples);
   if (o.whole_record) {
     if (log.input.size() > (1u << 24)) throw InputError("a whole record is limited to 2^24 samples");
     w.window_length = static_cast<int>(log.input.size());
@@ -215,7 +247,7 @@ LogsEstimate EstimateLocal(const std::vector<std::string>& paths, const LogsEsti
                            const EstimateNote& note) {
   const ident::LocalModelOptions& o = *options.local;
   if (options.whole_record || options.period_samples != 0 ||
-      options.welch.window_length != ident::WelchOptions{}.window_length ||
+      options.welch.window_length != 0 ||
       options.welch.overlap != ident::WelchOptions{}.overlap) {
     throw InputError("the local method (" + ident::ToString(o.method) +
                      ") fits a local model on each whole log: drop LogsEstimateOptions::whole_record, "
@@ -261,15 +293,18 @@ LogsEstimate EstimateLocal(const std::vector<std::string>& paths, const LogsEsti
 
 }  // namespace
 
-LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const LogsEstimateOptions& options,
+LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const LogsEstimateOptions& given,
                               const EstimateNote& note) {
+  LogsEstimateOptions options = given;
   if (paths.empty()) throw InputError("no log to estimate from: give at least one");
   LogsEstimate out;
   if (options.local) {
     out = EstimateLocal(paths, options, note);
   } else {
     std::string why;
-    if (!options.welch.IsValid(&why)) throw InputError(why);
+    ident::WelchOptions check = options.welch;
+    if (check.window_length == 0) check.window_length = ident::WelchOptions{}.window_length;  // resolved per log
+    if (!check.IsValid(&why)) throw InputError(why);
     CheckRecordOptions(options, note);
     // One segment: the per-bin std (the scatter between segments) would be infinite.
     auto one_segment = [&] {
@@ -289,6 +324,8 @@ LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const LogsE
       io::LogInfo info;
       std::uint64_t fingerprint = 0;
       for (ident::RunSpectra& run : LogRuns(path, options, note, &info, &fingerprint)) runs.push_back(std::move(run));
+      // The default window, resolved on the first log, is every run's (runs combine alike).
+      if (options.welch.window_length == 0 && !runs.empty()) options.welch.window_length = runs.front().uy.window_length;
       RefuseRepeatedLog(paths, seen, fingerprint, path);
       seen.push_back(fingerprint);
       out.total_samples += info.num_samples;

@@ -24,8 +24,9 @@ namespace zwidth::analysis {
 struct LogsEstimateOptions {
   io::LogSelect select;
   // Welch: window, detrend, estimator h1/h2, band (fmin/fmax also bound the
-  // local methods' band).
-  ident::WelchOptions welch;
+  // local methods' band). window_length 0 (the default): the first log's
+  // ident::DefaultWindowLength of its rate and length, every run's.
+  ident::WelchOptions welch{.window_length = 0};
   // The local polynomial / rational method instead of Welch (ident/local_models.h).
   std::optional<ident::LocalModelOptions> local;
   // Closed loop: the logged excitation r (a text/.mat column, an HDF5

@@ -48,12 +48,13 @@ void AddFitCommands(CLI::App& app) {
         }
       }
     }
-    const std::optional<FrictionInput> fin = FrictionInputFor(f->inputs, frf_file, f->est, friction_model);
+    std::optional<FrictionInput> fin = FrictionInputFor(f->inputs, frf_file, f->est, friction_model);
     std::string frf_note;
     const ident::FrequencyResponse frf = frf_file
         ? io::ReadFrequencyResponse(f->inputs[0], f->est.select.sample_rate_hz, &frf_note)
         : EstimateFromLogs(f->inputs, f->est, true).response.frf;
     if (!frf_note.empty()) std::fprintf(stderr, "note: %s\n", io::PrintableLines(frf_note).c_str());
+    if (fin && fin->options.welch.window_length == 0) fin->options.welch.window_length = frf.window_length;
     fit::FitResult r;
     fit::FrictionFitResult ff;
     const io::ModelFile mf = FitToModelFile(frf, f->fit.o, source, &r, fin ? &*fin : nullptr, &ff);

@@ -126,7 +126,11 @@ BoundaryTable ComputeBoundaryTable(const io::ModelFile& mf, double T, const std:
 // The summary table, per-hand lines, passivity and the margin() count on stdout.
 void PrintBoundarySummary(const BoundaryTable& t, const io::ModelFile& mf, const std::vector<int>& delays,
                           const std::vector<stability::LoopOptions>& loops) {
-  std::printf("%-6s %12s %10s %10s %12s %10s %10s %12s %12s\n", "delay", "K_cr(B=0)", "f(B=0)", "B_t",
+  std::printf("delay: the loop's; the Z-width is computed for it plus the model's input delay:");
+  for (size_t i = 0; i < delays.size(); ++i) {
+    std::printf("%s %s", i ? ";" : "", io::DelayText(delays[i], mf.plant.delay_samples).c_str());
+  }
+  std::printf("\n%-6s %12s %10s %10s %12s %10s %10s %12s %12s\n", "delay", "K_cr(B=0)", "f(B=0)", "B_t",
               "K_cr^max", "f_before", "f_after", "B_max_0", "B_max");
   for (size_t i = 0; i < t.sums.size(); ++i) {
     const auto& s = t.sums[i];
@@ -185,8 +189,7 @@ nlohmann::json BoundarySummaryJson(const BoundaryTable& t, const io::ModelFile& 
   js["delays"] = nlohmann::json::array();
   for (size_t i = 0; i < t.sums.size(); ++i) {
     nlohmann::json e = io::SummaryToJson(t.sums[i], t.has_cov ? &t.stds[i] : nullptr);
-    e["delay_samples"] = delays[i];
-    e["total_delay_samples"] = t.sums[i].delay_samples;
+    io::AddDelays(&e, delays[i], mf.plant.delay_samples);
     e["passivity"] = io::PassivitySummaryJson(t.pas[i], mf.plant.b);
     if (loops.size() > 1) {
       e["per_hand"] = nlohmann::json::array();
@@ -552,6 +555,8 @@ void AddCheckCommand(CLI::App& app) {
     const analysis::SceneCheck sc = analysis::CheckScene(mf.plant, mf.log_covariance, T, cf->delay, loops, objs, cf->options);
     if (!mf.log_covariance.empty() && !sc.has_std) std::fprintf(stderr, "note: no std (and no marginal status) with several hands\n");
     nlohmann::json out = analysis::SceneCheckJson(sc, objs, cf->delay, T, cf->options);
+    io::AddDelays(&out, cf->delay, mf.plant.delay_samples);
+    if (!cf->json) std::printf("delay: %s\n", io::DelayText(cf->delay, mf.plant.delay_samples).c_str());
     for (size_t i = 0; i < objs.size(); ++i) {
       nlohmann::json scratch;
       nlohmann::json* j = out.contains("objects") && i < out["objects"].size() ? &out["objects"][i] : &scratch;

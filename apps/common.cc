@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <memory>
 #include <sstream>
 
 #include "io/frf_file.h"
@@ -41,7 +42,9 @@ ident::WelchOptions EstimateFlags::Resolve() const {
     throw InputError("--estimator '" + estimator + "' is not one of h1, h2, lpm, lrm");
   }
   std::string why;
-  if (!o.IsValid(&why)) throw InputError(why);
+  ident::WelchOptions check = o;
+  if (check.window_length == 0) check.window_length = ident::WelchOptions{}.window_length;  // resolved per log
+  if (!check.IsValid(&why)) throw InputError(why);
   return o;
 }
 
@@ -77,7 +80,9 @@ void AddLogFlags(CLI::App* cmd, io::LogSelect* s) {
 void AddEstimateFlags(CLI::App* cmd, EstimateFlags* f) {
   AddLogFlags(cmd, &f->select);
   cmd->add_option("--window", f->window, "hann | hamming | rect (periodic)")->capture_default_str();
-  cmd->add_option("--window-length", f->welch.window_length, "samples per Welch segment")->capture_default_str();
+  cmd->add_option("--window-length", f->welch.window_length,
+                  "samples per Welch segment (default: the power of two nearest 4.096 s at the log's rate, halved until "
+                  "the log holds 3 segments: 4096 at 1 kHz, 16384 at 5 kHz)");
   cmd->add_option("--overlap", f->welch.overlap, "segment overlap fraction in [0, 1)")->capture_default_str();
   cmd->add_option("--detrend", f->detrend,
                   "none | mean | linear, per segment (default linear; mean with --whole-record, where linear biases "

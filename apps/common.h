@@ -31,7 +31,9 @@ const std::string& CommandLine();
 
 struct EstimateFlags {
   io::LogSelect select;
-  ident::WelchOptions welch;
+  // window_length 0 (the default): ident::DefaultWindowLength of the first
+  // log's rate and length, resolved when the log is read.
+  ident::WelchOptions welch{.window_length = 0};
   std::string window = "hann", estimator = "h1";
   // none | mean | linear; "" = not given: linear, or mean with whole_record
   // (a per-segment linear detrend of a rectangular one-period segment leaks

@@ -83,7 +83,8 @@ std::string ToString(FitQuality q);
 
 struct QualityReason {
   // Machine-readable: chi2_per_dof, residual_runs, misfit_band, few_averages,
-  // parameter_at_bound, spurious_section, order_search_at_limit,
+  // parameter_at_bound, spurious_section, section_outside_excited_band,
+  // order_search_at_limit,
   // delay_search_at_limit.
   std::string code;
   std::string message;  // what was seen, with the numbers

@@ -170,6 +170,11 @@ void JudgeQuality(const Fixed& fx, const ident::FrequencyResponse& sub, const Fi
   LeakageChecks(sub, res);
   for (const std::string& s : SpuriousSections(*res, o)) {
     const bool bound = s.find("bound") != std::string::npos;
+    if (s.find("well-excited band") != std::string::npos) {
+      add("section_outside_excited_band", s,
+          "an excitation whose band covers that frequency, or fewer modes (FitOptions::auto_modes)");
+      continue;
+    }
     add(bound ? "parameter_at_bound" : "spurious_section", s,
         bound ? "the data may not support this many modes: fewer modes (FitOptions::auto_modes)"
               : "fewer modes (FitOptions::auto_modes) or a wider band");
@@ -236,6 +241,14 @@ std::vector<std::string> SpuriousSections(const FitResult& r, const FitOptions& 
       const double lo = kHz * r.band.f_lo_hz / 1.05, hi = kHz * r.band.f_hi_hz * 1.05;
       if (md.omega < lo || md.omega > hi || md.v < lo || md.v > hi) {
         out.push_back(name + Fmt(": pole %.4g Hz or zero %.4g Hz is outside the used band", md.omega / kHz, md.v / kHz));
+      } else if (r.band.excited_hi_hz > 0) {
+        const double elo = kHz * r.band.excited_lo_hz / 1.05, ehi = kHz * r.band.excited_hi_hz * 1.05;
+        const double w = (md.omega < elo || md.omega > ehi) ? md.omega : md.v;
+        if (w < elo || w > ehi) {
+          out.push_back(name + Fmt(": %.4g Hz lies outside the well-excited band %.4g-%.4g Hz, where the input is "
+                                   "%.3g dB below its top: the data do not support a section there",
+                                   w / kHz, r.band.excited_lo_hz, r.band.excited_hi_hz, -r.band.InputLevelDb(w / kHz)));
+        }
       }
     }
   }

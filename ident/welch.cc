@@ -277,6 +277,13 @@ FrequencyResponse WelchEstimator::Finish(double fs) const {
   return r;
 }
 
+int DefaultWindowLength(double rate_hz, size_t num_samples) {
+  const double e = std::isfinite(rate_hz) && rate_hz > 0 ? std::round(std::log2(rate_hz * 4.096)) : 12.0;
+  int n = 1 << static_cast<int>(std::clamp(e, 4.0, 24.0));
+  while (n > 16 && 2 * static_cast<size_t>(n) > num_samples) n /= 2;
+  return n;
+}
+
 bool BandOptions::IsValid(std::string* why) const {
   auto bad = [&](const std::string& m) { if (why) *why = m; return false; };
   if (!(std::isfinite(fmin_hz) && fmin_hz >= 0.0)) return bad("BandOptions::fmin_hz must be finite and >= 0");
@@ -285,6 +292,10 @@ bool BandOptions::IsValid(std::string* why) const {
     return bad("BandOptions::min_input_power_ratio must be in [0, 1)");
   }
   if (!(min_coherence >= 0.0 && min_coherence < 1.0)) return bad("BandOptions::min_coherence must be in [0, 1)");
+  if (!(noise_coherence_sigmas >= 0.0 && std::isfinite(noise_coherence_sigmas))) {
+    return bad("the band's noise_coherence_sigmas must be finite and >= 0");
+  }
+  if (!(well_excited_ratio >= 0.0 && well_excited_ratio <= 1.0)) return bad("the band's well_excited_ratio must be in [0, 1]");
   return true;
 }
 
@@ -294,36 +305,99 @@ double CoherenceStd(double H_abs, double coherence, double averages) {
   return H_abs * std::sqrt((1.0 - c) / (2.0 * averages * c));
 }
 
+namespace {
+
+// The mean of v over the kBandSmoothBins entries centred on each (fewer at the ends).
+std::vector<double> MovingMean(const std::vector<double>& v) {
+  const long n = static_cast<long>(v.size()), h = kBandSmoothBins / 2;
+  std::vector<double> prefix(n + 1, 0.0), out(n);
+  for (long k = 0; k < n; ++k) prefix[k + 1] = prefix[k] + v[k];
+  for (long k = 0; k < n; ++k) {
+    const long a = std::max(0L, k - h), b = std::min(n, k + h + 1);
+    out[k] = (prefix[b] - prefix[a]) / (b - a);
+  }
+  return out;
+}
+
+}  // namespace
+
 ExcitedBand SelectExcitedBand(const FrequencyResponse& frf, const BandOptions& o) {
   std::string why;
   if (!o.IsValid(&why)) throw InputError(why);
   const size_t n = frf.f_hz.size();
   ExcitedBand b;
   b.used.assign(n, 0);
-  std::vector<double> inside;
+  std::vector<size_t> inside_k;  // the bins of [fmin_hz, fmax_hz], ascending
+  std::vector<double> inside, coherence;
   for (size_t k = 0; k < n; ++k) {
-    if (frf.f_hz[k] >= o.fmin_hz && frf.f_hz[k] <= o.fmax_hz && k < frf.S_uu.size()) inside.push_back(frf.S_uu[k]);
+    if (!(frf.f_hz[k] >= o.fmin_hz && frf.f_hz[k] <= o.fmax_hz)) continue;
+    inside_k.push_back(k);
+    inside.push_back(k < frf.S_uu.size() ? frf.S_uu[k] : 0.0);
+    coherence.push_back(k < frf.coherence.size() ? frf.coherence[k] : 1.0);
   }
   b.input_power_known = false;
   for (double s : inside) b.input_power_known |= s > 0.0;
+  auto percentile99 = [](std::vector<double> v) {
+    const size_t q = std::min(v.size() - 1, static_cast<size_t>(0.99 * v.size()));
+    std::nth_element(v.begin(), v.begin() + q, v.end());
+    return v[q];
+  };
   if (b.input_power_known) {
-    const size_t q = std::min(inside.size() - 1, static_cast<size_t>(0.99 * inside.size()));
-    std::nth_element(inside.begin(), inside.begin() + q, inside.end());
-    b.reference_input_psd = inside[q];
+    b.reference_input_psd = percentile99(inside);
+    const std::vector<double> smooth = MovingMean(inside);
+    const double top = percentile99(smooth);
+    for (size_t i = 0; i < inside.size(); ++i) {
+      const double f = frf.f_hz[inside_k[i]];
+      b.smoothed_f_hz.push_back(f);
+      b.smoothed_level_db.push_back(10.0 * std::log10(std::max(smooth[i], 1e-300) / top));
+      if (smooth[i] >= o.well_excited_ratio * top) {
+        if (b.excited_hi_hz == 0.0) b.excited_lo_hz = f;
+        b.excited_hi_hz = f;
+      }
+    }
   }
-  for (size_t k = 0; k < n; ++k) {
+  // Regions whose coherence is what noise alone gives (see BandOptions).
+  std::vector<char> noise(inside.size(), 0);
+  const double nd = frf.effective_averages;
+  // The test can tell noise from a response only when its threshold (for the
+  // full kBandSmoothBins) is below 0.5: from about 4 averages; fewer are judged
+  // by the fit's few_averages instead.
+  const double full_threshold =
+      (1.0 + o.noise_coherence_sigmas * std::sqrt(std::max(1.0, frf.bin_correlation) / kBandSmoothBins)) / nd;
+  if (o.noise_coherence_sigmas > 0 && nd > 1.0 && full_threshold < 0.5 && !coherence.empty()) {
+    const std::vector<double> mean = MovingMean(coherence);
+    const long h = kBandSmoothBins / 2, m = static_cast<long>(coherence.size());
+    for (long i = 0; i < m; ++i) {
+      const long count = std::min(m, i + h + 1) - std::max(0L, i - h);
+      const double sd = std::sqrt(std::max(1.0, frf.bin_correlation) / count) / nd;
+      noise[i] = mean[i] < 1.0 / nd + o.noise_coherence_sigmas * sd;
+    }
+  }
+  b.num_outside = static_cast<int>(n - inside_k.size());
+  for (size_t i = 0; i < inside_k.size(); ++i) {
+    const size_t k = inside_k[i];
     const double f = frf.f_hz[k];
-    if (!(f >= o.fmin_hz && f <= o.fmax_hz)) { ++b.num_outside; continue; }
-    if (b.input_power_known && !(frf.S_uu[k] >= o.min_input_power_ratio * b.reference_input_psd)) {
+    if (b.input_power_known && !(inside[i] >= o.min_input_power_ratio * b.reference_input_psd)) {
       ++b.num_low_input;
       continue;
     }
-    if (k < frf.coherence.size() && frf.coherence[k] < o.min_coherence) { ++b.num_low_coherence; continue; }
+    if (coherence[i] < o.min_coherence) { ++b.num_low_coherence; continue; }
+    if (noise[i]) { ++b.num_noise_coherence; continue; }
     b.used[k] = 1;
     if (b.num_used++ == 0) b.f_lo_hz = f;
     b.f_hi_hz = f;
   }
   return b;
+}
+
+double ExcitedBand::InputLevelDb(double f_hz) const {
+  if (smoothed_f_hz.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const auto it = std::lower_bound(smoothed_f_hz.begin(), smoothed_f_hz.end(), f_hz);
+  if (it == smoothed_f_hz.begin()) return smoothed_level_db.front();
+  if (it == smoothed_f_hz.end()) return smoothed_level_db.back();
+  const size_t j = it - smoothed_f_hz.begin();
+  const double t = (f_hz - smoothed_f_hz[j - 1]) / (smoothed_f_hz[j] - smoothed_f_hz[j - 1]);
+  return smoothed_level_db[j - 1] + t * (smoothed_level_db[j] - smoothed_level_db[j - 1]);
 }
 
 std::string ExcitedBand::Describe() const {
@@ -333,6 +407,13 @@ std::string ExcitedBand::Describe() const {
   if (num_outside) out += "; " + std::to_string(num_outside) + " outside BandOptions::fmin_hz/BandOptions::fmax_hz";
   if (num_low_input) out += "; " + std::to_string(num_low_input) + " where the input carries too little power";
   if (num_low_coherence) out += "; " + std::to_string(num_low_coherence) + " with too low coherence";
+  if (num_noise_coherence) {
+    out += "; " + std::to_string(num_noise_coherence) + " where the coherence is what noise alone gives";
+  }
+  if (excited_hi_hz > 0) {
+    std::snprintf(s, sizeof s, "; well excited %.4g-%.4g Hz", excited_lo_hz, excited_hi_hz);
+    out += s;
+  }
   if (!input_power_known) out += "; the response has no input PSD (S_uu): input power not checked";
   return out;
 }

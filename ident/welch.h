@@ -28,8 +28,18 @@ bool FromString(const std::string& s, Estimator* e);
 // The periodic window of length n (SciPy get_window(name, n, fftbins=True)).
 std::vector<double> MakeWindow(Window w, int n);
 
+// The default segment length for a log of n samples at rate_hz: the power of
+// two nearest (in ratio) to 4.096 s of samples (a bin spacing of about 0.24 Hz
+// whatever the rate: 4096 at 1 kHz, 16384 at 5 kHz, 2048 at 500 Hz), then
+// halved until the log holds at least 3 segments of 50 % overlap (n >= 2 N,
+// the fit's FitOptions::min_averages), and at least 16. The resolution a mode's
+// bandwidth needs is in Hz, not in samples: at 5 kHz 4096 samples (0.82 s)
+// bias the fitted mass by -0.3 % (2.4 std), 16384 by -0.06 %.
+int DefaultWindowLength(double rate_hz, size_t num_samples);
+
 struct WelchOptions {
-  int window_length = 4096;          // samples per segment, >= 16
+  // Samples per segment, >= 16. The CLI's default is DefaultWindowLength.
+  int window_length = 4096;
   double overlap = 0.5;              // fraction of a segment shared with the next, [0, 1)
   Window window = Window::kHann;
   Detrend detrend = Detrend::kLinear;
@@ -121,11 +131,29 @@ class WelchEstimator {
 // maximum that one spike cannot set). Where the input has no power the
 // "response" is sensor noise, or the feedback loop's own path, even when the
 // coherence stays high there.
+// Coherence set by noise: with n_d independent averages the estimated
+// coherence of a bin without any response is Beta(1, n_d - 1), mean 1/n_d,
+// std about 1/n_d; single bins pass any fixed threshold by chance (at 5 kHz,
+// hundreds of bins near Nyquist, each one a residual of several std). A bin is
+// left out when the mean coherence of the kBandSmoothBins bins centred on it is
+// below noise_coherence_sigmas std of that mean above 1/n_d (bins correlated as
+// the window's bin_correlation says): a region where noise sets the coherence,
+// not one bin of low coherence inside a good region. Not applied when that
+// threshold would be 0.5 or more (about 4 averages or fewer).
+// The well-excited band [excited_lo_hz, excited_hi_hz]: the bins whose input
+// PSD, averaged over the kBandSmoothBins bins centred on them, is at least
+// well_excited_ratio of that average's 99th percentile (half power, the
+// excitation's -3 dB band). Bins outside it are used (their std says how little
+// they weigh) but a section there is not supported by the data: the fit says
+// so, and the order search does not add one (fit/quality.cc).
+inline constexpr int kBandSmoothBins = 17;
 struct BandOptions {
   double fmin_hz = 0.0;                           // lowest frequency used [Hz], >= 0
   double fmax_hz = std::numeric_limits<double>::infinity();  // highest [Hz], > fmin_hz
   double min_input_power_ratio = 1e-2;  // S_uu threshold relative to S_ref (-20 dB), in [0, 1)
   double min_coherence = 0.05;          // bins with lower coherence are left out, in [0, 1)
+  double noise_coherence_sigmas = 3.0;  // see above; >= 0 (0: the test is off)
+  double well_excited_ratio = 0.5;      // see above (-3 dB), in [0, 1]
 
   bool IsValid(std::string* why) const;
 };
@@ -136,9 +164,17 @@ struct ExcitedBand {
   int num_outside = 0;         // outside [fmin_hz, fmax_hz]
   int num_low_input = 0;       // input power below the threshold
   int num_low_coherence = 0;   // coherence below min_coherence (counted once)
+  int num_noise_coherence = 0;  // in a region whose coherence is what noise alone gives
   bool input_power_known = true;  // false when the response has no S_uu (all 0)
   double f_lo_hz = 0.0, f_hi_hz = 0.0;  // lowest and highest used bin; 0 when none
   double reference_input_psd = 0.0;     // S_ref
+  // The well-excited band (see above); both 0 when the input PSD is unknown
+  // (then nothing is judged outside it).
+  double excited_lo_hz = 0.0, excited_hi_hz = 0.0;
+  // The smoothed input PSD at f relative to the top of the band [dB] (<= 0
+  // about), NaN when unknown; f between bins is interpolated, outside clamped.
+  double InputLevelDb(double f_hz) const;
+  std::vector<double> smoothed_f_hz, smoothed_level_db;  // the curve InputLevelDb reads
   // "used 0.7-300 Hz (1227 of 2048 bins); left out: 820 with input power 20 dB
   // below its reference (above 300.2 Hz) ...".
   std::string Describe() const;

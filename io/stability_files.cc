@@ -229,4 +229,17 @@ nlohmann::json PassivitySummaryJson(const stability::Passivity& pa, double b) {
                       "B with a passive K"}};
 }
 
+std::string DelayText(int loop_samples, int model_samples) {
+  char s[96];
+  std::snprintf(s, sizeof s, "loop %d + model %d = %d samples", loop_samples, model_samples,
+                loop_samples + model_samples);
+  return s;
+}
+
+void AddDelays(nlohmann::json* record, int loop_samples, int model_samples) {
+  (*record)["delay_samples"] = loop_samples;
+  (*record)["model_delay_samples"] = model_samples;
+  (*record)["total_delay_samples"] = loop_samples + model_samples;
+}
+
 }  // namespace zwidth::io

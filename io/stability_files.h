@@ -86,6 +86,14 @@ inline constexpr size_t kMaxLoopDelays = 64;
 // "" when `delays` keeps those bounds (and is not empty), else the message
 // naming `name` (a flag or an options field).
 std::string LoopDelaysProblem(const std::vector<int>& delays, const std::string& name);
+
+// Every place that shows a delay gives the loop's (a --delays value: the
+// controller's), the fitted model's input delay and their sum, the delay the
+// Z-width is computed for: "loop 2 + model 1 = 3 samples".
+std::string DelayText(int loop_samples, int model_samples);
+// The same in a JSON record: delay_samples (the loop's), model_delay_samples,
+// total_delay_samples.
+void AddDelays(nlohmann::json* record, int loop_samples, int model_samples);
 inline constexpr size_t kMaxSceneBytes = 16u << 20;
 std::vector<SceneObject> ReadScene(const std::string& path);
 

@@ -466,7 +466,10 @@ void BindEstimateLogs(py::module_& m) {
           analysis::LogsEstimateOptions o;
           const bool local = estimator == "lpm" || estimator == "lrm";
           const std::string det = detrend ? *detrend : ident::ToString(analysis::DefaultDetrend(whole_record));
-          o.welch = WelchFrom(window_length, overlap, window, det, local ? "h1" : estimator, fmin, fmax);
+          // window_length 0: the library's default rule (the first log's rate and length), as the CLI.
+          o.welch = WelchFrom(window_length == 0 ? ident::WelchOptions{}.window_length : window_length, overlap, window,
+                              det, local ? "h1" : estimator, fmin, fmax);
+          o.welch.window_length = window_length;
           if (local) {
             ident::LocalModelOptions lo;
             ident::FromString(estimator, &lo.method);
@@ -493,7 +496,7 @@ void BindEstimateLogs(py::module_& m) {
           for (const std::string& w : warnings) warn(w, py::module_::import("builtins").attr("UserWarning"), 2);
           return std::move(e.response.frf);
         },
-        std::make_tuple(py::arg("paths"), py::arg("window_length") = d.window_length,
+        std::make_tuple(py::arg("paths"), py::arg("window_length") = 0,
                         py::arg("overlap") = d.overlap, py::arg("window") = "hann",
                         py::arg("detrend") = py::none(), py::arg("estimator") = "h1", py::arg("fmin") = d.fmin_hz,
                         py::arg("fmax") = d.fmax_hz, py::arg("reference_column") = "",
@@ -505,7 +508,9 @@ void BindEstimateLogs(py::module_& m) {
                         py::arg("output_scale") = 1.0, py::arg("time_unit") = "", py::arg("delimiter") = ""),
         R"doc(The frequency response of one device from one or several log files, as
 `zwidth estimate LOG...` computes it (the same library function): runs
-averaged (the same samples twice refused); whole_record=True takes each log
+averaged (the same samples twice refused); window_length 0 (the default)
+is the CLI's rule: the power of two nearest 4.096 s at the first log's rate,
+halved until the log holds 3 segments; whole_record=True takes each log
 as one rectangular segment, with period_samples one segment per period of a
 periodic excitation (detrend default 'mean' then, else 'linear'); a closed
 loop's logged excitation named by reference_column (text, .mat) or

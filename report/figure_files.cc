@@ -324,7 +324,7 @@ std::string WriteFigureFiles(const analysis::RunAnalysis& a, const fs::path& fig
   const double k_clip_loop = WriteLoopDat(f, k_clip, fig);
   const bool table1 = a.input.reference && a.input.reference_is_table1;  // drawn only beside Table I
   if (table1) WriteFigureFile(fig / "table2.dat", Table2Dat(a.options.delays));
-  const FigureScriptOptions so{a.options.delays, a.input.response.method,
+  const FigureScriptOptions so{a.options.delays, a.input.model.plant.delay_samples, a.input.response.method,
                                a.input.response.method == ident::CombinedMethod::kJoint,
                                a.options.linear, a.input.reference.has_value(), table1,
                                k_clip, k_clip_loop, a.options.report_filter_hz, png};

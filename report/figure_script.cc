@@ -20,7 +20,7 @@ std::string FigureScript(const FigureScriptOptions& o) {
     if (i) dl += ' ';
     dl += std::to_string(o.delays[i]);
   }
-  gp << "delays = '" << dl << "'\n";
+  gp << "delays = '" << dl << "'\nmodel_delay = " << o.model_delay << "\n";
   std::vector<const char*> terms = {"svg size 900,640 font 'sans,12'"};
   if (o.png) terms.push_back("pngcairo size 900,640 font 'sans,10'");
   for (const char* term : terms) {
@@ -41,17 +41,17 @@ std::string FigureScript(const FigureScriptOptions& o) {
        << "set yrange [*:*]\nunset logscale x\nunset title\n";
     gp << "set output 'kcr." << ext << "'\nset multiplot layout 2,1 title 'Critical stiffness and ultimate frequency vs damping - Fig. 6 / Fig. 10'\n"
        << "set xlabel 'B [" << (o.linear ? "N s/m" : "N m s/rad") << "]'\nset ylabel 'K_{CR} [" << (o.linear ? "N/m" : "N m/rad") << "]'\n"
-       << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:2 w l lt i t 'model, d='.word(delays,i)"
+       << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:2 w l lt i t sprintf('model, d = %s + %d', word(delays,i), model_delay)"
        << (o.have_ref ? ", for [i=1:words(delays)] 'kcr_reference.dat' index i-1 u 1:2 w l lt i dt 2 lw 1 t 'reference, d='.word(delays,i)" : "")
        << (o.table1 ? ", 'table2.dat' u 2:3 w p pt 7 ps 0.8 lc rgb 'red' t 'Table II (relay)'" : "") << "\n"
        << "set logscale y\nset ylabel 'f_{CR} [Hz]'\n"
-       << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:3 w l lt i t 'model, d='.word(delays,i)"
+       << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:3 w l lt i t sprintf('model, d = %s + %d', word(delays,i), model_delay)"
        << (o.table1 ? ", 'table2.dat' u 2:4 w p pt 7 ps 0.8 lc rgb 'red' t 'Table II (relay)'" : "") << "\nunset logscale y\nunset multiplot\n";
     gp << "set output 'region." << ext << "'\nset multiplot layout " << o.delays.size()
        << ",1 title 'Z-width: stable (B, K) region per delay (shaded), K_{CR}(B) and its +-2 sigma band'\n"
        << "set xlabel 'B [N m s/rad]'\nset ylabel 'K [N m/rad]'\nset yrange [0:" << o.k_clip << "]\n"
        << "do for [i=1:words(delays)] {\n"
-       << "  set title 'loop delay '.word(delays,i).' samples'\n"
+       << "  set title sprintf('delay: loop %s + model %d = %d samples', word(delays,i), model_delay, word(delays,i) + model_delay)\n"
        << "  plot 'region_model.dat' index i-1 u 1:2:3 w filledcurves fs solid 1.0 noborder lc rgb '#9ecae1' notitle, "
        << "keyentry w l lw 2 lc rgb '#9ecae1' t 'stable', "
        << "'kcr_model.dat' index i-1 u 1:5:6 w filledcurves fs transparent solid 0.35 "
@@ -62,7 +62,7 @@ std::string FigureScript(const FigureScriptOptions& o) {
        << " Hz velocity low-pass; passivity boundary K_P(B) (Colgate-Schenkel)'\n"
        << "set xlabel 'B [N m s/rad]'\nset ylabel 'K [N m/rad]'\nset yrange [0:" << o.k_clip_loop << "]\n"
        << "do for [i=1:words(delays)] {\n"
-       << "  set title 'loop delay '.word(delays,i).' samples'\n"
+       << "  set title sprintf('delay: loop %s + model %d = %d samples', word(delays,i), model_delay, word(delays,i) + model_delay)\n"
        << "  plot 'loop_region.dat' index 2*i-2 u 1:2:3:4 w vectors nohead lc rgb '#fdae6b' t 'stable, filtered', "
        << "'' index 2*i-1 u 1:2:3:4 w vectors nohead lc rgb '#6baed6' t 'stable, raw difference', "
        << "'loop_passive.dat' index i-1 u 1:2 w l lw 2 lc rgb 'black' t 'K_P, raw', '' index i-1 u 1:3 w l lw 2 dt 2 lc rgb '#7f2704' t 'K_P, filtered'\n"

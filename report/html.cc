@@ -22,6 +22,7 @@
 
 #include "analysis/compare.h"
 #include "io/provenance.h"
+#include "io/stability_files.h"
 #include "report/report_internal.h"
 
 namespace zwidth::report {
@@ -139,13 +140,13 @@ std::string PlusMinus(double v, double sd) {
 void ZWidthTable(const analysis::RunAnalysis& a, std::ostringstream& h) {
   const analysis::PlantStability& st = a.stability;
   const Units u = UnitsOf(a);
-  h << "<table class='zw' id='zwidth-table'><tr><th>loop delay [samples]</th><th>K_CR(B = 0) [" << u.K
+  h << "<table class='zw' id='zwidth-table'><tr><th>loop delay + model delay = total [samples]</th><th>K_CR(B = 0) [" << u.K
     << "]</th><th>B_t [" << u.B << "]</th><th>K_CR^max [" << u.K << "]</th><th>B_max_from_zero [" << u.B
     << "]</th><th>B_max [" << u.B << "]</th></tr>\n";
   for (size_t i = 0; i < st.summaries.size(); ++i) {
     const auto& s = st.summaries[i];
     const auto& sd = st.stds[i];
-    h << "<tr><td>" << st.delays[i] << "</td><td>" << PlusMinus(s.K_cr_at_zero_B, sd.K_cr_at_zero_B) << "</td><td>"
+    h << "<tr><td>" << io::DelayText(st.delays[i], a.input.model.plant.delay_samples) << "</td><td>" << PlusMinus(s.K_cr_at_zero_B, sd.K_cr_at_zero_B) << "</td><td>"
       << PlusMinus(s.B_t, sd.B_t) << "</td><td>" << PlusMinus(s.K_cr_max, sd.K_cr_max) << "</td><td>"
       << Num(s.B_max_from_zero) << "</td><td>" << PlusMinus(s.B_max, sd.B_max) << "</td></tr>\n";
     for (const auto& band : s.reopened_bands) {
@@ -313,6 +314,15 @@ void ComparisonSection(const analysis::RunAnalysis& a, std::ostringstream& h) {
     << "(see boundary.csv, column margin_agrees).</p>\n";
 }
 
+// The delays of the Z-width figures: each loop delay, the model's, their sum.
+std::string DelayCaption(const analysis::RunAnalysis& a) {
+  std::string c = "Delays:";
+  for (size_t i = 0; i < a.options.delays.size(); ++i) {
+    c += (i ? "; " : " ") + io::DelayText(a.options.delays[i], a.input.model.plant.delay_samples);
+  }
+  return c + " (the loop's, the fitted model's input delay, and the total the Z-width is computed for).";
+}
+
 std::string LoopCaption(const analysis::RunAnalysis& a) {
   std::ostringstream c;
   c.imbue(std::locale::classic());
@@ -366,14 +376,14 @@ std::string RunHtml(const analysis::RunAnalysis& a, const std::map<std::string, 
     << internal::kDygraphCss << "</style></head><body>\n<h1>zwidth report</h1>\n";
   VerdictSection(a, h);
   ZWidthSection(a, h);
-  Figure(svgs, "region", "", h);
+  Figure(svgs, "region", Html(DelayCaption(a)), h);
   InteractiveSection(a, h);
   NoFiguresNote(a, !svgs.empty(), h);
   FitSection(a, fit_report, h);
   Figure(svgs, "bode", "", h);
   Figure(svgs, "coherence", "", h);
   ComparisonSection(a, h);
-  Figure(svgs, "kcr", "", h);
+  Figure(svgs, "kcr", Html(DelayCaption(a)), h);
   Figure(svgs, "loop", Html(LoopCaption(a)), h);
   Figure(svgs, "rigid", "", h);
   ProvenanceSection(a, command_line, h);

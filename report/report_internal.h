@@ -22,6 +22,7 @@ inline constexpr double kThinTolerancePx = 0.2;
 // What the gnuplot script of `run` depends on.
 struct FigureScriptOptions {
   std::vector<int> delays;                // loop delays [samples], one panel/curve each
+  int model_delay = 0;                    // the fitted model's input delay [samples], added to each
   ident::CombinedMethod method{};         // the estimate's method (Bode title)
   bool joint = false;                     // closed-loop joint estimate: two coherence columns
   bool linear = false;                    // N s/m and N/m labels instead of N m s/rad, N m/rad

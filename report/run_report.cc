@@ -30,7 +30,7 @@ std::string SummaryJson(const analysis::RunAnalysis& a) {
   summary["boundary"] = nlohmann::json::array();
   for (size_t i = 0; i < st.delays.size(); ++i) {
     nlohmann::json e = io::SummaryToJson(st.summaries[i], st.has_std ? &st.stds[i] : nullptr);
-    e["delay_samples"] = st.delays[i];
+    io::AddDelays(&e, st.delays[i], in.model.plant.delay_samples);
     summary["boundary"].push_back(e);
   }
   summary["B_max_meaning"] = "B_max: the largest B at which some K > 0 is stable (reopened bands included); "

@@ -9,9 +9,13 @@ pass=0; fail=0
 check() { if eval "$2"; then pass=$((pass + 1)); echo "ok   $1"; else fail=$((fail + 1)); echo "FAIL $1"; fi; }
 M=$SRC/datasets/phantom/table1.json
 "$ZW" simulate --model "$M" -o "$T/short.h5" --seconds 5 --seed 3 >/dev/null
-"$ZW" fit "$T/short.h5" -o "$T/s.json" > "$T/out" 2> "$T/err"; rc=$?
+# The default window fits 3 segments into a 5 s log (2048 samples at 1 kHz,
+# ident::DefaultWindowLength); a 4096 window given leaves one, refused.
+"$ZW" fit "$T/short.h5" -o "$T/d.json" > "$T/out" 2> "$T/err"; rc=$?
+check "5 s log: the default window is 2048 samples, 3 segments" '[ $rc = 0 ] && grep -q "3 segments" "$T/err" && grep -q "2048-sample segment" "$T/err"'
+"$ZW" fit "$T/short.h5" --window-length 4096 -o "$T/s.json" > "$T/out" 2> "$T/err"; rc=$?
 check "one-segment log refused" '[ $rc = 2 ] && [ ! -e "$T/s.json" ] && grep -q -- "--allow-short" "$T/err" && grep -q -- "--window-length" "$T/err"'
-"$ZW" fit "$T/short.h5" -o "$T/s.json" --allow-short > "$T/out" 2>&1
+"$ZW" fit "$T/short.h5" --window-length 4096 -o "$T/s.json" --allow-short > "$T/out" 2>&1
 check "--allow-short fits and says poor" 'grep -q "\"quality\": \"poor\"" "$T/s.json"'
 "$ZW" simulate --model "$M" -o "$T/log.h5" --seed 4 >/dev/null
 "$ZW" estimate "$T/log.h5" -o "$T/frf.csv" >/dev/null
@@ -25,5 +29,20 @@ check "run: verdict first in summary.json" '[ "$(sed -n 2p "$T/run/summary.json"
 check "run: frf.csv has used_by_fit" 'head -1 "$T/run/frf.csv" | grep -q ",used_by_fit$"'
 "$ZW" run "$T/log.h5" -o "$T/run_nf" --no-figures > /dev/null 2>&1
 check "run --no-figures: no figures/, same boundary.csv and summary" '[ ! -e "$T/run_nf/figures" ] && cmp -s "$T/run/boundary.csv" "$T/run_nf/boundary.csv" && grep -q "no-figures" "$T/run_nf/report.html"'
+# --delay-samples auto is the default (issue 29): a log with a 3-sample input
+# delay is fitted with it, and every delay shown is the loop's + the model's.
+"$ZW" simulate --model "$M" -o "$T/late.h5" --delay-samples 3 --seed 6 >/dev/null 2>&1
+"$ZW" fit "$T/late.h5" -o "$T/late.json" > "$T/out" 2>&1
+check "fit: the input delay found by default (3 samples), verdict good" 'python3 -c "import json,sys; m=json.load(open(sys.argv[1])); sys.exit(0 if m[\"delay_samples\"] == 3 and m[\"fit\"][\"quality\"] == \"good\" else 1)" "$T/late.json"'
+"$ZW" fit "$T/late.h5" --delay-samples 0 -o "$T/late0.json" > /dev/null 2>&1
+check "fit --delay-samples 0 on it: poor" 'grep -q "\"quality\": \"poor\"" "$T/late0.json"'
+"$ZW" run "$T/late.h5" --delays 2 --no-figures -o "$T/run_late" > "$T/out" 2>&1
+check "run summary.json: loop 2, model 3, total 5" 'python3 -c "import json,sys; e=json.load(open(sys.argv[1]))[\"boundary\"][0]; sys.exit(0 if (e[\"delay_samples\"], e[\"model_delay_samples\"], e[\"total_delay_samples\"]) == (2, 3, 5) else 1)" "$T/run_late/summary.json"'
+check "run report: loop 2 + model 3 = 5 samples" 'grep -q "loop 2 + model 3 = 5 samples" "$T/run_late/report.html"'
+"$ZW" boundary "$T/late.json" --delays 2 --summary "$T/late_sum.json" -o "$T/late_b.csv" > "$T/out" 2>&1
+check "boundary: loop 2 + model 3 = 5 samples (text and summary)" 'grep -q "loop 2 + model 3 = 5 samples" "$T/out" && python3 -c "import json,sys; e=json.load(open(sys.argv[1]))[\"delays\"][0]; sys.exit(0 if (e[\"delay_samples\"], e[\"model_delay_samples\"], e[\"total_delay_samples\"]) == (2, 3, 5) else 1)" "$T/late_sum.json"'
+echo '{"objects": [{"name": "wall", "K": 0.5, "B": 0.01}]}' > "$T/scene.json"
+"$ZW" check "$T/scene.json" --model "$T/late.json" --delay 2 > "$T/out" 2>&1
+check "check: loop 2 + model 3 = 5 samples" 'grep -q "delay: loop 2 + model 3 = 5 samples" "$T/out"'
 echo "$pass passed, $fail failed"
 [ $fail = 0 ]

@@ -36,7 +36,12 @@ TEST(FitQuality, OneModeTooManyIsFlagged) {
   const FitResult r = FitModel(Frf(Device(kPoles[2]), 22), o);
   ASSERT_EQ(r.status, FitStatus::kConverged);
   EXPECT_EQ(r.quality, FitQuality::kPoor);
-  EXPECT_FALSE(SpuriousSections(r, o).empty());
+  // The extra section is named: spurious, or (a pole-zero pair 0.06 % apart
+  // with damping 1e-3, on the bins of the band rule of issue 29) narrower
+  // than the window's bins.
+  bool narrow = false;
+  for (const auto& q : r.reasons) narrow |= q.code == "mode_narrower_than_bins";
+  EXPECT_TRUE(!SpuriousSections(r, o).empty() || narrow);
 }
 
 TEST(FitQuality, OneSegmentLogIsRefusedUnlessAllowed) {

@@ -8,6 +8,7 @@ canvas per interactive chart; the Z-width table's rows are compared with the
 run's summary.json (K_CR at B = 0 per delay, as the table prints it, %.5g).
 """
 import json
+import re
 import sys
 from html.parser import HTMLParser
 
@@ -101,7 +102,11 @@ def check_dom(path, kind, summary_path):
             errors.append(f"the Z-width table's header lacks {unit}: {header}")
     rows = [r for r in d.rows if r and r[0].strip()]
     want = expected_rows(summary_path)
-    got = [(int(r[0]), r[1].split("\u00b1")[0].strip()) for r in rows]
+    # The delay cell: "loop d + model m = t samples" (issue 29): the loop's delay d and t = d + m.
+    cells = [re.fullmatch(r"loop (\d+) \+ model (\d+) = (\d+) samples", r[0].strip()) for r in rows]
+    if not all(c and int(c[1]) + int(c[2]) == int(c[3]) for c in cells):
+        errors.append(f"delay cells not 'loop d + model m = d+m samples': {[r[0] for r in rows]}")
+    got = [(int(c[1]) if c else -1, r[1].split("\u00b1")[0].strip()) for c, r in zip(cells, rows)]
     if got != want:
         errors.append(f"Z-width rows {got} != summary.json's {want}")
     if kind == "poor" and (d.verdict is None or "poor" not in d.verdict):

@@ -48,13 +48,13 @@ def test_two_runs_equal_the_cli_to_the_last_digit(two_runs, cli, tmp_path):
 def test_one_run_is_the_welch_estimate_of_that_log(two_runs):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        a = zwidth.estimate_logs(two_runs[0])
+        a = zwidth.estimate_logs(two_runs[0], window_length=4096)
         b = zwidth.estimate(two_runs[0])
     np.testing.assert_allclose(np.asarray(a.H), np.asarray(b.H), rtol=1e-12, atol=0)
     # Two runs average twice the segments of one.
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        both = zwidth.estimate_logs(two_runs)
+        both = zwidth.estimate_logs(two_runs, window_length=4096)
     assert both.num_averages == 2 * a.num_averages
 
 
@@ -62,7 +62,7 @@ def test_dropped_samples_warn_with_the_keyword(two_runs):
     # 8 s at 1 kHz = 8000 samples; 4096-sample Hann segments at 50 %: 2 segments cover 6144,
     # the last 1856 samples are left out (worked out here, not read from the library).
     with pytest.warns(UserWarning) as record:
-        zwidth.estimate_logs(two_runs[0])
+        zwidth.estimate_logs(two_runs[0], window_length=4096)
     texts = [str(w.message) for w in record]
     assert any("the last 1856 samples" in t and "window_length" in t and "--" not in t for t in texts), texts
 
@@ -77,6 +77,15 @@ def test_whole_record_of_one_log_names_the_keywords(two_runs):
         zwidth.estimate_logs(two_runs[0], whole_record=True)
     text = str(e.value)
     assert "whole_record" in text and "period_samples" in text and "--" not in text and "::" not in text
+
+
+def test_default_window_follows_the_log_as_the_cli(two_runs):
+    # 8000 samples at 1 kHz: 4096 is the power of two nearest 4.096 s, halved to 2048 so that the
+    # log holds 3 segments (8000 < 2 * 4096); 2048-sample segments give 1000/2048 Hz bins.
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        r = zwidth.estimate_logs(two_runs[0])
+    np.testing.assert_allclose(np.diff(np.asarray(r.f_hz)), 1000.0 / 2048, rtol=1e-12)
 
 
 def test_whole_record_of_two_runs_uses_every_sample(two_runs):
