@@ -289,7 +289,7 @@ void ExportModel(const ModelFile& mf, ExportFormat fmt, double T, const std::str
                  const ident::FrequencyResponse* response) {
   mf.plant.Validate();
   if (response && fmt != ExportFormat::kMat && fmt != ExportFormat::kMat73) {
-    throw InputError("a measured response is exported only in the .mat formats (--format mat or mat73), not " +
+    throw InputError("a measured response is exported only in the .mat formats (the formats mat and mat73), not " +
                      ToString(fmt));
   }
   switch (fmt) {

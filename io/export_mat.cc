@@ -27,7 +27,7 @@ class MatWriter {
       : path_(path), mat_(Mat_CreateVer(path.c_str(), nullptr, v73 ? MAT_FT_MAT73 : MAT_FT_MAT5)) {
     if (!mat_) {
       throw InputError("cannot create the MATLAB file '" + path + "'" +
-                       (v73 ? " as v7.3 (this libmatio may lack HDF5 support: use --format mat for v5)" : ""));
+                       (v73 ? " as v7.3 (this libmatio may lack HDF5 support: export the format mat, v5, instead)" : ""));
     }
   }
   // rows x cols, column-major values.

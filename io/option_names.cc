@@ -22,6 +22,7 @@ const std::vector<OptionName>& OptionNames() {
       {"OutputFolder::force", "--force", ""},
       {"WelchOptions::window_length", "--window-length", "window_length"},
       {"WelchOptions::detrend", "--detrend", "detrend"},
+      {"BatchOptions::threads", "--jobs", ""},
       {"LogsEstimateOptions::whole_record", "--whole-record", "whole_record"},
       {"LogsEstimateOptions::period_samples", "--period-samples", "period_samples"},
       {"LogsEstimateOptions::reference_column", "--reference-column", "reference_column"},
