@@ -6,6 +6,7 @@
 #include "io/atomic_file.h"
 #include "io/frf_file.h"
 #include "io/printable.h"
+#include "io/provenance.h"
 #include "io/stability_files.h"
 #include "model/error.h"
 
@@ -89,7 +90,8 @@ void AddFitCommands(CLI::App& app) {
     const double T = ResolvePeriod(c->period, &m);
     app::ConvertDelayToPeriod(&r, T, "the reference");
     std::string text;
-    const nlohmann::json j = CompareModels(m, r, c->delays, T, &text);
+    nlohmann::json j = CompareModels(m, r, c->delays, T, &text);
+    j["provenance"] = io::ProvenanceJson();
     if (c->json) std::cout << j.dump(2) << std::endl;
     else std::printf("%s", io::PrintableLines(text).c_str());
   });

@@ -409,7 +409,9 @@ void WarnRelay(const stability::RelayResult& res) {
 void PrintRelay(const stability::RelayResult& res, const stability::CriticalPoint& cp, const nlohmann::json& j,
                 bool json) {
   if (json) {
-    std::cout << j.dump() << std::endl;
+    nlohmann::json out = j;
+    out["provenance"] = io::ProvenanceJson();
+    std::cout << out.dump() << std::endl;
   } else if (res.status == stability::RelayStatus::kDiverged) {
     std::printf("relay: the loop diverges with the relay alone, so K -> 0+ is unstable here (B past B_max_from_zero): "
                 "K_cr = 0\n");

@@ -10,6 +10,7 @@
 #include "apps/loop_flags.h"
 #include "io/atomic_file.h"
 #include "io/model_json.h"
+#include "io/provenance.h"
 #include "io/stability_files.h"
 #include "model/error.h"
 #include "stability/friction_prediction.h"
@@ -124,7 +125,9 @@ void AddWallCommand(CLI::App& app) {
                                    f->o.damping, f->o.friction, f->o.encoder_step);
     if (!f->trace.empty()) WriteWallTrace(f->trace, r, f->o.period_s);
     if (f->json) {
-      std::cout << WallJson(r, p, f->o).dump() << std::endl;
+      nlohmann::json j = WallJson(r, p, f->o);
+      j["provenance"] = io::ProvenanceJson();
+      std::cout << j.dump() << std::endl;
     } else {
       PrintWall(r, p);
     }

@@ -4,7 +4,7 @@ provenance (issue 26, item 3): the zwidth version (= `zwidth --version`), a UTC 
 test's run, the command line, and each input's SHA-256 equal to hashlib's.
 
 Files: fit -o model.json, run's model.json and summary.json, export --format json and statespace,
-validate -o, boundary --summary, check --json. Also: a model file without format_version (an
+validate -o, boundary --summary, check --json, compare --json, relay --json, wall --json. Also: a model file without format_version (an
 older file) is still read, one with a newer format_version is refused naming the key.
 Exit 77 (skipped) without python3-jsonschema.
 """
@@ -102,6 +102,19 @@ json.dump({"objects": [{"name": "wall", "K": 100, "B": 0.01}]}, open(scene, "w")
 chk = os.path.join(tmp, "check.json")
 zwidth("check", scene, "--model", model, "--delay", "2", "--json", stdout=chk)
 check("check --json", chk, "check.schema.json", [model, scene])
+
+cmp_json = os.path.join(tmp, "compare.json")
+zwidth("compare", model, "--reference", table1, "--json", stdout=cmp_json)
+check("compare --json", cmp_json, "compare.schema.json", [model, table1])
+
+relay_json = os.path.join(tmp, "relay.json")
+zwidth("relay", model, "--delay", "2", "--damping", "0", "--seconds", "2", "--json", stdout=relay_json)
+check("relay --json", relay_json, "relay.schema.json", [model])
+
+wall_json = os.path.join(tmp, "wall.json")
+zwidth("wall", model, "--stiffness", "1", "--damping", "0.01", "--delay", "2", "--coulomb", "0.008", "--seconds", "1",
+       "--json", stdout=wall_json)
+check("wall --json", wall_json, "wall.schema.json", [model])
 
 # The schema is not vacuous: a model file with a misspelt key or a string m is refused by it.
 bad = dict(json.load(open(model)), mm=1)
