@@ -74,6 +74,18 @@ if locale -a 2>/dev/null | grep -qi '^de_DE\.utf-\?8$'; then
 else
   echo "skip: no de_DE.UTF-8 locale (scripts/setup generates it)"
 fi
+# ---- scene object names: what a report and a CI gate read the verdicts by
+for case in 'empty|{"objects":[{"name":"","K":1,"B":0}]}|non-empty string' \
+            'number|{"objects":[{"name":5,"K":1,"B":0}]}|non-empty string' \
+            'twice|{"objects":[{"name":"w","K":1,"B":0},{"name":"w","K":2,"B":0}]}|already used'; do
+  IFS='|' read -r label json pattern <<<"$case"
+  printf '%s' "$json" > "$T/scene_$label.json"
+  expect "scene-name-$label" "$pattern" "" -- "$ZW" check "$T/scene_$label.json" --model "$M" --delay 2
+done
+printf '%s' '{"objects":[{"K":1,"B":0},{"K":2,"B":0}]}' > "$T/scene_unnamed.json"
+"$ZW" check "$T/scene_unnamed.json" --model "$M" --delay 2 --json 2>/dev/null | grep -q '"object1"' \
+  && ok "scene objects without a name are called object<i>" || bad "unnamed scene objects"
+
 no_temps() { [ -z "$(find "$1" -name '*.tmp-*' 2>/dev/null | head -1)" ]; }
 no_temps "$T" && ok "no temporary left" || bad "temporaries left"
 echo "hostile3: $pass passed, $fail failed"
