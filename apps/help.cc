@@ -137,7 +137,8 @@ constexpr OptionTopic kOptionTopics[] = {
     {"", "force", "Output", ""},
     {"", "no-figures", "Output", ""},
     {"", "png", "Output", ""},
-    {"", "format", "Output", "json hdf5 matlab python statespace"},
+    {"", "format", "Output", "json hdf5 matlab python statespace mat mat73"},
+    {"export", "response", "Output", ""},
     {"", "units", "Output", "rotary linear"},
     // batch: many units, one table
     {"batch", "manifest", "Batch", ""},

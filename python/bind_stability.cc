@@ -385,8 +385,7 @@ void DefZWidthSummary(py::class_<PyZWidth>& cls) {
                                                  z.delay_samples, s, {}, z.loop);
                }
                e = io::SummaryToJson(s, has_cov ? &sd : nullptr);
-               e["delay_samples"] = z.delay_samples;
-               e["total_delay_samples"] = s.delay_samples;
+               io::AddDelays(&e, z.delay_samples, z.model.plant.delay_samples);  // loop, model, total: as the CLI
                const stability::Passivity pa(z.model.plant.b, z.z->period_s(), z.z->total_delay(), z.loop);
                e["passivity"] = io::PassivitySummaryJson(pa, z.model.plant.b);
                if (mc > 0) {
@@ -548,6 +547,7 @@ void BindCheck(py::module_& m) {
             const analysis::SceneCheck sc = analysis::CheckScene(used.plant, used.log_covariance, T, delay_samples,
                                                                  {loop}, objs, o);
             out = analysis::SceneCheckJson(sc, objs, delay_samples, T, o);
+            io::AddDelays(&out, delay_samples, used.plant.delay_samples);  // as `zwidth check --json`
           }
           return JsonToPython(out);
         },

@@ -137,8 +137,21 @@ import csv, sys
 r = {r["serial"]: r for r in csv.DictReader(open(sys.argv[1]))}["SN-003"]
 assert r["status"] == "input_error" and "missing.csv" in r["error"], r
 PY
-cmp -s "$T/folders/SN-001/model.json" "$T/run_s2/model.json" && cmp -s "$T/folders/SN-001/summary.json" "$T/run_s2/summary.json" && \
-  [ ! -e "$T/folders/SN-003" ] && ok "--unit-folders: a unit's model.json and summary.json are run's" || { bad "unit folders"; diff "$T/folders/SN-001/summary.json" "$T/run_s2/summary.json" | head; }
+# Equal to run's but for the provenance (its command and date are batch's; its inputs the same log).
+same_but_provenance() {
+  $PY - "$1" "$2" <<'PY'
+import json, sys
+a, b = (json.load(open(p)) for p in sys.argv[1:3])
+pa, pb = a.pop("provenance"), b.pop("provenance")
+assert a == b, "content differs"
+assert pa["command"].startswith("zwidth batch") and pb["command"].startswith("zwidth run"), (pa["command"], pb["command"])
+assert [i["sha256"] for i in pa["inputs"] if i["path"].endswith("u1.csv")] == \
+       [i["sha256"] for i in pb["inputs"] if i["path"].endswith("u1.csv")] != [], (pa["inputs"], pb["inputs"])
+PY
+}
+same_but_provenance "$T/folders/SN-001/model.json" "$T/run_s2/model.json" && \
+  same_but_provenance "$T/folders/SN-001/summary.json" "$T/run_s2/summary.json" && \
+  [ ! -e "$T/folders/SN-003" ] && ok "--unit-folders: a unit's model.json and summary.json are run's (but for the provenance's command)" || { bad "unit folders"; diff "$T/folders/SN-001/summary.json" "$T/run_s2/summary.json" | head; }
 
 # 6. User mistakes: exit 2, the file, line and column named, no table written.
 printf 'serial,path,rat\nA,u1.csv,1000\n' >"$T/line/typo.csv"
