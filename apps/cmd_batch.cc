@@ -24,6 +24,7 @@
 #include "io/atomic_file.h"
 #include "io/batch_table.h"
 #include "io/printable.h"
+#include "io/provenance.h"
 #include "model/error.h"
 #include "model/parallel.h"
 #include "report/run_report.h"
@@ -186,8 +187,14 @@ void Batch(BatchFlags& b, const CLI::App* cmd) {
     return in;
   };
   analysis::BatchUnitDone unit_done;
+  // A unit's files name its own log (and what the batch read before its units: a manifest, a
+  // reference), not the logs other threads read meanwhile.
+  const std::vector<std::string> batch_inputs = io::NotedInputs();
   if (!b.unit_folders.empty()) {
     unit_done = [&](const io::BatchEntry& e, const analysis::RunAnalysis& a) {
+      std::vector<std::string> inputs = batch_inputs;
+      inputs.push_back(e.path);
+      io::ProvenanceInputsScope scope(std::move(inputs));
       io::OutputFolder folder((std::filesystem::path(b.unit_folders) / e.serial).string(), true);
       report::WriteRunReport(a, folder, {.draw_figures = false, .fit_report = FitReport(a.input.fit), .command_line = CommandLine()});
       folder.Commit();

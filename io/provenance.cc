@@ -7,6 +7,8 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <vector>
+#include <utility>
 #include <tuple>
 
 #include <sys/stat.h>
@@ -140,9 +142,19 @@ std::string Sha256OfFile(const std::string& path) {
   return hex;
 }
 
+namespace {
+thread_local const std::vector<std::string>* t_scope_inputs = nullptr;
+}  // namespace
+
+ProvenanceInputsScope::ProvenanceInputsScope(std::vector<std::string> inputs)
+    : inputs_(std::move(inputs)), outer_(t_scope_inputs) {
+  t_scope_inputs = &inputs_;
+}
+ProvenanceInputsScope::~ProvenanceInputsScope() { t_scope_inputs = outer_; }
+
 nlohmann::json ProvenanceJson() {
   nlohmann::json inputs = nlohmann::json::array();
-  for (const std::string& path : NotedInputs()) {
+  for (const std::string& path : t_scope_inputs ? *t_scope_inputs : NotedInputs()) {
     // An input of an earlier command of a long-lived process (a library
     // user's), removed since, is no input of this file: skipped, never a
     // reason to fail the write.

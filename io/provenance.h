@@ -10,6 +10,7 @@
 
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -31,5 +32,20 @@ std::string Sha256OfFile(const std::string& path);
 // The provenance object above, for the inputs noted so far that can still be
 // read (one removed since it was read is left out).
 nlohmann::json ProvenanceJson();
+
+// While one lives, ProvenanceJson on its thread lists exactly `inputs`
+// instead of every input the process noted: the files of one unit of a
+// batch, whose other units' logs are read on other threads meanwhile.
+class ProvenanceInputsScope {
+ public:
+  explicit ProvenanceInputsScope(std::vector<std::string> inputs);
+  ~ProvenanceInputsScope();
+  ProvenanceInputsScope(const ProvenanceInputsScope&) = delete;
+  ProvenanceInputsScope& operator=(const ProvenanceInputsScope&) = delete;
+
+ private:
+  std::vector<std::string> inputs_;
+  const std::vector<std::string>* outer_;
+};
 
 }  // namespace zwidth::io
