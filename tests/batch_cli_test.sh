@@ -148,7 +148,8 @@ assert pa["command"].startswith("zwidth batch") and pb["command"].startswith("zw
 assert [i["sha256"] for i in pa["inputs"] if i["path"].endswith("u1.csv")] == \
        [i["sha256"] for i in pb["inputs"] if i["path"].endswith("u1.csv")] != [], (pa["inputs"], pb["inputs"])
 # The unit's own log only: not the logs of the units read on other threads meanwhile.
-others = [i["path"] for i in pa["inputs"] if i["path"].endswith(".csv") and "/u" in i["path"] and not i["path"].endswith("u1.csv")]
+import re
+others = [i["path"] for i in pa["inputs"] if re.search(r"/u\d+\.csv$", i["path"]) and not i["path"].endswith("/u1.csv")]
 assert not others, others
 PY
 }
