@@ -82,6 +82,7 @@ constexpr OptionTopic kOptionTopics[] = {
     {"", "allow-short", "Fit", ""},
     {"", "min-input-power", "Fit", ""},
     {"", "min-coherence", "Fit", ""},
+    {"", "noise-coherence-sigmas", "Fit", ""},
     {"", "init", "Fit", ""},
     {"", "starts", "Fit", ""},
     {"fit", "friction", "Fit", "none auto coulomb"},

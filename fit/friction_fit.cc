@@ -485,9 +485,27 @@ FrictionFitResult FitFriction(const std::vector<double>& input, const std::vecto
   r.fit = linear;
   r.linear_b = linear.plant.b;
   r.linear_b_std = linear.std_errors.b;
-  r.cutoff_hz = o.cutoff_hz > 0 ? o.cutoff_hz : AutoCutoff(linear.plant, fs);
+  // The seed: the linear fit again on every excited bin when the caller's
+  // dropped noise-coherence bins (ident::BandOptions): on a log with
+  // friction a low coherence is the stick-slip, not noise, and the dropped
+  // low band sets m, b and the cutoff (measured on the friction stress grid:
+  // b -0.4 % -> F_c 13 std off, 30 %/4000 counts F_c -20 %, with the seed
+  // that dropped them).
+  FitResult seed = linear;
+  if (fit_options.band.noise_coherence_sigmas > 0.0) {
+    FitOptions so = fit_options;
+    so.auto_modes = false;
+    so.auto_delay = false;
+    so.num_modes = static_cast<int>(linear.plant.modes.size());
+    so.delay_samples = linear.plant.delay_samples;
+    so.init = linear.plant;
+    so.band.noise_coherence_sigmas = 0.0;
+    FitResult again = FitModel(ident::EstimateFrequencyResponse(input, output, fs, o.welch), so);
+    if (again.status == FitStatus::kConverged) seed = std::move(again);
+  }
+  r.cutoff_hz = o.cutoff_hz > 0 ? o.cutoff_hz : AutoCutoff(seed.plant, fs);
   if (r.cutoff_hz > 0.3 * fs) throw InputError(Num("FrictionFitOptions::cutoff_hz = %g: must be at most 0.3 x the sample rate (%g Hz)", r.cutoff_hz, 0.3 * fs));
-  model::Plant plant = linear.plant;
+  model::Plant plant = seed.plant;
   const std::vector<double> U = PlantTime(input, plant.delay_samples);
   Motion mo = Differentiate(output, fs, plant, r.cutoff_hz);
   Idim id = DetectionIdim(mo, U, plant.m, fs, r.cutoff_hz, o.min_speed_fraction);
@@ -519,10 +537,15 @@ FrictionFitResult FitFriction(const std::vector<double>& input, const std::vecto
   // The friction-free response can favour another basin than the linear
   // fit's (whose sections friction distorted): converge a few screened starts.
   fo.max_converged_starts = std::max(fo.max_converged_starts, 3);
+  // Every excited bin: on a log with friction, a low coherence comes from the
+  // stick-slip the Coulomb model leaves in the friction-free response, not
+  // from noise, and the noise-coherence rule (ident::BandOptions) would drop
+  // the low band that sets m and b (measured: b -58 % at 16 % friction).
+  fo.band.noise_coherence_sigmas = 0.0;
   FitResult refit;
   for (int it = 0; it < o.iterations; ++it) {
     const double b_sim = it > 0 && refit.std_errors.b < id.b_std ? plant.b : 0.0;
-    const double m_std = it == 0 ? linear.std_errors.m : refit.std_errors.m;
+    const double m_std = it == 0 ? seed.std_errors.m : refit.std_errors.m;
     const Sliding sl = SimulatedIdim(mo, Y, U, plant, m_std, b_sim, fs, r.cutoff_hz, o.min_speed_fraction, &id);
     keep(id);
     fo.init = plant;
@@ -538,7 +561,7 @@ FrictionFitResult FitFriction(const std::vector<double>& input, const std::vecto
       mo = Differentiate(output, fs, plant, r.cutoff_hz);
   }
   r.fit = refit;
-  ChooseB(r.linear_b, id, &r.fit);
+  ChooseB(seed.plant.b, id, &r.fit);  // the seed's linear-only b: the one on every excited bin
   r.status = FrictionFitStatus::kFitted;
   r.message = Num("Coulomb friction %.4g +- %.2g", id.fc, id.fc_std) + Num(" (offset %.3g +- %.2g)", id.offset, id.offset_std) +
               Num(" fitted in %.0f rounds; b %.4g", r.iterations, plant.b) + Num(" (the linear-only fit's %.4g)", r.linear_b);

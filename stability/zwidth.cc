@@ -152,43 +152,6 @@ ZWidth::ZWidth(const SampledPlant& sampled, int delay_samples, const LoopOptions
   const double sgn = (total_delay_ % 2 == 0) ? 1.0 : -1.0;  // z^d at z = -1
   K_pi_at_zero_B_ = (-sgn / gpi).real();
   V_pi_ = V(-1.0, 0.0).real();
-  if (!use_polynomial_) BuildZeroKCounts();
-}
-
-void ZWidth::BuildZeroKCounts() {
-  // Each sign change of K(theta) on the grid is one crossing of K = 0 at
-  // B(theta) (a conjugate pair, weight 2), as ZeroKBoundary finds them.
-  auto Kof = [this](double t) { double b, k; Point(t, &b, &k); return k; };
-  zero_k_known_below_ = std::numeric_limits<double>::infinity();
-  if (V_pi_ != 0.0 && K_pi_at_zero_B_ / V_pi_ > 0.0) zero_k_known_below_ = K_pi_at_zero_B_ / V_pi_;
-  for (size_t i = 1; i < grid_theta_.size(); ++i) {
-    if ((grid_K_[i - 1] > 0) == (grid_K_[i] > 0)) continue;
-    const double t = BrentRoot(Kof, grid_theta_[i - 1], grid_theta_[i], grid_K_[i - 1], grid_K_[i],
-                               options_.theta_tolerance);
-    double b, k;
-    Point(t, &b, &k);
-    if (!std::isfinite(b)) { zero_k_known_below_ = std::min(zero_k_known_below_, 0.0); continue; }
-    if (b <= 0.0) continue;
-    const double im_v = has_filter_ ? V(std::cos(t), std::sin(t)).imag() : 1.0;
-    const double dk = grid_K_[i] > grid_K_[i - 1] ? 1.0 : -1.0;
-    if (im_v == 0.0) { zero_k_known_below_ = std::min(zero_k_known_below_, b); continue; }
-    zero_k_steps_.push_back({b, dk * im_v < 0.0 ? 2 : -2});
-  }
-  std::sort(zero_k_steps_.begin(), zero_k_steps_.end(),
-            [](const ZeroKStep& a, const ZeroKStep& b) { return a.B < b.B; });
-  zero_k_count_at_zero_b_ = closed_loop_->RootsOutside(0.0, 0.0, has_integrator_);
-}
-
-int ZWidth::ZeroKCount(double B) const {
-  if (zero_k_count_at_zero_b_ < 0 || !(B >= 0.0 && B < zero_k_known_below_ * (1.0 - 1e-6))) return -1;
-  int count = zero_k_count_at_zero_b_;
-  for (const ZeroKStep& st : zero_k_steps_) {
-    if (std::abs(st.B - B) <= 1e-6 * st.B) return -1;
-    if (st.B > B) break;
-    count += st.step;
-    if (count < 0) return -1;  // a crossing missed: do not trust the table
-  }
-  return count;
 }
 
 void ZWidth::BuildGrid() {
@@ -323,12 +286,7 @@ std::vector<Crossing> ZWidth::Crossings(double B) const {
     Point(t, &b, &k);
     // Reject a spurious "root" at a singularity of B(theta) (a zero of G_d).
     if (!std::isfinite(k) || std::abs(b - B) > 1e-6 * (std::abs(B) + std::abs(lo) + std::abs(hi) + 1e-12)) continue;
-    // The crossing's direction: sign(B'(theta) Im V(theta)) (zwidth.h); B is
-    // monotone on the piece, Im V = sin(theta) / T > 0 without a filter.
-    const double im_v = has_filter_ ? V(std::cos(t), std::sin(t)).imag() : 1.0;
-    const double slope = s.Bb > s.Ba ? 1.0 : (s.Bb < s.Ba ? -1.0 : 0.0);
-    const double sign = slope * im_v;
-    out.push_back({t, k, sign > 0.0 ? 1 : (sign < 0.0 ? -1 : 0)});
+    out.push_back({t, k});
   }
   out.push_back({std::numbers::pi, K_pi_at_zero_B_ - B * V_pi_});
   return out;
@@ -363,10 +321,6 @@ int ZWidth::UnstableRoots(double K, double B) const {
     // The closed-loop state matrix (stability/closed_loop.h): K = 0 is 0+,
     // the integrator's eigenvalue at 1 deflated (it moves inside for K > 0).
     if (K < 0.0 && has_integrator_) return 1;
-    if (K == 0.0) {
-      const int count = ZeroKCount(B);
-      if (count >= 0) return count;
-    }
     return closed_loop_->RootsOutside(K, B, K == 0.0 && has_integrator_);
   }
   return PolynomialStable(K, B) ? 0 : 1;
@@ -489,32 +443,14 @@ std::vector<KInterval> ZWidth::IntervalsFrom(const std::vector<Crossing>& xs, co
   // Merge coincident crossings (a double root at one K); weight: how many
   // roots can cross the circle there (a conjugate pair at 0 < theta < pi, one
   // real root at theta = pi).
-  // step: the signed change of the number of unstable roots across it
-  // (weight times direction), known only when every merged crossing's
-  // direction is.
   std::vector<Crossing> ks;
-  std::vector<int> weight, step;
-  std::vector<char> step_known;
+  std::vector<int> weight;
   for (const Crossing& x : pos) {
     const int w = x.theta < std::numbers::pi ? 2 : 1;
-    if (!ks.empty() && x.K - ks.back().K <= 1e-13 * x.K) {
-      weight.back() += w;
-      step.back() += w * x.direction;
-      step_known.back() = step_known.back() && x.direction != 0;
-      continue;
-    }
+    if (!ks.empty() && x.K - ks.back().K <= 1e-13 * x.K) { weight.back() += w; continue; }
     ks.push_back(x);
     weight.push_back(w);
-    step.push_back(w * x.direction);
-    step_known.push_back(x.direction != 0);
   }
-  // With the eigenvalue test the count is exact, so one test in the first
-  // region and the crossings' directions give every other region's count
-  // (issue 31: a test per region made 64 sections 1 % apart take over 600 s);
-  // a region after a crossing of unknown direction, or where the count would
-  // turn negative (a crossing missed), is tested. Schur-Cohn only says
-  // "at least one", so it keeps the region-by-region tests.
-  const bool counts = !use_polynomial_;
   const double inf = std::numeric_limits<double>::infinity();
   const size_t n = ks.size();
   std::vector<KInterval> out;
@@ -525,28 +461,15 @@ std::vector<KInterval> ZWidth::IntervalsFrom(const std::vector<Crossing>& xs, co
   // unstable roots has at least u - weight unstable, and is not tested while
   // that is positive (the eigenvalue test counts u; Schur-Cohn says u >= 1).
   int unstable_at_least = 0;
-  bool count_known = false;
   for (size_t i = 0; i <= n; ++i) {
-    if (i > 0) {
-      if (counts && count_known && step_known[i - 1] && unstable_at_least + step[i - 1] >= 0) {
-        unstable_at_least += step[i - 1];
-      } else {
-        unstable_at_least -= weight[i - 1];
-        count_known = false;
-      }
-    }
+    if (i > 0) unstable_at_least -= weight[i - 1];
+    if (unstable_at_least > 0) continue;
     const double a = lo_of(i), b = hi_of(i);
-    if (!count_known) {
-      if (unstable_at_least > 0) continue;
-      double probe;
-      // K -> 0+ when there is no crossing at all, or with the exact counts
-      // (K = 0+ lies in the first region; ZeroKCount usually knows it).
-      if (i == 0) probe = (n == 0 || counts) ? 0.0 : 0.5 * b;
-      else if (i == n) probe = 2.0 * a;
-      else probe = std::sqrt(a * b);
-      unstable_at_least = stable(probe);
-      count_known = counts;
-    }
+    double probe;
+    if (i == 0) probe = n == 0 ? 0.0 : 0.5 * b;  // K -> 0+ when there is no crossing at all
+    else if (i == n) probe = 2.0 * a;
+    else probe = std::sqrt(a * b);
+    unstable_at_least = stable(probe);
     if (unstable_at_least != 0) continue;
     if (n == 0 && stable(NoCrossingProbe(xs)) != 0) continue;  // see PointFrom
     if (!out.empty() && out.back().K_hi == a) {  // a tangential crossing: both sides stable

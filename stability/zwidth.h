@@ -47,12 +47,6 @@ struct BoundaryOptions {
 struct Crossing {
   double theta = 0.0;  // rad/sample
   double K = 0.0;      // N m/rad at which a closed-loop pole is at e^{j theta}
-  // Which way the roots at e^{+-j theta} cross as K rises through K (B fixed):
-  // +1 out of the unit circle, -1 into it, 0 not known (theta = pi, or a
-  // tangency). From the D-decomposition curve alone: with F = K + B V(z) - W(z)
-  // zero on the curve, dF/dtheta = 0 gives dz/dK = j z / (K' + B' V), whose
-  // radial part Re(conj(z) dz/dK) has the sign of B'(theta) Im V(theta).
-  int direction = 0;
 };
 
 struct CriticalPoint {
@@ -273,20 +267,6 @@ class ZWidth {
 
   // Picks IsStable's test from polynomial_error().
   void ChooseStabilityTest();
-  // With the eigenvalue test: the number of unstable roots at K = 0+ for
-  // every B from one test at B = 0 and the B > 0 where the curve crosses
-  // K = 0 (below), each with its direction for rising B: out of the circle
-  // when K'(theta) Im V(theta) < 0 (zwidth.h, Crossing::direction, with K
-  // and B swapped). Known up to the first crossing of unknown direction
-  // (the theta = pi line), -1 past it.
-  void BuildZeroKCounts();
-  // The count at (0+, B) from that table; -1 where it does not say (B within
-  // 1e-6, relative, of a crossing, past the table, or no table).
-  int ZeroKCount(double B) const;
-  struct ZeroKStep { double B; int step; };
-  int zero_k_count_at_zero_b_ = -1;
-  std::vector<ZeroKStep> zero_k_steps_;
-  double zero_k_known_below_ = 0.0;  // the table holds for B < this
   // Schur-Cohn on the characteristic polynomial (K = 0 as 0+).
   bool PolynomialStable(double K, double B) const;
 

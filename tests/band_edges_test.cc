@@ -130,7 +130,7 @@ TEST(BandEdges, NoiseCoherenceRegionIsLeftOut) {
     frf.coherence.push_back(c);
   }
   ASSERT_GT(noise_above_threshold, 200);  // the old rule used them all
-  const ident::ExcitedBand b = ident::SelectExcitedBand(frf, ident::BandOptions{});
+  const ident::ExcitedBand b = ident::SelectExcitedBand(frf, ident::BandOptions{.noise_coherence_sigmas = 3.0});  // opt-in
   int used_good = 0, used_noise = 0;
   for (int k = 0; k < 2000; ++k) (k < 1000 ? used_good : used_noise) += b.used[k];
   EXPECT_GE(used_good, 990) << b.Describe();
@@ -197,6 +197,7 @@ TEST(BandEdges, FiveKilohertzDeviceRightFitsAreGood) {
         log.torque, log.position, fs, ident::WelchOptions{.window_length = ident::DefaultWindowLength(fs, N)});
     FitOptions o;
     o.num_modes = 2;
+    o.band.noise_coherence_sigmas = 3.0;  // the noise-coherence rule, opt-in (ident/welch.h)
     const FitResult r = FitModel(frf, o);
     ASSERT_EQ(r.status, FitStatus::kConverged);
     const bool is_right = std::abs(r.plant.modes[0].omega / p.modes[0].omega - 1) < 0.02 &&

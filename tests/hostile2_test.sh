@@ -189,8 +189,8 @@ import json, sys
 json.dump({"objects": [{"name": "evil\nforged: stable\u001b[2J\u001b[31m", "K": 1.0, "B": 0.001}, {"name": "b\r", "K": 2.0, "B": 0.001}]},
           open(f"{sys.argv[1]}/ansi.json", "w"))
 PYEOF
-"$ZW" check "$T/ansi.json" --model "$M" --delay 2 >"$T/ansi.out" 2>&1
-if grep -q $'\e' "$T/ansi.out" || grep -q $'\r' "$T/ansi.out" || [ "$(wc -l < "$T/ansi.out")" -ne 2 ]; then
+"$ZW" check "$T/ansi.json" --model "$M" --delay 2 >"$T/ansi.out" 2>&1  # a delay line, then one line per object
+if grep -q $'\e' "$T/ansi.out" || grep -q $'\r' "$T/ansi.out" || [ "$(wc -l < "$T/ansi.out")" -ne 3 ]; then
   bad "scene names reach the terminal raw"; cat -A "$T/ansi.out"
 else ok "scene names shown escaped: $(head -1 "$T/ansi.out" | cut -c1-60)"; fi
 "$ZW" boundary "$T/x"$'\e[31m'"y.json" -o "$T/o40" 2>"$T/stderr"

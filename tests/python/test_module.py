@@ -551,7 +551,7 @@ def test_docs_python_example(src, tmp_path, cli):
 def auto_fit(cli, log_h5, tmp_path_factory):
     """`zwidth fit --modes auto` and zwidth.fit(modes="auto") on the shipped log."""
     out = tmp_path_factory.mktemp("auto") / "m.json"
-    stdout = cli("fit", log_h5, "-o", out, "--modes", "auto").stdout
+    stdout = cli("fit", log_h5, "-o", out, "--modes", "auto", "--delay-samples", "0").stdout  # Python's default delay
     res = zwidth.fit(zwidth.estimate(zwidth.read_log(log_h5)), modes="auto")
     assert res.brief_report() in stdout
     return res, str(out)
