@@ -19,6 +19,15 @@ WITH_PYTHON=0; [ -f "$BUILD/python/zwidth/__init__.py" ] && WITH_PYTHON=1
 
 # has_dep FIELD PACKAGE: PACKAGE is one of the alternatives of FIELD (a Depends line).
 has_dep() { tr ',|' '\n\n' <<<"$1" | sed 's/(.*//; s/:any//; s/ //g' | grep -qx -- "$2"; }
+# provides_dep DEPENDS PKG: PKG provides a name that DEPENDS lists (a virtual package such as
+# liblapack.so.3, which the BLAS/LAPACK alternative selected here, e.g. OpenBLAS, provides).
+provides_dep() {
+  local v
+  for v in $(dpkg-query -W -f='${Provides}' "$2" 2>/dev/null | tr ',' '\n' | sed 's/(.*//; s/ //g'); do
+    has_dep "$1" "$v" && return 0
+  done
+  return 1
+}
 # owner FILE: the Debian package that holds FILE (through links, and /lib = /usr/lib).
 owner() {
   local f r; r=$(realpath "$1")
@@ -63,7 +72,8 @@ if [ "$MODE" = deb ]; then
       for lib in $(readelf -d "$R/$f" | sed -n 's/.*(NEEDED).*\[\(.*\)\]/\1/p'); do
         path=$(awk -v l="$lib" '$1 == l {print $NF; exit}' "$T/ldcache")
         pkg=$(owner "$path") || fail "$name: no package holds $lib ($path), which $f needs"
-        has_dep "$deps" "${pkg%%:*}" || fail "$name: $f needs $lib ($pkg), not in Depends: $deps"
+        has_dep "$deps" "${pkg%%:*}" || provides_dep "$deps" "${pkg%%:*}" ||
+          fail "$name: $f needs $lib ($pkg), not in Depends: $deps"
       done
     done <"$T/$name.files"
   done
