@@ -11,6 +11,7 @@
 #include <memory>
 #include <string>
 #include <vector>
+#include "model/sample_period.h"
 
 namespace zwidth::ident {
 
@@ -59,7 +60,7 @@ struct FrequencyResponse {
   double sample_rate_hz = 0.0;
   // The sample period T = 1 / sample_rate_hz [s] of the log it was estimated
   // from: the one place it is computed (issue 24).
-  double period_s() const { return 1.0 / sample_rate_hz; }
+  double period_s() const { return model::SamplePeriod(sample_rate_hz); }
   int window_length = 0;
   int num_averages = 0;            // Welch segments averaged
   double effective_averages = 0;   // Welch (1967) equivalent independent averages

@@ -18,6 +18,7 @@
 #include <functional>
 #include <string>
 #include <vector>
+#include "model/sample_period.h"
 
 namespace zwidth::io {
 
@@ -65,7 +66,7 @@ struct LogInfo {
   std::string source;
   size_t num_samples = 0;
   double sample_rate_hz = 0.0;
-  double period_s() const { return 1.0 / sample_rate_hz; }  // the sample period T [s]
+  double period_s() const { return model::SamplePeriod(sample_rate_hz); }  // the sample period T [s]
   // How the file was read, e.g. "text, ';'-separated, header at line 3
   // (comment): t, torque, position; columns 1, 2, 3".
   std::string layout;

@@ -8,13 +8,14 @@
 #include <vector>
 
 #include "model/plant.h"
+#include "model/sample_period.h"
 
 namespace zwidth::model {
 
 struct SimulateOptions {
   double seconds = 30.0;             // log length [s], > 0
   double sample_rate_hz = 1000.0;    // [Hz], > 0
-  double period_s() const { return 1.0 / sample_rate_hz; }  // the sample period T [s]
+  double period_s() const { return SamplePeriod(sample_rate_hz); }  // the sample period T [s]
   double torque_rms = 0.03;          // RMS of the torque [N m], > 0
   double bandwidth_hz = 300.0;       // torque band limit [Hz], > 0; >= Nyquist = white
   double encoder_step_rad = 2.0 * 3.14159265358979323846 / 40960.0;  // rad per count; 0 = none
@@ -27,7 +28,7 @@ struct SimulateOptions {
 
 struct SimulatedLog {
   double sample_rate_hz = 0.0;
-  double period_s() const { return 1.0 / sample_rate_hz; }  // the sample period T [s]
+  double period_s() const { return SamplePeriod(sample_rate_hz); }  // the sample period T [s]
   std::vector<double> torque;    // N m
   std::vector<double> position;  // rad
 };

@@ -16,6 +16,7 @@
 #include "model/error.h"
 #include "model/simulate.h"
 #include "python/bind_common.h"
+#include "model/sample_period.h"
 
 namespace zwidth::python {
 namespace {
@@ -25,7 +26,7 @@ struct PyLog {
   std::string source;
   double sample_rate_hz = 0.0;
   std::vector<double> u, y;
-  double period_s() const { return 1.0 / sample_rate_hz; }
+  double period_s() const { return model::SamplePeriod(sample_rate_hz); }
 };
 
 ident::WelchOptions WelchFrom(int window_length, double overlap, const std::string& window,
@@ -208,7 +209,7 @@ void BindLog(py::module_& m) {
            "u [N m] and y [rad]: 1-D arrays of finite numbers of the same length; sample_rate_hz [Hz] > 0.")
       .def_readonly("source", &PyLog::source, "the file it was read from ('' when made in memory)")
       .def_readonly("sample_rate_hz", &PyLog::sample_rate_hz, "[Hz]")
-      .def_property_readonly("period_s", &PyLog::period_s, "sample period 1 / sample_rate_hz [s]")
+      .def_property_readonly("period_s", &PyLog::period_s, "the sample period T [s]")
       .def_property_readonly("num_samples", [](const PyLog& l) { return l.u.size(); })
       .def_property_readonly("t", [](const PyLog& l) {
         std::vector<double> t(l.u.size());
@@ -323,7 +324,7 @@ void BindFrequencyResponse(py::module_& m) {
            py::arg("path"), "Writes it as `zwidth estimate -o` does (CSV or HDF5 by extension).");
   cls.def_readonly("sample_rate_hz", &ident::FrequencyResponse::sample_rate_hz, "[Hz]")
       .def_property_readonly("period_s", &ident::FrequencyResponse::period_s,
-                             "sample period 1 / sample_rate_hz [s] of the log it was estimated from")
+                             "the sample period T [s] of the log it was estimated from")
       .def_readonly("window_length", &ident::FrequencyResponse::window_length, "samples per segment")
       .def_readonly("num_averages", &ident::FrequencyResponse::num_averages, "Welch segments averaged")
       .def_readonly("effective_averages", &ident::FrequencyResponse::effective_averages,
