@@ -365,12 +365,37 @@ CsvHeader ReadHeader(const std::optional<CsvPreLine>& last, const Delim& delim_v
 int FindColumn(const std::string& spec, bool required, const char* flag, const std::vector<std::string>& names,
                size_t ncols, const std::string& path, const std::string& layout) {
   if (!required && (spec.empty() || spec == "none")) return -1;
-  for (size_t i = 0; i < names.size(); ++i) if (names[i] == spec) return static_cast<int>(i);
-  int match = -1, count = 0;
-  for (size_t i = 0; i < names.size(); ++i) {
-    if (Lower(names[i]) == Lower(spec)) { match = static_cast<int>(i); ++count; }
+  // Each rule in turn; a name that two columns answer is refused (reading
+  // either one silently could fit the wrong signal).
+  auto unique = [&](auto&& same, const char* how) {
+    std::vector<size_t> hits;
+    for (size_t i = 0; i < names.size(); ++i) if (same(names[i])) hits.push_back(i);
+    if (hits.size() > 1) {
+      throw InputError(path + ": " + std::to_string(hits.size()) + " columns answer to '" + spec.substr(0, 40) + "'" +
+                       how + " (columns " + std::to_string(hits[0] + 1) + " and " + std::to_string(hits[1] + 1) +
+                       "; " + layout + "): choose one by position with " + flag + " N");
+    }
+    return hits.empty() ? -1 : static_cast<int>(hits[0]);
+  };
+  // A header's unit in brackets ("torque [mNm]", "t (s)") is not part of the
+  // name a default such as 'torque' or 't' looks for.
+  auto without_unit = [](std::string n) {
+    while (!n.empty() && (n.back() == ' ' || n.back() == '\t')) n.pop_back();
+    if (!n.empty() && (n.back() == ']' || n.back() == ')')) {
+      const size_t open = n.find_last_of(n.back() == ']' ? '[' : '(');
+      if (open != std::string::npos && open > 0) n.erase(open);
+      while (!n.empty() && (n.back() == ' ' || n.back() == '\t')) n.pop_back();
+    }
+    return n;
+  };
+  if (const int c = unique([&](const std::string& n) { return n == spec; }, ""); c >= 0) return c;
+  const std::string want = Lower(spec);
+  if (const int c = unique([&](const std::string& n) { return Lower(n) == want; }, " (ignoring case)"); c >= 0) return c;
+  if (const int c = unique([&](const std::string& n) { return Lower(without_unit(n)) == want; },
+                           " (its unit in brackets aside)");
+      c >= 0) {
+    return c;
   }
-  if (count == 1) return match;
   const int pos = Position(spec);
   if (pos >= 1 && static_cast<size_t>(pos) <= ncols) return pos - 1;
   if (!required) return -1;

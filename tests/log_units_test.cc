@@ -108,6 +108,33 @@ TEST_F(LogUnits, UnitsInHeaderNamesAreConverted) {
   }
 }
 
+// The default column names ('t', 'torque', 'position') find columns whose
+// header carries a bracketed unit; the unit is still converted.
+TEST_F(LogUnits, DefaultNamesFindColumnsWithBracketedUnits) {
+  ExpectSi(ReadLog(dir_.Write("b.csv", "t [s],torque [mNm],position [deg]\n" + Rows(s_, 1e3, kDeg))), s_);
+  LogSelect time;
+  time.time_column = "time";
+  ExpectSi(ReadLog(dir_.Write("b2.csv", "Time (s);Torque (N m);Position (mrad)\n" + Rows(s_, 1, 1e3, ";")), time), s_);
+}
+
+// A name that two columns answer is refused, by each matching rule, naming
+// both columns and the flag that picks one by position; the other columns
+// of the same file still read.
+TEST_F(LogUnits, ANameTwoColumnsAnswerIsRefused) {
+  std::string four;  // t, u, u, y: the torque twice
+  for (size_t k = 0; k < s_.u.size(); ++k) four += Num(s_.t[k]) + "," + Num(s_.u[k]) + "," + Num(s_.u[k]) + "," + Num(s_.y[k]) + "\n";
+  for (const char* header : {"t,torque,torque,position", "t,TORQUE,Torque,position", "t,torque [N m],torque [mNm],position"}) {
+    SCOPED_TRACE(header);
+    const std::string why = Refusal(dir_.Write("dup.csv", std::string(header) + "\n" + four));
+    EXPECT_NE(why.find("2 columns answer to 'torque'"), std::string::npos) << why;
+    EXPECT_NE(why.find("columns 2 and 3"), std::string::npos) << why;
+    EXPECT_NE(why.find("LogSelect::input_column"), std::string::npos) << why;
+  }
+  LogSelect by_position;
+  by_position.input_column = "3";
+  ExpectSi(ReadLog(dir_.Write("dup.csv", "t,torque,torque,position\n" + four), by_position), s_);
+}
+
 TEST_F(LogUnits, AUnitsRowUnderTheHeaderIsRead) {
   const Log log = ReadLog(dir_.Write("r.csv", "t;torque;position\ns;mN m;deg\n" + Rows(s_, 1e3, kDeg, ";")));
   ExpectSi(log, s_);
