@@ -10,6 +10,8 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include "io/atomic_file.h"
 #include "io/provenance.h"
@@ -64,8 +66,12 @@ void CheckPlausible(double v, const std::string& source, const std::string& name
   if (!(v >= kPlausibleMin && v <= kPlausibleMax)) {
     char b[64];
     std::snprintf(b, sizeof b, "%g", v);
-    Fail(source, "key '" + name + "' = " + b + " is outside the plausible range [1e-12, 1e12] (SI units, rad/s); "
-                 "check the units");
+    const char last = name.back();
+    const char* unit = last == 'm' ? "kg m^2 (kg on a linear axis)"
+                       : last == 'b' ? "N m s/rad (N s/m on a linear axis)"
+                                     : "rad/s";
+    Fail(source, "key '" + name + "' = " + b + " is outside the plausible range [1e-12, 1e12] (SI units: " + unit +
+                     "); check the units");
   }
 }
 
@@ -89,6 +95,17 @@ model::Plant ParsePlant(const json& j, const std::string& source, const std::str
     CheckKeys(mj, {"omega", "c", "v", "d"}, source, w);
     p.modes.push_back({Number(mj, "omega", source, w, is_std), Number(mj, "c", source, w, is_std),
                        Number(mj, "v", source, w, is_std), Number(mj, "d", source, w, is_std)});
+  }
+  if (is_std) {  // a standard error is >= 0 (inf: null, unknown)
+    std::vector<std::pair<std::string, double>> all = {{"m", p.m}, {"b", p.b}};
+    for (size_t i = 0; i < p.modes.size(); ++i) {
+      const std::string w = "modes[" + std::to_string(i) + "].";
+      const model::Mode& md = p.modes[i];
+      for (auto [k, v] : {std::pair{"omega", md.omega}, {"c", md.c}, {"v", md.v}, {"d", md.d}}) all.emplace_back(w + k, v);
+    }
+    for (const auto& [k, v] : all) {
+      if (v < 0.0) Fail(source, "key '" + where + k + "' is a standard error and must be >= 0 (null: unknown)");
+    }
   }
   if (!is_std) {
     CheckPlausible(p.m, source, where + "m");

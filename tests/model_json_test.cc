@@ -45,6 +45,38 @@ TEST(ModelJson, DelaysAndParametersOutsideTheirRangesAreRefused) {
   EXPECT_THROW(ParseModelJson(R"({"m": 1e-3, "b": 5e-3, "modes": [)" + modes + "]}", "model.json"), InputError);
 }
 
+// A standard error is >= 0 (null: unknown), in every key; a parameter out of
+// range is refused with its own SI unit, not another key's.
+TEST(ModelJson, NegativeStandardErrorsAreRefusedAndRangesNameTheirUnits) {
+  const std::string mode = R"({"omega": 400, "c": 80, "v": 380, "d": 70})";
+  const std::string head = R"({"m": 1e-3, "b": 5e-3, "modes": [)" + mode + R"(], "std": )";
+  EXPECT_NO_THROW(ParseModelJson(head + R"({"m": 1e-5, "b": null, "modes": [{"omega": 1, "c": 0, "v": 2, "d": 3}]}})",
+                                 "model.json"));
+  for (const char* bad : {R"({"m": -1e-5, "b": 1e-4, "modes": [{"omega": 1, "c": 1, "v": 2, "d": 3}]})",
+                          R"({"m": 1e-5, "b": 1e-4, "modes": [{"omega": 1, "c": 1, "v": -2, "d": 3}]})"}) {
+    SCOPED_TRACE(bad);
+    try {
+      ParseModelJson(head + bad + "}", "model.json");
+      ADD_FAILURE() << "accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("standard error and must be >= 0"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("key 'std."), std::string::npos) << e.what();
+    }
+  }
+  auto refusal = [](const std::string& text) {
+    try {
+      ParseModelJson(text, "model.json");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(refusal(R"({"m": 1e-300, "b": 5e-3, "modes": []})").find("kg m^2"), std::string::npos);
+  EXPECT_NE(refusal(R"({"m": 1e-3, "b": 5e300, "modes": []})").find("N m s/rad"), std::string::npos);
+  EXPECT_NE(refusal(R"({"m": 1e-3, "b": 5e-3, "modes": [{"omega": -4, "c": 80, "v": 380, "d": 70}]})").find("rad/s"),
+            std::string::npos);
+}
+
 TEST(ModelJson, FrictionRoundTripsAndIsChecked) {
   const std::string head = R"({"m": 1e-3, "b": 5e-3, "modes": [], )";
   const ModelFile mf = ParseModelJson(
