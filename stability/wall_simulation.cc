@@ -17,13 +17,15 @@ bool WallOptions::IsValid(std::string* why) const {
   auto bad = [&](const std::string& m) { if (why) *why = "WallOptions::" + m; return false; };
   if (!(std::isfinite(period_s) && period_s > 0)) return bad("period_s must be finite and > 0");
   if (delay_samples < 0) return bad("delay_samples must be >= 0");
-  if (!(std::isfinite(stiffness) && stiffness >= 0)) return bad("stiffness must be finite and >= 0");
-  if (!(std::isfinite(damping) && damping >= 0)) return bad("damping must be finite and >= 0");
+  // Past 1e12 (the model file's range for m and b) K x and B v overflow the
+  // simulation's arithmetic long before any device could render them.
+  if (!(std::isfinite(stiffness) && stiffness >= 0 && stiffness <= 1e12)) return bad("stiffness must lie in [0, 1e12]");
+  if (!(std::isfinite(damping) && damping >= 0 && damping <= 1e12)) return bad("damping must lie in [0, 1e12]");
   if (!(std::isfinite(seconds) && seconds > 0)) return bad("seconds must be finite and > 0");
   if (seconds / period_s < 64) return bad("seconds must give at least 64 samples");
   if (seconds / period_s > 5e7) return bad("seconds / period_s is over 5e7 samples: simulate less");
-  if (!(std::isfinite(initial_position) && initial_position != 0.0)) {
-    return bad("initial_position must be finite and != 0 (the wall is at 0)");
+  if (!(std::isfinite(initial_position) && initial_position != 0.0 && std::abs(initial_position) <= 1e6)) {
+    return bad("initial_position must be != 0 (the wall is at 0) and within +-1e6");
   }
   if (!(std::isfinite(encoder_step) && encoder_step >= 0)) return bad("encoder_step must be finite and >= 0");
   std::string w;

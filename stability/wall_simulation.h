@@ -25,10 +25,10 @@ namespace zwidth::stability {
 struct WallOptions {
   double period_s = 0.001;        // sample period T [s], > 0
   int delay_samples = 1;          // loop delay [samples], >= 0 (the model's own delay adds)
-  double stiffness = 0.0;         // K [N m/rad], finite, >= 0
-  double damping = 0.0;           // B [N m s/rad], finite, >= 0
+  double stiffness = 0.0;         // K [N m/rad], in [0, 1e12]
+  double damping = 0.0;           // B [N m s/rad], in [0, 1e12]
   double seconds = 10.0;          // simulated time [s], > 0; at least 64 samples, at most 5e7
-  double initial_position = 0.01; // the device starts at rest here [rad], finite, != 0
+  double initial_position = 0.01; // the device starts at rest here [rad], != 0, within +-1e6
   double encoder_step = 0.0;      // rad per count, >= 0; 0 = exact position
   model::Friction friction;       // at the plant input
   model::Actuator actuator;       // on the wall's force

@@ -186,5 +186,24 @@ TEST(RelayWithFriction, StickSlipPathWithNegligibleFrictionGivesTheLinearKcr) {
   EXPECT_THROW(SimulateRelay(p, o), InputError);
 }
 
+// Values past what any device renders are refused before the simulation
+// (K = 1e300 ran and printed "grows (amplitude nan ...)" with exit 0).
+TEST(WallSimulation, OptionsPastTheirRangesAreRefused) {
+  auto problem = [](auto set) {
+    WallOptions o;
+    o.stiffness = 1.0;
+    set(o);
+    std::string why;
+    return o.IsValid(&why) ? std::string("valid") : why;
+  };
+  EXPECT_EQ(problem([](WallOptions&) {}), "valid");
+  EXPECT_EQ(problem([](WallOptions& o) { o.stiffness = 1e12; o.damping = 1e12; o.initial_position = -1e6; }), "valid");
+  EXPECT_NE(problem([](WallOptions& o) { o.stiffness = 1e300; }).find("WallOptions::stiffness"), std::string::npos);
+  EXPECT_NE(problem([](WallOptions& o) { o.damping = 2e12; }).find("WallOptions::damping"), std::string::npos);
+  EXPECT_NE(problem([](WallOptions& o) { o.initial_position = 1e300; }).find("WallOptions::initial_position"),
+            std::string::npos);
+  EXPECT_NE(problem([](WallOptions& o) { o.stiffness = std::nan(""); }).find("WallOptions::stiffness"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace zwidth::stability
