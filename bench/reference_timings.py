@@ -63,13 +63,15 @@ p = np.exp(sol.x)
 perr = max(abs(p[i] / truth[i] - 1) for i in (0, 1, 2, 4, 6, 8))
 rows.append(("fit (10 parameters, ZOH residual)", "SciPy least_squares, 1 start", t * 1e3, f"max rel err m, b, freqs {perr:.4f}"))
 
-# 3. The paper's margin() loop, eq. (4) with the parenthesis corrected, B = 0:0.001:0.099, d = 2.
+# 3. The paper's margin() loop, eq. (4) as its README reads it (the appendix's
+# parenthesis corrected): margin(T/((T z^d)/Gz + B (z-1)/z)), i.e. the gain
+# margin of Gz/(z^d + B (z-1)/(T z) Gz), B = 0:0.001:0.099, d = 2.
 octave = shutil.which("octave-cli") or shutil.which("octave")
 if octave:
     script = """pkg load control;
 G=tf(856,[1 5 0])*tf(2296*[1 80 174400],1744*[1 83 229600])*tf(13440*[1 90 298800],2988*[1 352 1344000]);
 T=0.001; z=tf([1 0],1,T); Gz=c2d(G,T); v=0:0.001:0.099; K=v*0; tic;
-for n=1:numel(v), B=v(n); K(n)=margin(Gz/(z^2 + B*(z-1)/z*Gz)); end
+for n=1:numel(v), B=v(n); K(n)=margin(Gz/(z^2 + B*(z-1)/(T*z)*Gz)); end
 printf('%.6f\\n', toc); printf('%.12g\\n', K);"""
     out = subprocess.run([octave, "--no-gui", "--quiet", "--eval", script], capture_output=True, text=True)
     vals = out.stdout.split()
@@ -88,6 +90,64 @@ printf('%.6f\\n', toc); printf('%.12g\\n', K);"""
 else:
     rows.append(("boundary, 100-point sweep at d = 2", "GNU Octave margin() loop", float("nan"), "Octave not installed"))
 
+# 4. The whole job as a user waits for it, whole processes (start-up, reading,
+# writing included): `zwidth run --no-figures` (estimate, order search, std,
+# 1000 B x 3 delays, passivity) against a Python process doing Welch plus the
+# one-start SciPy fit above and an Octave process doing margin() over 100 B at
+# d = 2, 4, 8 (eq. (4) as above). Medians of 5 runs, alternated.
+def whole(cmd):
+    t0 = time.perf_counter()
+    out = subprocess.run(cmd, capture_output=True, text=True)
+    return time.perf_counter() - t0, out.returncode
+work = tempfile.mkdtemp()
+fit_py = os.path.join(work, "scipy_fit.py")
+with open(fit_py, "w") as fh:
+    fh.write(f"""import json, numpy as np, scipy.signal as ss, h5py
+from scipy.optimize import least_squares
+T = 1e-3
+with h5py.File({os.path.join(src, "datasets/phantom/phantom_30s.h5")!r}) as f:
+    u, y = f["/input/torque"][:], f["/output/position"][:]
+kw = dict(fs=1000, window="hann", nperseg=4096, noverlap=2048, detrend="linear")
+f, Puy = ss.csd(u, y, **kw); _, Puu = ss.welch(u, **kw); _, Pyy = ss.welch(y, **kw)
+sel = (f >= 0.7) & (f <= 300); f, H = f[sel], (Puy / Puu)[sel]
+def resp(p):
+    num, den = np.array([1.0]), np.array([p[0], p[1], 0.0])
+    for w, c, v, d in zip(*[iter(p[2:])] * 4):
+        num = np.polymul(num, w**2 / v**2 * np.array([1, d, v**2])); den = np.polymul(den, [1, c, w**2])
+    nd, dd, _ = ss.cont2discrete((num, den), T, method="zoh")
+    return ss.freqz(nd.ravel(), dd, worN=2 * np.pi * f * T)[1]
+def resid(x):
+    e = (H - resp(np.exp(x))) / np.abs(H)
+    return np.concatenate([e.real, e.imag])
+x0 = np.log(np.array({truth!r}) * 1.1)
+print(json.dumps(list(np.exp(least_squares(resid, x0, method="lm").x))))
+""")
+margin_m = os.path.join(work, "margin_sweep.m")
+with open(margin_m, "w") as fh:
+    fh.write("""pkg load control;
+G=tf(856,[1 5 0])*tf(2296*[1 80 174400],1744*[1 83 229600])*tf(13440*[1 90 298800],2988*[1 352 1344000]);
+T=0.001; z=tf([1 0],1,T); Gz=c2d(G,T); v=linspace(0,0.099,100);
+for d=[2 4 8], for n=1:numel(v), B=v(n); K=margin(Gz/(z^d + B*(z-1)/(T*z)*Gz)); end, end
+""")
+log_csv = os.path.join(src, "datasets/phantom/phantom_30s.csv")
+runs = {"zwidth": [], "scipy": [], "octave": []}
+for i in range(5):
+    out_dir = os.path.join(work, f"run{i}")
+    runs["zwidth"].append(whole([zw, "run", log_csv, "-o", out_dir, "--no-figures"]))
+    runs["scipy"].append(whole(["/usr/bin/python3", fit_py]))
+    if octave:
+        runs["octave"].append(whole([octave, "--no-gui", "--quiet", margin_m]))
+med = {k: float(np.median([t for t, rc in v])) if v and all(rc == 0 for _, rc in v) else float("nan")
+       for k, v in runs.items()}
+anchor = med["scipy"] + med["octave"]
+rows.append(("whole job: `zwidth run --no-figures` (process)", "zwidth", med["zwidth"] * 1e3, "median of 5"))
+rows.append(("whole job: Welch + 1-start fit (process)", "SciPy", med["scipy"] * 1e3, "median of 5"))
+rows.append(("whole job: margin() over 100 B at d = 2, 4, 8 (process)", "GNU Octave", med["octave"] * 1e3,
+             "median of 5" if octave else "Octave not installed"))
+shutil.rmtree(work, ignore_errors=True)
+
 print("| stage | reference | time [ms] | error |\n|---|---|---|---|")
 for st, ref, ms, e in rows:
     print(f"| {st} | {ref} | {ms:.2f} | {e} |")
+print(f"\nwhole job, whole processes: (SciPy + Octave) / zwidth run = {anchor:.3f} s / {med['zwidth']:.3f} s = "
+      f"{anchor / med['zwidth']:.1f}x")
