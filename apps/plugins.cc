@@ -1,4 +1,4 @@
-// The zwidth executable's own io::internal::Hdf5() and fit::FitLibrary()
+// The zwidth executable's provider of io::internal::Hdf5() and its own fit::FitLibrary()
 // (io/hdf5_api.h, fit/fit_api.h): the HDF5/MATLAB code and the fit are loaded
 // from the plugins zwidth-hdf5.so and zwidth-fit.so on first use, so that a
 // command that needs neither (--help, boundary, relay, check, compare on JSON
@@ -82,17 +82,16 @@ std::mutex g_fit_mutex;
 }  // namespace
 
 namespace io::internal {
+namespace {
 
-const Hdf5Api& Hdf5() {
+const Hdf5Api& LoadedHdf5() {
   return Loaded(g_hdf5, g_hdf5_mutex, "zwidth-hdf5.so", "zwidth_hdf5_plugin", kHdf5ApiKey ^ ZWIDTH_ABI_HASH,
                 "HDF5 and MATLAB files");
 }
+// Hdf5()'s table (io/hdf5_api.h) is the plugin's, loaded on first call.
+const bool kProvided = (SetHdf5Provider(&LoadedHdf5), true);
 
-long Hdf5OpenObjects() {
-  std::lock_guard<std::mutex> lock(g_hdf5_mutex);
-  return g_hdf5 ? g_hdf5->open_objects() : 0;  // not loaded: no HDF5 file can be open
-}
-
+}  // namespace
 }  // namespace io::internal
 
 namespace fit {

@@ -20,8 +20,6 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
-#include "io/hdf5_api.h"
-#include "io/isolated.h"
 #include "model/error.h"
 
 namespace zwidth::io {
@@ -247,16 +245,6 @@ void SyncFile(const std::string& tmp, const std::string& shown) {
   if (::close(fd) != 0) throw InputError("failed writing '" + shown + "' (disk full?); nothing was written");
 }
 
-// An HDF5 file whose close failed (a full disk) stays open inside libhdf5,
-// which retries at exit and crashes (SIGSEGV instead of exit 2; closing it
-// again crashes the same way). So once that happened, the process ends with
-// the exit code of an InputError before libhdf5's exit handler runs (atexit
-// handlers run in reverse order of registration, this one is the latest).
-void ExitBeforeHdf5Cleanup() {
-  std::fflush(nullptr);
-  ::_exit(2);
-}
-
 // Removes the (registered) temporary file however the scope is left.
 struct TempGuard {
   std::string path;
@@ -340,10 +328,7 @@ void WriteAtomically(const std::string& path, const std::function<void(const std
   if (path == "-") {
     const char* dir = std::getenv("TMPDIR");
     TempGuard tmp(CreateTemp(std::string(dir && *dir ? dir : "/tmp") + "/zwidth-stdout"));
-    {
-      std::lock_guard<std::recursive_mutex> hold(LibraryForkMutex());  // write() may call libhdf5
-      write(tmp.path);
-    }
+    write(tmp.path);
     std::ifstream in(tmp.path, std::ios::binary);
     std::fflush(stdout);
     char buf[1 << 16];
@@ -358,20 +343,7 @@ void WriteAtomically(const std::string& path, const std::function<void(const std
   const std::string dest = Destination(path);
   CheckNotAnInput(path, dest, {});
   TempGuard tmp(CreateTemp(dest));
-  std::unique_lock<std::recursive_mutex> hold(LibraryForkMutex());  // write() may call libhdf5
-  const long h5_open_before = internal::Hdf5OpenObjects();
   write(tmp.path);
-  // An HDF5 writer whose file or objects failed to close (a full disk at the
-  // final flush: the C++ API swallows that error in its destructors) leaves
-  // them open. Such a file is corrupt: it is never renamed into place.
-  const bool left_open = internal::Hdf5OpenObjects() > h5_open_before;
-  hold.unlock();
-  if (left_open) {
-    static std::once_flag once;
-    std::call_once(once, [] { std::atexit(ExitBeforeHdf5Cleanup); });
-    throw InputError("failed writing '" + path + "': the HDF5 library could not close the file "
-                     "(disk full?); nothing was written");
-  }
   SyncFile(tmp.path, path);
   // Checked again just before the rename: the destination may have changed
   // (another process) during the work.

@@ -297,11 +297,15 @@ void ExportModel(const ModelFile& mf, ExportFormat fmt, double T, const std::str
     case ExportFormat::kMatlab: WriteTextAtomically(path, Matlab(mf, T)); break;
     case ExportFormat::kPython: WriteTextAtomically(path, Python(mf, T)); break;
     case ExportFormat::kStateSpace: WriteTextAtomically(path, StateSpaceJson(mf, T).dump(2) + "\n"); break;
-    case ExportFormat::kHdf5: WriteAtomically(path, [&](const std::string& tmp) { internal::Hdf5().write_model_hdf5(tmp, mf, T); }); break;
+    case ExportFormat::kHdf5:
+      internal::WriteHdf5Atomically(path, [&](const internal::Hdf5Api& h5, const std::string& tmp) {
+        h5.write_model_hdf5(tmp, mf, T);
+      });
+      break;
     case ExportFormat::kMat:
     case ExportFormat::kMat73:
-      WriteAtomically(path, [&](const std::string& tmp) {
-        internal::Hdf5().write_model_mat(tmp, mf, T, response, fmt == ExportFormat::kMat73);
+      internal::WriteHdf5Atomically(path, [&](const internal::Hdf5Api& h5, const std::string& tmp) {
+        h5.write_model_mat(tmp, mf, T, response, fmt == ExportFormat::kMat73);
       });
       break;
   }

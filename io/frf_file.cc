@@ -385,10 +385,13 @@ void CheckInputPower(const ident::FrequencyResponse& r, const std::string& sourc
 void WriteFrequencyResponse(const std::string& path, const ident::FrequencyResponse& r) {
   CheckFiniteResponse(r, path);
   const bool h5 = DetectLogFormat(path) == LogFormat::kHdf5;
-  WriteAtomically(path, [&](const std::string& tmp) {
-    if (h5) internal::Hdf5().write_frf_hdf5(tmp, r);
-    else WriteCsv(tmp, r);
-  });
+  if (h5) {
+    internal::WriteHdf5Atomically(path, [&](const internal::Hdf5Api& api, const std::string& tmp) {
+      api.write_frf_hdf5(tmp, r);
+    });
+  } else {
+    WriteAtomically(path, [&](const std::string& tmp) { WriteCsv(tmp, r); });
+  }
 }
 
 bool IsFrequencyResponseFile(const std::string& path) {

@@ -1,7 +1,7 @@
-// Hdf5() of the static library zwidth_io: the real functions, linked directly
-// (see io/hdf5_api.h; the zwidth executable defines its own Hdf5(), which
-// loads them from the plugin, so this file and what it references stay out of
-// the executable).
+// The table of the real HDF5 and MATLAB functions, in the static library
+// zwidth_hdf5 (target zwidth::hdf5; see io/hdf5_api.h). Linked, it becomes
+// Hdf5()'s provider before main; the zwidth executable never links it (it
+// loads the same table from the plugin zwidth-hdf5.so, io/hdf5_plugin.cc).
 #include "io/hdf5_api.h"
 
 #include <hdf5.h>
@@ -10,7 +10,7 @@
 
 namespace zwidth::io::internal {
 
-const Hdf5Api& Hdf5() {
+const Hdf5Api& LinkedHdf5() {
   static const Hdf5Api api = [] {
     Hdf5Api a;
     a.stream_hdf5_log = StreamHdf5InProcess;
@@ -35,6 +35,13 @@ const Hdf5Api& Hdf5() {
   return api;
 }
 
-long Hdf5OpenObjects() { return Hdf5().open_objects(); }
+namespace {
+// Runs when this object is linked, which zwidth::hdf5's link interface
+// ensures (--undefined=zwidth_link_hdf5: a static library's member that
+// nothing references is otherwise left out, with its initialiser).
+const bool kProvided = (SetHdf5Provider(&LinkedHdf5), true);
+}  // namespace
 
 }  // namespace zwidth::io::internal
+
+extern "C" void zwidth_link_hdf5() { static_cast<void>(zwidth::io::internal::kProvided); }

@@ -3,16 +3,21 @@
 // the zwidth executable's plugin loader).
 //
 // Why: libhdf5 and libmatio bring ~40 shared libraries (curl, krb5, ldap,
-// gnutls...) whose loading costs ~14 ms at every process start. The static
-// library zwidth_io defines Hdf5() in io/hdf5_api.cc as the table of the real
-// functions (find_package(zwidth) users and the Python module get exactly that).
-// The zwidth executable defines Hdf5() itself (apps/plugins.cc): it loads the
-// module zwidth-hdf5.so (io/hdf5_plugin.cc, built from this same library) on
-// first use, so that the commands that never touch HDF5 or MATLAB files never
-// map those libraries. Callers in io/ call Hdf5().<function>(...) and do not
-// know which of the two they got.
+// gnutls...) whose loading costs ~14 ms at every process start, and FindHDF5
+// needs a C compiler in every project that finds it. So the static library
+// zwidth_io holds no HDF5 or MATLAB code: the functions live in zwidth_hdf5
+// (target zwidth::hdf5: io/hdf5_api.cc and the readers and writers it lists),
+// which installs its table as the provider when it is linked (its link
+// interface asks the linker for zwidth_link_hdf5, so its initialiser is kept).
+// The zwidth executable installs its own provider instead (apps/plugins.cc):
+// it loads the module zwidth-hdf5.so (io/hdf5_plugin.cc, built from that same
+// library) on first use, so that the commands that never touch HDF5 or MATLAB
+// files never map those libraries. Callers in io/ call Hdf5().<function>(...)
+// and do not know which provider they got; with none (a program that links
+// zwidth::io without zwidth::hdf5) Hdf5() throws, naming the target to link.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -63,10 +68,29 @@ inline constexpr unsigned long long kHdf5ApiKey =
     (1ull << 56) ^ (sizeof(Hdf5Api) << 40) ^ (sizeof(LogSelect) << 28) ^ (sizeof(LogInfo) << 20) ^
     (sizeof(ident::FrequencyResponse) << 8) ^ sizeof(ModelFile);
 
-// The table: the real functions (zwidth_io), or the plugin's, loaded on first
-// call (the zwidth executable; a missing or broken plugin is a
-// ComputationError naming the file).
+// Where Hdf5() gets its table: zwidth::hdf5's LinkedHdf5, or the executable's
+// plugin loader (a missing or broken plugin is a ComputationError naming the
+// file). The latest call wins; set before main, by static initialisers.
+using Hdf5Provider = const Hdf5Api& (*)();
+void SetHdf5Provider(Hdf5Provider provider);
+
+// The provider's table (io/hdf5_provider.cc, in zwidth_io). Without a provider,
+// a ComputationError that says to link zwidth::hdf5.
 const Hdf5Api& Hdf5();
+
+// The table of the real functions, linked into this binary (io/hdf5_api.cc,
+// in zwidth_hdf5; the plugin's entry point returns it).
+const Hdf5Api& LinkedHdf5();
+
+// The one way io/ writes an HDF5 or MATLAB file: WriteAtomically(path), with
+// write(Hdf5(), tmp) called under LibraryForkMutex() (libhdf5's global lock
+// must not be held across a fork, io/isolated.h). An HDF5 writer whose file or
+// objects failed to close (a full disk at the final flush: the C++ API
+// swallows that error in its destructors) leaves them open; such a file is
+// corrupt, so it is an InputError and never renamed into place (and the
+// process then ends before libhdf5's exit handler, which would crash on it).
+void WriteHdf5Atomically(const std::string& path,
+                         const std::function<void(const Hdf5Api& h5, const std::string& tmp)>& write);
 
 // The real functions behind the table (they need HDF5/matio headers and libraries).
 LogInfo StreamMatInProcess(const std::string& path, const LogSelect& sel, const LogSink& sink);  // log_mat.cc
@@ -78,9 +102,5 @@ void WriteModelMat(const std::string& tmp, const ModelFile& model, double period
                    const ident::FrequencyResponse* frf, bool v73);                               // export_mat.cc
 std::string ReadFrfMatPacked(const std::string& path);                                           // frf_mat.cc
 bool HasFrfMatVariables(const std::string& path);                                                // frf_mat.cc
-
-// HDF5 objects open now, without loading anything: 0 while libhdf5 is not
-// loaded (then nothing can be open).
-long Hdf5OpenObjects();
 
 }  // namespace zwidth::io::internal

@@ -256,10 +256,11 @@ void WriteLog(const std::string& path, double rate, const std::vector<double>& u
   if (!(rate > 0.0)) throw InputError("sample rate must be > 0");
   // By extension: the file is about to be (re)written.
   const bool h5 = HasExtension(path, {".h5", ".hdf5", ".he5"});
-  WriteAtomically(path, [&](const std::string& tmp) {
-    if (h5) Hdf5().write_hdf5_log(tmp, rate, u, y);
-    else WriteCsvLog(tmp, rate, u, y);
-  });
+  if (h5) {
+    WriteHdf5Atomically(path, [&](const Hdf5Api& api, const std::string& tmp) { api.write_hdf5_log(tmp, rate, u, y); });
+  } else {
+    WriteAtomically(path, [&](const std::string& tmp) { WriteCsvLog(tmp, rate, u, y); });
+  }
 }
 
 }  // namespace zwidth::io

@@ -77,6 +77,18 @@ if [ "$MODE" = deb ]; then
       done
     done <"$T/$name.files"
   done
+  # BLAS and LAPACK by their reference interfaces, satisfied by any Debian BLAS: Depends name
+  # liblapack3 | liblapack.so.3 (and libblas3 | libblas.so.3 when libblas.so.3 is NEEDED),
+  # never the implementation selected at build time (libatlas3-base, libopenblas...).
+  for d in "$T"/pkg/zwidth_*.deb "$T"/pkg/python3-zwidth_*.deb; do
+    [ -e "$d" ] || continue
+    deps=$(dpkg-deb -f "$d" Depends)
+    grep -qF "liblapack3 | liblapack.so.3" <<<"$deps" || fail "$(basename "$d"): Depends lack 'liblapack3 | liblapack.so.3': $deps"
+    ! grep -qE '(^|[ ,])libblas3([ ,]|$)' <<<"$deps" || grep -qF "libblas3 | libblas.so.3" <<<"$deps" ||
+      fail "$(basename "$d"): Depends name libblas3 without its alternative libblas.so.3: $deps"
+    ! grep -qE 'libatlas|libopenblas|libblis|libmkl' <<<"$deps" || fail "$(basename "$d"): Depends name a BLAS implementation: $deps"
+  done
+  echo "Depends: liblapack3 | liblapack.so.3 (BLAS through it), no BLAS implementation named"
   # Each file in one package only; the runtime, development and Python parts where they belong.
   dup=$(cat "$T"/*.files | sort | uniq -d)
   [ -z "$dup" ] || fail "files in two packages: $dup"
@@ -128,10 +140,14 @@ for f in fit/fit_internal.h fit/bin_correlated_covariance.h io/io_internal.h io/
          io/h5_safety.h; do
   [ ! -e "$P/include/zwidth/$f" ] || fail "the internal header $f is installed"
 done
-(cd "$P/include/zwidth" && find . -name '*.h' | sort | sed 's|^\./\(.*\)|#include "\1"|') >"$T/all_headers.cc"
+# Consumers write <zwidth/model/plant.h> with <prefix>/include alone on the path: no installed
+# header includes one of ours in the source tree's short form ("model/plant.h").
+bare=$(grep -rlE '#include "(model|ident|fit|stability|io|analysis|report)/' "$P/include/zwidth" || true)
+[ -z "$bare" ] || fail "installed headers include the short form instead of \"zwidth/...\": $bare"
+(cd "$P/include" && find zwidth -name '*.h' | sort | sed 's|^\(.*\)|#include <\1>|') >"$T/all_headers.cc"
 [ "$(wc -l <"$T/all_headers.cc")" -ge 20 ] || fail "fewer than 20 public headers are installed"
-${CXX:-c++} -std=c++20 -fsyntax-only -I"$P/include/zwidth" -isystem /usr/include/eigen3 \
-  $(pkg-config --cflags-only-I hdf5 2>/dev/null) "$T/all_headers.cc" || fail "an installed header does not compile alone"
+${CXX:-c++} -std=c++20 -fsyntax-only -I"$P/include" -isystem /usr/include/eigen3 \
+  "$T/all_headers.cc" || fail "an installed header does not compile with only <prefix>/include"
 if [ "$WITH_PYTHON" = 1 ]; then
   ls "$P/$PY"/zwidth/_zwidth*.so >/dev/null 2>&1 || fail "the Python extension is not installed"
 else
@@ -177,6 +193,16 @@ if [ "$MODE" = deb ]; then
     cmake --build consumer-build -j2 && ./consumer-build/consumer; } >consumer.log 2>&1 ||
     { tail -20 consumer.log; echo "FAIL: tests/consumer against the -dev package"; exit 1; }
   grep -q "^zwidth_DIR:PATH=$P/" consumer-build/CMakeCache.txt || { echo "FAIL: the consumer did not use $P's zwidth"; exit 1; }
+  # examples/: C++ only (no C compiler, no HDF5), against the -dev package; the model-only
+  # example links neither libhdf5 nor libmatio.
+  { cmake -S "$KIT/examples" -B examples-build -DCMAKE_PREFIX_PATH="$P" -DCMAKE_BUILD_TYPE=Release &&
+    cmake --build examples-build -j2 &&
+    ./examples-build/example_model_zwidth "$P/share/zwidth/phantom/table1.json" 2; } >examples.log 2>&1 ||
+    { tail -20 examples.log; echo "FAIL: examples/ (LANGUAGES CXX) against the -dev package"; exit 1; }
+  if readelf -d examples-build/example_model_zwidth | grep NEEDED | grep -qE 'hdf5|matio'; then
+    echo "FAIL: example_model_zwidth links HDF5 or matio"; exit 1
+  fi
+  echo "C++: examples/ (LANGUAGES CXX) built and ran against the -dev package; the model-only one links no HDF5 or matio"
   source "$KIT/deps.sh"; n=0
   while IFS='=' read -r key path; do
     case $path in "$W"/*|"$P"/*|"$KIT"/*) continue ;; esac  # the consumer's own folders, the packages'
@@ -212,6 +238,7 @@ mkdir -p "$T/work" "$T/kit/tests" "$T/kit/datasets"
 # What the smoke needs from the source tree, copied before it is hidden.
 cp "$SRC/tests/cli_help_test.sh" "$SRC/tests/cli_lib.sh" "$T/kit/tests/"
 cp -r "$SRC/tests/consumer" "$T/kit/consumer"
+cp -r "$SRC/examples" "$T/kit/examples"
 ln -s "$P/share/zwidth/phantom" "$T/kit/datasets/phantom"
 declare -f owner >"$T/kit/deps.sh"
 if [ "$MODE" = deb ]; then

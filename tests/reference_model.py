@@ -61,3 +61,22 @@ def loop_eigenvalues(Ad, Bd, Cd, K, B, dt, T):
             M[nx + i, nx + i - 1] = 1.0
     M[nx + dt, :nx] = Cd[0]
     return np.linalg.eigvals(M)
+
+
+def first_unstable_k(max_root, B, d, k_min=1e-7, k_max=1e4, rel=1e-11):
+    """(lo, hi): the K_cr bracket of the loop with max_root(K, B, d) (the largest closed-loop pole
+    modulus), scanned on a geometric grid for the first unstable K and bisected to rel; None when
+    unstable at k_min (K_cr = 0), (inf, inf) when no K up to k_max is unstable."""
+    ks = np.geomspace(k_min, k_max, 400)
+    if max_root(ks[0], B, d) > 1.0:
+        return None
+    prev = ks[0]
+    for k in ks[1:]:
+        if max_root(k, B, d) > 1.0:
+            lo, hi = prev, k
+            while hi / lo - 1.0 > rel:
+                mid = 0.5 * (lo + hi)
+                lo, hi = (lo, mid) if max_root(mid, B, d) > 1.0 else (mid, hi)
+            return lo, hi
+        prev = k
+    return float("inf"), float("inf")
