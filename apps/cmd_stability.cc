@@ -153,6 +153,7 @@ void PrintBoundarySummary(const BoundaryTable& t, const io::ModelFile& mf, const
                   "roots here (rounding moves D(z)'s poles by %.3g of their distance to the unit circle)\n",
                   s.pole_shift);
     }
+    if (!s.conditioning_warning.empty()) std::printf("  warning: %s\n", s.conditioning_warning.c_str());
   }
   std::printf("B_max_0: where the interval from K = 0+ closes; B_max: the largest B with some stable K > 0\n");
   if (loops.size() > 1) {

@@ -74,7 +74,12 @@ nlohmann::json SummaryToJson(const stability::DelaySummary& s, const stability::
           {"frequency_jumps", jumps},
           {"stability_test", {{"method", s.polynomial_test ? "schur-cohn" : "eigenvalues"},
                               {"polynomial_error", NumberOrNull(s.polynomial_error)},
-                              {"pole_shift", NumberOrNull(s.pole_shift)}}}};
+                              {"pole_shift", NumberOrNull(s.pole_shift)},
+                              {"conditioning", {{"relative_separation", NumberOrNull(s.conditioning.relative_separation)},
+                                                {"eigenvalue_condition", NumberOrNull(s.conditioning.eigenvalue_condition)},
+                                                {"eigenvalue_shift", NumberOrNull(s.conditioning.eigenvalue_shift)}}},
+                              {"warning", s.conditioning_warning.empty() ? nlohmann::json(nullptr)
+                                                                         : nlohmann::json(s.conditioning_warning)}}}};
   if (std) {
     j["std"] = {{"K_cr_at_zero_B", NumberOrNull(std->K_cr_at_zero_B)}, {"B_t", NumberOrNull(std->B_t)},
                 {"K_cr_max", NumberOrNull(std->K_cr_max)}, {"B_max", NumberOrNull(std->B_max)}};

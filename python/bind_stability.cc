@@ -364,7 +364,9 @@ void DefZWidthSummary(py::class_<PyZWidth>& cls) {
              return out;
            },
            py::arg("K"), py::arg("B"),
-           "Schur-Cohn test of the closed loop at (K [N m/rad], B [N m s/rad]); broadcasts arrays (K = 0 is "
+           "The closed loop's stability at (K [N m/rad], B [N m s/rad]) by the one test behind every answer "
+           "(stable_intervals, summary, check): Schur-Cohn where the polynomial is well conditioned, else the "
+           "closed-loop matrix's eigenvalues (stability_test in summary()); broadcasts arrays (K = 0 is "
            "taken as 0+). K and B must be finite and >= 0 (InputError naming the first that is not).")
       .def("summary",
            [](const PyZWidth& z, const py::object& monte_carlo, uint64_t seed) {

@@ -85,6 +85,41 @@ std::vector<double> DiscreteDenominator(const model::Plant& plant, double T, con
   return den1;
 }
 
+// The eigenvalues of the balanced discrete A, their condition numbers from the
+// right eigenvectors V and the left ones (the rows of V^-1), and LAPACK's
+// error bound eps |A|_F kappa_i against each pole's distance to the circle.
+PoleConditioning Conditioning(const Eigen::MatrixXd& A, bool has_integrator) {
+  PoleConditioning c;
+  const Eigen::VectorXd sc = model::internal::BalancingScales(A);
+  const Eigen::MatrixXd Ab = sc.cwiseInverse().asDiagonal() * A * sc.asDiagonal();
+  Eigen::EigenSolver<Eigen::MatrixXd> es(Ab, true);
+  if (es.info() != Eigen::Success) return c;
+  const Eigen::VectorXcd z = es.eigenvalues();
+  const Eigen::MatrixXcd V = es.eigenvectors();
+  const Eigen::MatrixXcd W = V.inverse();
+  const int n = static_cast<int>(z.size());
+  int integrator = -1;
+  if (has_integrator) (z.array() - 1.0).abs().minCoeff(&integrator);
+  const double norm = Ab.norm();
+  double min_gap = std::numeric_limits<double>::infinity(), spread = 0.0;
+  c.eigenvalue_condition = 0.0;
+  c.eigenvalue_shift = 0.0;
+  for (int i = 0; i < n; ++i) {
+    for (int j = i + 1; j < n; ++j) {
+      const double g = std::abs(z(i) - z(j));
+      min_gap = std::min(min_gap, g);
+      spread = std::max(spread, g);
+    }
+    const double kappa = V.col(i).norm() * W.row(i).norm();
+    c.eigenvalue_condition = std::max(c.eigenvalue_condition, kappa);
+    if (i == integrator) continue;
+    const double shift = 2.220446049250313e-16 * norm * kappa / (1.0 - std::abs(z(i)));
+    c.eigenvalue_shift = std::max(c.eigenvalue_shift, shift >= 0.0 ? shift : INFINITY);
+  }
+  c.relative_separation = n > 1 && spread > 0.0 ? min_gap / spread : 1.0;
+  return c;
+}
+
 }  // namespace
 
 SampledPlant::SampledPlant(const model::Plant& plant, double period_s, const Hand& hand_in) {
@@ -157,6 +192,7 @@ SampledPlant::SampledPlant(const model::Plant& plant, double period_s, const Han
   }
   for (const std::complex<double>& l : hand_poles) patch(std::abs(l), -2.0 * l.real());
   d->g_minus_one = d->response.AtZ(-1.0);
+  d->conditioning = Conditioning(discrete.A, d->has_integrator);
   d_ = std::move(d);
 }
 

@@ -16,6 +16,7 @@
 #pragma once
 
 #include <complex>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -29,6 +30,33 @@ namespace zwidth::stability {
 // Each patch: the damped frequency sqrt(w^2 - c^2/4) T +- k h, h = max(c T / 16,
 // 1e-9) rad, k = -kModePatchHalfWidth..kModePatchHalfWidth, inside (pi 1e-7, pi (1 - 1e-9)).
 constexpr int kModePatchHalfWidth = 320;
+
+// How well double precision places the sampled plant's poles, per (model,
+// period, hand): the conditioning the closed-loop eigenvalue test rests on
+// (issue 31, must-have 3). Poles: the eigenvalues z_i of the discrete A
+// (balanced, as the closed-loop test balances its matrix).
+struct PoleConditioning {
+  // min_{i != j} |z_i - z_j| / max_{i, j} |z_i - z_j| over the poles (a
+  // conjugate pair counts as two): ~0.01 for a few separated modes, 1e-5 and
+  // below for lightly damped modes within 1 % of each other.
+  double relative_separation = std::numeric_limits<double>::quiet_NaN();
+  // max_i kappa_i, kappa_i = |x_i| |y_i| / |y_i^H x_i| (right and left
+  // eigenvectors): how much a perturbation of A moves z_i.
+  double eigenvalue_condition = std::numeric_limits<double>::quiet_NaN();
+  // max_i eps |A|_F kappa_i / (1 - |z_i|) over the poles inside the circle
+  // (the integrator at z = 1 aside): LAPACK's error bound of a computed
+  // eigenvalue (EPS * ABNRM / RCONDE, the LAPACK Users' Guide section 4.8)
+  // relative to that pole's distance to the unit circle. The eigenvalue
+  // test's analogue of denominator_pole_shift.
+  double eigenvalue_shift = std::numeric_limits<double>::quiet_NaN();
+};
+
+// The warning rule: the eigenvalue test's answers near a boundary rest on the
+// double-precision eigenvalues when eigenvalue_shift exceeds this: the
+// relative neighbourhood of a boundary outside which the answers are stated
+// exact (the 1e-6 offsets at which ZWidth verifies each interval end), so a
+// pole's rounding error can then reach into it.
+constexpr double kEigenvalueShiftWarning = 1e-6;
 
 class SampledPlant {
  public:
@@ -67,6 +95,8 @@ class SampledPlant {
   // at z = 1 aside). ~1e-12 for a few separated modes; 1 and more for many
   // lightly damped modes crowded together, where no polynomial test holds.
   double denominator_pole_shift() const { return d_->denominator_pole_shift; }
+  // The poles' conditioning (computed once, O(n^3)).
+  const PoleConditioning& conditioning() const { return d_->conditioning; }
   // G_d(-1).
   std::complex<double> gd_at_minus_one() const { return d_->g_minus_one; }
 
@@ -85,6 +115,7 @@ class SampledPlant {
     model::StateSpace discrete;
     int position_state = -1;
     double denominator_pole_shift = 0.0;
+    PoleConditioning conditioning;
     explicit Data(const model::StateSpace& s) : response(s) {}
   };
   std::shared_ptr<const Data> d_;

@@ -258,6 +258,17 @@ void ZWidth::ChooseStabilityTest() {
   use_polynomial_ = poles_ok && polynomial_error_ <= kPolynomialRelativeTolerance;
 }
 
+std::string ConditioningWarning(bool polynomial_test, const PoleConditioning& c) {
+  if (polynomial_test || !(c.eigenvalue_shift > kEigenvalueShiftWarning)) return "";
+  char buf[400];
+  std::snprintf(buf, sizeof buf,
+                "ill-conditioned poles: rounding can move a pole of the sampled plant by %.3g of its distance to "
+                "the unit circle (eigenvalue condition %.3g, relative pole separation %.3g); (K, B) within about "
+                "that (relative) of a boundary may be misclassified",
+                c.eigenvalue_shift, c.eigenvalue_condition, c.relative_separation);
+  return buf;
+}
+
 double ZWidth::HzOf(double theta) const { return theta / (2.0 * std::numbers::pi * period_s_); }
 
 std::vector<Crossing> ZWidth::Crossings(double B) const {
@@ -567,6 +578,8 @@ DelaySummary ZWidth::Summarize() const {
   s.polynomial_test = use_polynomial_;
   s.polynomial_error = polynomial_error_;
   s.pole_shift = sp_.denominator_pole_shift();
+  s.conditioning = sp_.conditioning();
+  s.conditioning_warning = ConditioningWarning(use_polynomial_, s.conditioning);
   const CriticalPoint c0 = ValueAt(0.0);
   s.K_cr_at_zero_B = c0.K_cr;
   s.f_at_zero_B_hz = c0.f_cr_hz;

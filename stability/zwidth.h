@@ -132,7 +132,19 @@ struct DelaySummary {
   bool polynomial_test = true;
   double polynomial_error = std::numeric_limits<double>::quiet_NaN();
   double pole_shift = std::numeric_limits<double>::quiet_NaN();
+  // The sampled plant's pole conditioning (SampledPlant::conditioning), and a
+  // warning (empty: none) when the eigenvalue test decides and
+  // conditioning.eigenvalue_shift > kEigenvalueShiftWarning: rounding can
+  // then move a pole by more than 1e-6 of its distance to the unit circle,
+  // the neighbourhood of a boundary outside which the answers are stated
+  // exact, so points that close rest on the last digits of the eigenvalues. Schur-Cohn is used only where its own bounds hold.
+  PoleConditioning conditioning;
+  std::string conditioning_warning;
 };
+
+// The warning of DelaySummary::conditioning_warning for a test and a
+// conditioning: the rule, once.
+std::string ConditioningWarning(bool polynomial_test, const PoleConditioning& c);
 
 // Standard deviations [same units as the quantity] of the summary's quantities
 // from a parameter covariance (stability/uncertainty.h); nan = not computed.

@@ -9,8 +9,10 @@
 // eigenvalues disagree with the Z-width, the same brute force in long double
 // decides (the referee of tests/brute_force.h's Classify).
 #include <cmath>
+#include <complex>
 #include <cstdio>
 #include <numbers>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -138,6 +140,76 @@ TEST(ZWidthExact, PolynomialTestOnlyWhereItsRootsAreWellPlaced) {
               few.polynomial_error());
 }
 
+// The conditioning of PoleConditioning recomputed independently: the poles
+// from the modes (e^{pT}: 1, e^{-bT/m}, each mode's pair), kappa_i from left
+// eigenvectors of A^T by a second eigensolver (not V^-1), paired with the
+// right ones by nearest eigenvalue, and each pole's distance to the circle
+// from its exact modulus.
+PoleConditioning IndependentConditioning(const model::Plant& p, const SampledPlant& sp) {
+  const double T = sp.period_s();
+  std::vector<std::complex<double>> exact = {1.0, std::exp(-p.b / p.m * T)};
+  for (const model::Mode& md : p.modes) {
+    const std::complex<double> s(-md.c / 2, std::sqrt(md.omega * md.omega - md.c * md.c / 4));
+    exact.push_back(std::exp(s * T));
+    exact.push_back(std::exp(std::conj(s) * T));
+  }
+  PoleConditioning c;
+  double gap = INFINITY, spread = 0.0;
+  for (size_t i = 0; i < exact.size(); ++i)
+    for (size_t j = i + 1; j < exact.size(); ++j) {
+      gap = std::min(gap, std::abs(exact[i] - exact[j]));
+      spread = std::max(spread, std::abs(exact[i] - exact[j]));
+    }
+  c.relative_separation = gap / spread;
+  const Eigen::MatrixXd& A = sp.discrete().A;
+  const Eigen::VectorXd sc = model::internal::BalancingScales(A);
+  const Eigen::MatrixXd Ab = sc.cwiseInverse().asDiagonal() * A * sc.asDiagonal();
+  Eigen::ComplexEigenSolver<Eigen::MatrixXcd> right(Ab.cast<std::complex<double>>()),
+      left(Ab.transpose().cast<std::complex<double>>());
+  c.eigenvalue_condition = 0.0;
+  c.eigenvalue_shift = 0.0;
+  for (int i = 0; i < Ab.rows(); ++i) {
+    const std::complex<double> z = right.eigenvalues()(i);
+    int j = 0, k = 0;
+    (left.eigenvalues().array() - z).abs().minCoeff(&j);
+    double best = INFINITY;
+    for (size_t e = 0; e < exact.size(); ++e)
+      if (std::abs(exact[e] - z) < best) { best = std::abs(exact[e] - z); k = static_cast<int>(e); }
+    const Eigen::VectorXcd x = right.eigenvectors().col(i), y = left.eigenvectors().col(j);
+    const double kappa = x.norm() * y.norm() / std::abs((y.transpose() * x).value());
+    c.eigenvalue_condition = std::max(c.eigenvalue_condition, kappa);
+    if (k == 0) continue;  // the integrator
+    c.eigenvalue_shift = std::max(c.eigenvalue_shift, 2.220446049250313e-16 * Ab.norm() * kappa / (1 - std::abs(exact[k])));
+  }
+  return c;
+}
+
+TEST(ZWidthExact, ConditioningWarnsForCrowdedModesOnly) {
+  const double T = 1e-3;
+  struct Case { const char* name; model::Plant plant; bool warns; };
+  const std::vector<Case> cases = {{"Table I", model::PhantomTable1(), false},
+                                   {"3 sections 30 % apart", Family(3, 300.0, 1.3, 0.05), false},
+                                   {"64 sections 1 % apart, damping 1e-4", Family(64, 300.0, 1.01, 1e-4), true}};
+  for (const Case& c : cases) {
+    const SampledPlant sp(c.plant, T);
+    const PoleConditioning& got = sp.conditioning();
+    const PoleConditioning ref = IndependentConditioning(c.plant, sp);
+    std::printf("%s: relative separation %.3g (independent %.3g), eigenvalue condition %.3g (%.3g), "
+                "shift %.3g (%.3g)\n", c.name, got.relative_separation, ref.relative_separation,
+                got.eigenvalue_condition, ref.eigenvalue_condition, got.eigenvalue_shift, ref.eigenvalue_shift);
+    EXPECT_NEAR(got.relative_separation / ref.relative_separation, 1.0, 1e-3) << c.name;
+    EXPECT_NEAR(got.eigenvalue_condition / ref.eigenvalue_condition, 1.0, 0.1) << c.name;
+    EXPECT_NEAR(got.eigenvalue_shift / ref.eigenvalue_shift, 1.0, 0.1) << c.name;
+    EXPECT_EQ(got.eigenvalue_shift > kEigenvalueShiftWarning, c.warns) << c.name;
+    EXPECT_EQ(ConditioningWarning(false, got).empty(), !c.warns) << c.name;
+  }
+  // The summary carries the sampled plant's numbers and the warning's rule.
+  const ZWidth z(model::PhantomTable1(), T, 2);
+  const DelaySummary s = z.Summarize();
+  EXPECT_EQ(s.conditioning.eigenvalue_shift, z.sampled_plant().conditioning().eigenvalue_shift);
+  EXPECT_TRUE(s.conditioning_warning.empty());
+}
+
 // The frequency [Hz] of the brute force's largest root just past K.
 double BruteFrequency(const LoopBruteForce& bf, double K, double B, double T) {
   const Eigen::VectorXcd ev = bf.Matrix(K, B).eigenvalues();
@@ -218,7 +290,66 @@ TEST_P(ZWidthFamilies, IntervalsAgreeWithIndependentEigenvaluesOnAGrid) {
   EXPECT_LT(t.stable, t.points) << "and the unstable one";
 }
 
+// Issue 31's done-when test: a seeded random sample of mode families (the
+// generator below: sections uniform in [lo, hi], spacing ratio uniform in
+// [1.01, 1.08], damping ratio log-uniform in [zeta_lo, 0.1], delay uniform in
+// 0..20, first mode uniform in 150-600 rad/s, the last kept below 0.8 of
+// Nyquist), each classified on a (K, B) grid by StableIntervals and by the
+// independent brute force (long double referee where double disagrees).
+struct RandomSample {
+  uint64_t seed;
+  int families, sections_lo, sections_hi;
+  double zeta_lo;
+  int num_b, min_points;
+};
+
+Tally ClassifyRandomFamilies(const RandomSample& r) {
+  const double T = 1e-3;
+  std::mt19937_64 rng(r.seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Tally all;
+  for (int f = 0; f < r.families; ++f) {
+    const int n = r.sections_lo + static_cast<int>(u(rng) * (r.sections_hi - r.sections_lo + 1) * 0.999999);
+    const double ratio = 1.01 + 0.07 * u(rng);
+    const double zeta = r.zeta_lo * std::pow(0.1 / r.zeta_lo, u(rng));
+    const int delay = static_cast<int>(u(rng) * 20.999);
+    double w0 = 150.0 + 450.0 * u(rng);
+    w0 = std::min(w0, 0.8 * std::numbers::pi / T / std::pow(ratio, n - 1));
+    const model::Plant p = Family(n, w0, ratio, zeta);
+    const ZWidth z(p, T, delay);
+    const LoopBruteForce bf = IndependentBrute(p, delay, T);
+    const LoopBruteForceT<long double> referee = IndependentBrute<long double>(p, delay, T);
+    const double b_max = z.Summarize().B_max;
+    ClassifyGrid g;
+    g.b_top = std::isfinite(b_max) && b_max > 0 ? 1.1 * b_max : 0.1;
+    g.num_b = r.num_b;
+    g.min_points = r.min_points;
+    g.points_inside = 2;
+    const Tally t = Classify(z, [&](double K, double B) { return bf.MaxRoot(K, B); }, p, T, delay, g,
+                             [&](double K, double B) { return referee.MaxRoot(K, B); });
+    std::printf("family %d: %d sections, ratio %.4f, zeta %.3g, w0 %.1f, d %d, %s test: %ld points, %ld stable, "
+                "%ld near a boundary, %ld refereed, %ld disagree\n", f, n, ratio, zeta, w0, delay,
+                z.uses_polynomial_test() ? "Schur-Cohn" : "eigenvalue", t.points, t.stable, t.near_boundary,
+                t.refereed, t.disagree);
+    all.points += t.points;
+    all.stable += t.stable;
+    all.near_boundary += t.near_boundary;
+    all.refereed += t.refereed;
+    all.disagree += t.disagree;
+  }
+  std::printf("%d families: %ld points, %ld stable, %ld near a boundary, %ld refereed, %ld disagree\n", r.families,
+              all.points, all.stable, all.near_boundary, all.refereed, all.disagree);
+  return all;
+}
+
 #ifndef ZWIDTH_MANY_MODES
+TEST(ZWidthExact, SeededRandomFamiliesAgreeWithIndependentEigenvalues) {
+  const Tally t = ClassifyRandomFamilies({20261202, 12, 1, 16, 1e-4, 4, 40});
+  EXPECT_EQ(t.disagree, 0);
+  EXPECT_GT(t.stable, 0);
+  EXPECT_LT(t.stable, t.points);
+}
+
 INSTANTIATE_TEST_SUITE_P(
     ClusteredModes, ZWidthFamilies,
     ::testing::Values(FamilyCase{"one_section_zeta1e4_d0", 1, 300, 1.08, 1e-4, 0, false},
@@ -242,6 +373,10 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(FamilyCase{"thirtytwo_sections_1pct_zeta1e3_d3", 32, 500, 1.01, 1e-3, 3, false},
                       FamilyCase{"sixtyfour_sections_8pct_zeta0025_d2", 64, 300, 1.08, 0.025, 2, false}),
     [](const ::testing::TestParamInfo<FamilyCase>& i) { return i.param.name; });
+
+// The random sample's many-mode part (17-64 sections) is not in the suite
+// yet: 3 seeded families of 17-64 sections did not finish one in 220 s under
+// load (the ZWidth constructor's grid, issue 31 item 3, open).
 #endif
 
 }  // namespace

@@ -664,3 +664,19 @@ def test_loop_options_equal_cli(cli, table1_json, tmp_path):
         zwidth.ZWidth(model, delay_samples=2, velocity_filter_hz=600.0)  # above Nyquist
     with pytest.raises(zwidth.InputError):
         zwidth.ZWidth(model, delay_samples=2, hand=(-1.0, 0.0, 0.0))
+
+
+def test_summary_carries_the_pole_conditioning():
+    """stability_test.conditioning (issue 31): the relative separation of the poles against an
+    independent numpy computation from the modes (e^{pT}: 1, e^{-bT/m}, each mode's pair)."""
+    m = zwidth.Model.table1()
+    st = zwidth.ZWidth(m, T, 2).summary()["stability_test"]
+    poles = [1.0, np.exp(-m.b / m.m * T)]
+    for w, c, _, _ in m.modes:
+        p = complex(-c / 2, np.sqrt(w * w - c * c / 4))
+        poles += [np.exp(p * T), np.exp(p.conjugate() * T)]
+    gaps = [abs(a - b) for i, a in enumerate(poles) for b in poles[i + 1:]]
+    c = st["conditioning"]
+    assert c["relative_separation"] == pytest.approx(min(gaps) / max(gaps), rel=1e-6)
+    assert c["eigenvalue_condition"] >= 1.0 and 0 < c["eigenvalue_shift"] < 1e-6
+    assert st["warning"] is None
