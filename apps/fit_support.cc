@@ -47,7 +47,7 @@ void ResolveModesFlag(const std::string& flag, fit::FitOptions* o) {
 void AddFitFlags(CLI::App* cmd, FitFlags* f) {
   cmd->add_option("--modes", f->modes, "resonance/antiresonance sections (0: rigid body) or 'auto' (0..--max-modes, by BIC)")->capture_default_str();
   cmd->add_option("--max-modes", f->o.max_modes, "largest order --modes auto tries, <= 8")->capture_default_str();
-  cmd->add_option("--delay-samples", f->delay, "input delay [samples] or 'auto' (searched around the phase slope's)")->capture_default_str();
+  cmd->add_option("--delay-samples", f->delay, "input delay [samples] or 'auto' (searched from the phase of H / G_rigid)")->capture_default_str();
   cmd->add_option("--max-delay", f->o.max_auto_delay, "largest delay --delay-samples auto tries [samples]")->capture_default_str();
   cmd->add_flag("--allow-short", f->o.allow_few_averages, "fit a response of fewer than 3 Welch segments anyway (judged poor)");
   cmd->add_option("--min-input-power", f->o.band.min_input_power_ratio,

@@ -179,7 +179,7 @@ constexpr Example kExamples[] = {
      "another log of the same device (another seed), to validate a fit on"},
     {"estimate", "zwidth estimate log.h5 -o frf.csv", "the frequency response, Welch H1 with a Hann window"},
     {"fit", "zwidth fit log.h5 --modes auto --delay-samples auto -o model.json",
-     "fit eq. (1): order by BIC, delay from the phase slope; prints the verdict"},
+     "fit eq. (1): order by BIC, delay from the phase of H / G_rigid; prints the verdict"},
     {"fit", "zwidth fit frf.csv --modes 2 -o model2.json", "fit a saved frequency response with two sections"},
     {"compare", "zwidth compare model.json --reference table1",
      "parameters and Z-width at delays 2, 4, 8 against the paper's Table I"},

@@ -121,6 +121,29 @@ void BM_FitAutoModes(benchmark::State& state) {
 }
 BENCHMARK(BM_FitAutoModes)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
+// Fixed order (2 sections) on Table I simulated with an input delay of 7
+// samples (SimulateLog, seed 3, otherwise defaults): range(0) = 0 gives the
+// delay, 1 searches it (--delay-samples auto). The delay found and the
+// parameter error are reported beside the time.
+void BM_FitDelaySearch(benchmark::State& state) {
+  static const ident::FrequencyResponse r = [] {
+    model::SimulateOptions so;
+    so.seed = 3;
+    so.delay_samples = 7;
+    const model::SimulatedLog log = model::SimulateLog(model::PhantomTable1(), so);
+    return ident::EstimateFrequencyResponse(log.torque, log.position, 1000, ident::WelchOptions{});
+  }();
+  fit::FitOptions o;
+  o.delay_samples = 7;
+  o.auto_delay = state.range(0) != 0;
+  fit::FitResult res;
+  for (auto _ : state) res = fit::FitModel(r, o);
+  state.counters["chosen_delay"] = res.plant.delay_samples;
+  state.counters["max_rel_err_m_b_freqs"] = MaxParamError(res.plant, model::PhantomTable1());
+  state.counters["good"] = res.quality == fit::FitQuality::kGood;
+}
+BENCHMARK(BM_FitDelaySearch)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
 // 100-point sweep at d = 2 (construction included), error against a reference
 // computed with a 16x finer grid and verification.
 void BM_BoundarySweep(benchmark::State& state) {

@@ -29,8 +29,9 @@ struct FitOptions {
   bool auto_modes = false;
   int max_modes = 4;              // in [0, 8]
   int delay_samples = 0;          // input delay [samples], >= 0, unless auto_delay
-  // Search delays around the one the phase slope of the upper band suggests
-  // (+-2, extended while the fit keeps improving) and keep the best fit.
+  // Fit at the delay that the phase of H / G_rigid across the band suggests,
+  // then re-solve one sample either side and on while the cost falls (fit.cc,
+  // WalkDelay); keep the best fit.
   bool auto_delay = false;
   int max_auto_delay = 40;        // largest delay searched [samples], in [0, 1000]
   // Bins used: the band [fmin_hz, fmax_hz], where the input has power and the

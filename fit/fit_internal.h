@@ -68,14 +68,16 @@ struct Fixed {
 
 // Fits n sections to the used bins `sub` at o.delay_samples (or over the
 // automatic delay search), from the automatic starts and `extra` starts.
+// rescreen_poor: when the delay search's fit is poor, screen every start at
+// the delays beside it too (the order search leaves it to the chosen order).
 Fixed FitFixed(const ident::FrequencyResponse& sub, const FitOptions& o, int num_modes,
-               const std::vector<model::Plant>& extra);
+               const std::vector<model::Plant>& extra, bool rescreen_poor = true);
 
 // The bins of frf where used[k] != 0, with every per-bin vector kept aligned.
 ident::FrequencyResponse Restrict(const ident::FrequencyResponse& frf, const std::vector<char>& used);
 
-// Delay [samples] that the phase slope of the upper half of the band
-// suggests; NaN when it cannot be read.
+// Delay [samples] that the phase of H / G_rigid across the band suggests
+// (sections' excursions cancel; fit.cc); NaN when it cannot be read.
 double PhaseSlopeDelay(const ident::FrequencyResponse& r);
 
 // Starts.

@@ -65,7 +65,7 @@ Fixed FitOrders(const ident::FrequencyResponse& sub, const ident::ExcitedBand& b
     if (2 * band.num_used <= 2 + 4 * n) break;
     std::vector<model::Plant> extra;
     if (n > 0 && fits.back().res.status == FitStatus::kConverged) extra = GrowStarts(fits.back());
-    fits.push_back(FitFixed(sub, o, n, extra));
+    fits.push_back(FitFixed(sub, o, n, extra, /*rescreen_poor=*/false));
     Fixed& fx = fits.back();
     fx.res.band = band;
     fx.res.band_sample_rate_hz = sample_rate_hz;
@@ -82,6 +82,22 @@ Fixed FitOrders(const ident::FrequencyResponse& sub, const ident::ExcitedBand& b
     if (table[i].spurious.empty() && (pick < 0 || table[i].bic < table[pick].bic)) pick = static_cast<int>(i);
   }
   if (pick < 0) pick = 0;
+  // The orders were fitted without the delay search's re-screening of a poor
+  // fit (the orders below the right one are all poor): the chosen one gets
+  // it when it is poor.
+  if (o.auto_delay && fits[pick].res.status == FitStatus::kConverged &&
+      fits[pick].res.chi2_per_dof > Chi2Limit(fits[pick].res, kappa)) {
+    std::vector<model::Plant> extra;
+    if (pick > 0 && fits[pick - 1].res.status == FitStatus::kConverged) extra = GrowStarts(fits[pick - 1]);
+    Fixed again = FitFixed(sub, o, pick, extra);
+    if (again.res.status == FitStatus::kConverged && again.res.cost < fits[pick].res.cost) {
+      again.res.band = band;
+      again.res.band_sample_rate_hz = sample_rate_hz;
+      table[pick].delay_samples = again.res.plant.delay_samples;
+      table[pick].chi2_per_dof = again.res.chi2_per_dof;
+      fits[pick] = std::move(again);
+    }
+  }
   Fixed chosen = std::move(fits[pick]);
   chosen.res.order_table = table;
   chosen.res.order_choice = OrderChoice(table, pick);
