@@ -241,25 +241,13 @@ void RefuseRepeatedLog(const std::vector<std::string>& paths, const std::vector<
   }
 }
 
-// The local method: every log read whole (with its excitation in closed
-// loop), one local estimate over all of them.
-LogsEstimate EstimateLocal(const std::vector<std::string>& paths, const LogsEstimateOptions& options,
-                           const EstimateNote& note) {
-  const ident::LocalModelOptions& o = *options.local;
-  if (options.whole_record || options.period_samples != 0 ||
-      options.welch.window_length != 0 ||
-      options.welch.overlap != ident::WelchOptions{}.overlap) {
-    throw InputError("the local method (" + ident::ToString(o.method) +
-                     ") fits a local model on each whole log: drop LogsEstimateOptions::whole_record, "
-                     "LogsEstimateOptions::period_samples, WelchOptions::window_length and WelchOptions::overlap "
-                     "(Welch options)");
-  }
-  std::string why;
-  if (!o.IsValid(&why)) throw InputError(why);
-  LogsEstimate out;
+// Every log read whole (with its excitation in closed loop), one record
+// each, of one rate (returned in *rate); out gets the infos and sample count.
+std::vector<ident::LocalRecord> WholeRecords(const std::vector<std::string>& paths, const LogsEstimateOptions& options,
+                                             const EstimateNote& note, LogsEstimate* out, double* rate) {
   std::vector<ident::LocalRecord> runs;
   std::vector<std::uint64_t> seen;
-  double rate = 0.0;
+  *rate = 0.0;
   for (const std::string& path : paths) {
     NamingTheFile(path, [&] {
       io::Log log = io::ReadLog(path, options.select);
@@ -270,16 +258,41 @@ LogsEstimate EstimateLocal(const std::vector<std::string>& paths, const LogsEsti
       seen.push_back(fp.value());
       ident::LocalRecord run{std::move(log.input), std::move(log.output), {}};
       if (options.ClosedLoop()) run.r = std::move(io::ReadLog(path, ExcitationSelect(path, options)).input);
-      if (rate == 0.0) rate = log.info.sample_rate_hz;
-      if (std::abs(log.info.sample_rate_hz - rate) > 1e-3 * rate) {
+      if (*rate == 0.0) *rate = log.info.sample_rate_hz;
+      if (std::abs(log.info.sample_rate_hz - *rate) > 1e-3 * *rate) {
         throw InputError("the log's rate differs from the first log's: runs of one estimate need one rate");
       }
-      out.total_samples += log.info.num_samples;
-      out.infos.push_back(log.info);
+      out->total_samples += log.info.num_samples;
+      out->infos.push_back(log.info);
       runs.push_back(std::move(run));
       return 0;
     });
   }
+  return runs;
+}
+
+// The Welch options that a whole-record method (local, robust) does not take.
+bool WelchSegmentsGiven(const LogsEstimateOptions& options) {
+  return options.whole_record || options.welch.window_length != 0 ||
+         options.welch.overlap != ident::WelchOptions{}.overlap;
+}
+
+// The local method: every log read whole (with its excitation in closed
+// loop), one local estimate over all of them.
+LogsEstimate EstimateLocal(const std::vector<std::string>& paths, const LogsEstimateOptions& options,
+                           const EstimateNote& note) {
+  const ident::LocalModelOptions& o = *options.local;
+  if (options.period_samples != 0 || WelchSegmentsGiven(options)) {
+    throw InputError("the local method (" + ident::ToString(o.method) +
+                     ") fits a local model on each whole log: drop LogsEstimateOptions::whole_record, "
+                     "LogsEstimateOptions::period_samples, WelchOptions::window_length and WelchOptions::overlap "
+                     "(Welch options)");
+  }
+  std::string why;
+  if (!o.IsValid(&why)) throw InputError(why);
+  LogsEstimate out;
+  double rate = 0.0;
+  const std::vector<ident::LocalRecord> runs = WholeRecords(paths, options, note, &out, &rate);
   ident::LocalEstimate est = ident::EstimateLocal(runs, rate, o);
   for (const std::string& w : est.warnings) Note(note, "warning: " + w);
   out.response = ident::ToCombined(std::move(est), o.method, static_cast<int>(runs.size()));
@@ -291,14 +304,61 @@ LogsEstimate EstimateLocal(const std::vector<std::string>& paths, const LogsEsti
   return out;
 }
 
+// The robust method: each log one realisation of a periodic excitation.
+LogsEstimate EstimateRobustLogs(const std::vector<std::string>& paths, const LogsEstimateOptions& options,
+                                const EstimateNote& note) {
+  const ident::RobustOptions& o = *options.robust;
+  if (options.local || options.ClosedLoop() || WelchSegmentsGiven(options)) {
+    throw InputError("the robust method takes the periods of each whole log (one random-phase realisation per log, "
+                     "open loop): drop LogsEstimateOptions::whole_record, WelchOptions::window_length, "
+                     "WelchOptions::overlap, LogsEstimateOptions::reference_column/reference_dataset and the local "
+                     "method's options");
+  }
+  LogsEstimate out;
+  double rate = 0.0;
+  const std::vector<ident::LocalRecord> runs = WholeRecords(paths, options, note, &out, &rate);
+  const ident::RobustEstimate est = ident::EstimateRobust(runs, rate, o);
+  char s[400];
+  std::snprintf(s, sizeof s,
+                "robust method from %d realisation%s of %d periods of %d samples (%d transient dropped), %zu excited "
+                "lines%s",
+                est.num_realisations, est.num_realisations > 1 ? "s" : "", est.num_periods, est.period_samples,
+                o.transient_periods, est.f_hz.size(),
+                est.num_realisations > 1 ? "" : "; with one realisation the nonlinear distortion is not known "
+                                                "(record several random-phase realisations, one log each)");
+  out.response = ident::ToCombined(est);
+  Note(note, s);
+  return out;
+}
+
 }  // namespace
+
+void ChooseRobust(LogsEstimateOptions* o, bool robust, int transient_periods) {
+  if (!robust) {
+    if (transient_periods != ident::RobustOptions{}.transient_periods) {
+      throw InputError("RobustOptions::transient_periods is for the robust method of a periodic excitation");
+    }
+    return;
+  }
+  ident::RobustOptions r;
+  r.period_samples = o->period_samples;
+  r.transient_periods = transient_periods;
+  r.fmin_hz = o->welch.fmin_hz;
+  r.fmax_hz = o->welch.fmax_hz;
+  std::string why;
+  if (!r.IsValid(&why)) throw InputError(why);
+  o->robust = r;
+  o->period_samples = 0;  // the robust method's, not the Welch periods'
+}
 
 LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const LogsEstimateOptions& given,
                               const EstimateNote& note) {
   LogsEstimateOptions options = given;
   if (paths.empty()) throw InputError("no log to estimate from: give at least one");
   LogsEstimate out;
-  if (options.local) {
+  if (options.robust) {
+    out = EstimateRobustLogs(paths, options, note);
+  } else if (options.local) {
     out = EstimateLocal(paths, options, note);
   } else {
     std::string why;

@@ -16,6 +16,7 @@
 
 #include "ident/joint.h"
 #include "ident/local_models.h"
+#include "ident/robust_frf.h"
 #include "ident/welch.h"
 #include "io/log.h"
 
@@ -29,6 +30,10 @@ struct LogsEstimateOptions {
   ident::WelchOptions welch{.window_length = 0};
   // The local polynomial / rational method instead of Welch (ident/local_models.h).
   std::optional<ident::LocalModelOptions> local;
+  // The robust method of a periodic excitation instead (ident/robust_frf.h):
+  // each log one random-phase realisation of P periods of
+  // RobustOptions::period_samples; the band is RobustOptions::fmin_hz/fmax_hz.
+  std::optional<ident::RobustOptions> robust;
   // Closed loop: the logged excitation r (a text/.mat column, an HDF5
   // dataset: the one the log's format reads); H = S_ry / S_ru (ident/joint.h).
   std::string reference_column, reference_dataset;
@@ -61,6 +66,14 @@ struct LogsEstimate {
 // "warning: PATH: ..." and the estimate's summary, naming option fields
 // (io/option_names.h) and the file names as given (io::Printable them).
 using EstimateNote = std::function<void(const std::string& line)>;
+
+// The robust method chosen (robust) or not from the estimate's own fields, as
+// the CLI's --estimator robust and Python's estimator='robust' ask for it:
+// LogsEstimateOptions::period_samples becomes RobustOptions::period_samples
+// (and 0 itself), the band WelchOptions::fmin_hz/fmax_hz, with
+// transient_periods. Throws InputError naming the field for invalid options,
+// and for a transient_periods other than the default without the robust method.
+void ChooseRobust(LogsEstimateOptions* options, bool robust, int transient_periods);
 
 // Throws InputError naming the file first for a log that cannot be read or
 // options that do not go together, and for the same samples given twice (a

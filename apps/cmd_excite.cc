@@ -24,7 +24,10 @@ void AddExciteCommand(CLI::App& app) {
   cmd->add_option("--rms", f->o.rms, "RMS [input unit, e.g. N m]")->capture_default_str();
   cmd->add_option("--fmin", f->o.fmin_hz, "band start [Hz]; the multisine's line spacing")->capture_default_str();
   cmd->add_option("--fmax", f->o.fmax_hz, "band end [Hz], below Nyquist")->capture_default_str();
-  cmd->add_option("--seed", f->o.seed, "random seed (noise)")->capture_default_str();
+  cmd->add_option("--seed", f->o.seed, "random seed (noise; a multisine's --random-phases)")->capture_default_str();
+  cmd->add_flag("--random-phases", f->o.random_phases,
+                "multisine: random phases from --seed instead of Schroeder's (one realisation per seed, for "
+                "estimate --estimator robust)");
   cmd->callback([f] {
     if (!ident::FromString(f->kind, &f->o.kind)) {
       throw InputError("--kind '" + f->kind.substr(0, 20) + "' is not one of noise, multisine, chirp");
@@ -37,6 +40,7 @@ void AddExciteCommand(CLI::App& app) {
        << " fmin_hz=" << f->o.fmin_hz << " fmax_hz=" << f->o.fmax_hz << " rms=" << e.rms;
     if (f->o.kind == ident::ExcitationKind::kMultisine) {
       os << " period_samples=" << e.period_samples << " periods=" << e.num_periods;
+      if (f->o.random_phases) os << " random_phases=1 seed=" << f->o.seed;
     }
     if (f->o.kind == ident::ExcitationKind::kNoise) os << " seed=" << f->o.seed;
     os << "\nu\n";

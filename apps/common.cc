@@ -38,8 +38,8 @@ ident::WelchOptions EstimateFlags::Resolve() const {
   if (!ident::FromString(ResolvedDetrend(), &o.detrend)) {
     throw InputError("--detrend '" + detrend + "' is not one of none, mean, linear");
   }
-  if (!IsLocal() && !ident::FromString(estimator, &o.estimator)) {
-    throw InputError("--estimator '" + estimator + "' is not one of h1, h2, lpm, lrm");
+  if (!IsLocal() && !IsRobust() && !ident::FromString(estimator, &o.estimator)) {
+    throw InputError("--estimator '" + estimator + "' is not one of h1, h2, lpm, lrm, robust");
   }
   std::string why;
   ident::WelchOptions check = o;
@@ -89,7 +89,8 @@ void AddEstimateFlags(CLI::App* cmd, EstimateFlags* f) {
                   "the response)");
   cmd->add_option("--estimator", f->estimator,
                   "h1 | h2 (Welch) | lpm | lrm (local polynomial / rational method on the whole record, "
-                  "docs/estimators.md)")->capture_default_str();
+                  "docs/estimators.md) | robust (periodic excitation, --period-samples: noise and nonlinear "
+                  "distortion apart, each log one random-phase realisation)")->capture_default_str();
   cmd->add_option("--local-half-width", f->local.half_width,
                   "lpm/lrm: bins either side of each estimate (0: 6 for lpm, 7 for lrm)")->capture_default_str();
   cmd->add_option("--local-order", f->local.order, "lpm/lrm: order of the local polynomials (lrm: numerators)")->capture_default_str();
@@ -101,7 +102,12 @@ void AddEstimateFlags(CLI::App* cmd, EstimateFlags* f) {
   cmd->add_option("--reference-column", f->reference_column, "closed loop: column/variable of the logged excitation r (H = S_ry/S_ru)");
   cmd->add_option("--reference-dataset", f->reference_dataset, "closed loop: HDF5 dataset of the logged excitation r");
   cmd->add_flag("--whole-record", f->whole_record, "each log one rectangular segment; std from the scatter between logs");
-  cmd->add_option("--period-samples", f->period_samples, "with --whole-record: one segment per period of this many samples (periodic excitation)");
+  cmd->add_option("--period-samples", f->period_samples,
+                  "with --whole-record: one segment per period of this many samples (periodic excitation); with "
+                  "--estimator robust: the multisine's period");
+  cmd->add_option("--transient-periods", f->transient_periods,
+                  "--estimator robust: whole periods dropped at the start of each log (the transient)")
+      ->capture_default_str();
 }
 
 void AddUnitsFlag(CLI::App* cmd, std::string* units) {
@@ -137,6 +143,11 @@ analysis::LogsEstimateOptions EstimateFlags::Options(bool for_fit) const {
   o.reference_dataset = reference_dataset;
   o.whole_record = whole_record;
   o.period_samples = period_samples;
+  try {
+    analysis::ChooseRobust(&o, IsRobust(), transient_periods);
+  } catch (const InputError& e) {
+    throw InputError(WithFlags(e.what()));
+  }
   o.for_fit = for_fit;
   return o;
 }

@@ -51,6 +51,10 @@ struct EstimateFlags {
   // the band comes from welch.fmin_hz/fmax_hz.
   ident::LocalModelOptions local;
   bool IsLocal() const { return estimator == "lpm" || estimator == "lrm"; }
+  // --estimator robust: the robust method of a periodic excitation
+  // (ident/robust_frf.h), period_samples per period, each log a realisation.
+  bool IsRobust() const { return estimator == "robust"; }
+  int transient_periods = ident::RobustOptions{}.transient_periods;
   // Parses the enum names; throws InputError naming the flag.
   ident::WelchOptions Resolve() const;
   ident::LocalModelOptions ResolveLocal() const;  // with IsLocal()

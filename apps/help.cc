@@ -41,6 +41,7 @@ constexpr OptionTopic kOptionTopics[] = {
     {"excite", "fmin", "Excitation", ""},
     {"excite", "fmax", "Excitation", ""},
     {"excite", "seed", "Excitation", ""},
+    {"excite", "random-phases", "Excitation", ""},
     // which columns or datasets of a log, and how to read them
     {"", "input-column", "Log selection", ""},
     {"", "output-column", "Log selection", ""},
@@ -63,7 +64,7 @@ constexpr OptionTopic kOptionTopics[] = {
     {"", "window-length", "Estimate (Welch)", ""},
     {"", "overlap", "Estimate (Welch)", ""},
     {"", "detrend", "Estimate (Welch)", "none mean linear"},
-    {"", "estimator", "Estimate (Welch)", "h1 h2 lpm lrm"},
+    {"", "estimator", "Estimate (Welch)", "h1 h2 lpm lrm robust"},
     {"", "local-half-width", "Estimate (Welch)", ""},
     {"", "local-order", "Estimate (Welch)", ""},
     {"", "local-denominator-order", "Estimate (Welch)", ""},
@@ -74,6 +75,7 @@ constexpr OptionTopic kOptionTopics[] = {
     {"", "reference-dataset", "Estimate (Welch)", ""},
     {"", "whole-record", "Estimate (Welch)", ""},
     {"", "period-samples", "Estimate (Welch)", ""},
+    {"", "transient-periods", "Estimate (Welch)", ""},
     // frequency response -> model
     {"", "modes", "Fit", "auto"},
     {"", "max-modes", "Fit", ""},

@@ -23,6 +23,7 @@ namespace internal {
 ident::FrequencyResponse Restrict(const ident::FrequencyResponse& frf, const std::vector<char>& used) {
   ident::FrequencyResponse r = frf;
   r.f_hz.clear(); r.H.clear(); r.coherence.clear(); r.H_std.clear(); r.S_uu.clear(); r.S_yy.clear(); r.S_uy.clear();
+  r.noise_var.clear(); r.distortion_var.clear();
   for (size_t k = 0; k < frf.f_hz.size(); ++k) {
     if (!used[k]) continue;
     r.f_hz.push_back(frf.f_hz[k]);
@@ -32,6 +33,8 @@ ident::FrequencyResponse Restrict(const ident::FrequencyResponse& frf, const std
     if (k < frf.S_uu.size()) r.S_uu.push_back(frf.S_uu[k]);
     if (k < frf.S_yy.size()) r.S_yy.push_back(frf.S_yy[k]);
     if (k < frf.S_uy.size()) r.S_uy.push_back(frf.S_uy[k]);
+    if (frf.noise_var.size() == frf.f_hz.size()) r.noise_var.push_back(frf.noise_var[k]);
+    if (frf.distortion_var.size() == frf.f_hz.size()) r.distortion_var.push_back(frf.distortion_var[k]);
   }
   return r;
 }

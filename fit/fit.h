@@ -85,6 +85,7 @@ std::string ToString(FitQuality q);
 struct QualityReason {
   // Machine-readable: chi2_per_dof, residual_runs, misfit_band, few_averages,
   // parameter_at_bound, spurious_section, section_outside_excited_band,
+  // mode_narrower_than_bins, nonlinear_distortion,
   // order_search_at_limit,
   // delay_search_at_limit.
   std::string code;
@@ -140,6 +141,10 @@ struct FitResult {
   std::vector<double> misfit_band_hz;   // {lo, hi} of the flagged octave, else empty
   double band_sample_rate_hz = 0.0;     // of the response fitted
   std::string estimator;                // ident::FrequencyResponse::estimator of the response fitted
+  // The robust method's median nonlinear-distortion to noise variance ratio
+  // where the rigid body is set (fit/quality.cc, DistortionCheck); above 1
+  // the verdict is poor (nonlinear_distortion). NaN: not known (another estimator).
+  double distortion_to_noise = std::numeric_limits<double>::quiet_NaN();
   std::vector<OrderTrial> order_table;  // filled when auto_modes
   std::string order_choice;             // why this order (auto_modes)
   std::string delay_choice;             // why this delay (auto_delay)

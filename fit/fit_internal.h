@@ -107,6 +107,10 @@ std::string Fmt(const char* fmt, double a, double b = 0, double c = 0, double d 
 std::string Alternatives(const std::vector<std::string>& items);
 double Chi2Limit(const FitResult& r, double kappa);  // chi2/dof above which the fit is poor
 void JudgeQuality(const Fixed& fx, const ident::FrequencyResponse& sub, const FitOptions& o, FitResult* res);
+// The window's leakage bound on each section's damping (a reason or a warning
+// that suggests the local methods) and the robust method's distortion check.
+void LeakageChecks(const ident::FrequencyResponse& sub, FitResult* res);
+void DistortionCheck(const ident::FrequencyResponse& sub, FitResult* res);
 
 // --modes auto: fits 0..o.max_modes sections to sub, fills res.order_table
 // and res.order_choice, and returns the chosen order's fit.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -66,6 +67,48 @@ void LeakageChecks(const ident::FrequencyResponse& sub, FitResult* res) {
       }
     }
   }
+}
+
+// The robust method's split of the variance (ident/robust_frf.h): where the
+// rigid body sets m and b (and K_CR scales with them, eq. (2)), the bins below
+// half the lowest fitted section frequency (all bins when fewer than 5 lie
+// there), a median nonlinear-distortion variance above the noise variance
+// means that the response is that of a nonlinear device (friction, backlash)
+// linearised at this excitation, and more averaging would not make it the
+// device's: the fit is poor. For a linear device distortion_var is
+// max(0, total - noise), a chance fluctuation whose median over many bins is
+// about 0 (total / noise ~ chi2 with 2 (M - 1) dof over 2 (M - 1)).
+void DistortionCheck(const ident::FrequencyResponse& sub, FitResult* res) {
+  const size_t n = sub.f_hz.size();
+  if (sub.distortion_var.size() != n || sub.noise_var.size() != n || n == 0) return;
+  double lowest_hz = std::numeric_limits<double>::infinity();
+  for (const model::Mode& m : res->plant.modes) lowest_hz = std::min({lowest_hz, m.omega, m.v});
+  lowest_hz /= 2.0 * std::numbers::pi;
+  std::vector<double> ratio;
+  double hi = 0.0;
+  for (int pass = 0; pass < 2 && ratio.size() < 5; ++pass) {
+    ratio.clear();
+    for (size_t k = 0; k < n; ++k) {
+      if (pass == 0 && !(sub.f_hz[k] < 0.5 * lowest_hz)) continue;
+      if (!(sub.noise_var[k] > 0.0)) continue;
+      ratio.push_back(sub.distortion_var[k] / sub.noise_var[k]);
+      hi = sub.f_hz[k];
+    }
+  }
+  if (ratio.empty()) return;
+  std::nth_element(ratio.begin(), ratio.begin() + ratio.size() / 2, ratio.end());
+  const double median = ratio[ratio.size() / 2];
+  res->distortion_to_noise = median;
+  if (!(median > 1.0)) return;
+  res->reasons.push_back(
+      {"nonlinear_distortion",
+       Fmt("the nonlinear distortion of the response is %.3g times its noise (median variance ratio over %.0f lines "
+           "from %.4g to %.4g Hz, where m and b, and so K_CR, are set): the device is not linear at this excitation, "
+           "and more averaging would not make the model its own",
+           median, static_cast<double>(ratio.size()), sub.f_hz.front(), hi),
+       "friction or backlash, not noise, limits the model: identify the friction from a time-domain log "
+       "(FrictionFitOptions::model coulomb), excite harder (the distortion of friction shrinks relative to the "
+       "response as the input grows), or check the device for play"});
 }
 
 // "a", "a or b", "a, b, or c": the non-empty items as alternatives of one
@@ -168,6 +211,7 @@ void JudgeQuality(const Fixed& fx, const ident::FrequencyResponse& sub, const Fi
         "record a longer log or use a shorter WelchOptions::window_length");
   }
   LeakageChecks(sub, res);
+  DistortionCheck(sub, res);
   for (const std::string& s : SpuriousSections(*res, o)) {
     const bool bound = s.find("bound") != std::string::npos;
     if (s.find("well-excited band") != std::string::npos) {

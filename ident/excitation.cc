@@ -132,10 +132,13 @@ Excitation MakeExcitation(const ExcitationOptions& o) {
     if (K < 1) {
       throw InputError("excitation: no multisine line k f0 (f0 = " + std::to_string(f0) + " Hz) in [fmin, fmax]; widen the band");
     }
-    // Schroeder (1970): phi_k = -pi k (k - 1) / K for the K equal lines.
+    // Schroeder (1970): phi_k = -pi k (k - 1) / K for the K equal lines; or
+    // random phases, uniform in [0, 2 pi), from the seed.
     std::vector<std::complex<double>> X(P / 2 + 1, 0.0);
+    std::mt19937_64 rng(o.seed);
+    std::uniform_real_distribution<double> uniform(0.0, 2.0 * std::numbers::pi);
     for (int i = 1; i <= K; ++i) {
-      const double phi = -std::numbers::pi * i * (i - 1.0) / K;
+      const double phi = o.random_phases ? uniform(rng) : -std::numbers::pi * i * (i - 1.0) / K;
       X[k_lo + i - 1] = std::polar(0.5, phi);
     }
     const std::vector<double> period = InverseReal(X, P);

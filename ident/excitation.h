@@ -24,7 +24,11 @@ struct ExcitationOptions {
   double rms = 0.03;              // RMS of the signal [input unit, e.g. N m], > 0
   double fmin_hz = 0.5;           // band [Hz]: >= 0 (chirp: > 0); multisine: also its line spacing f0
   double fmax_hz = 100.0;         // (fmin, Nyquist)
-  uint64_t seed = 1;              // noise only
+  uint64_t seed = 1;              // noise, and a multisine's random phases
+  // Multisine: phases uniform in [0, 2 pi) drawn from `seed` instead of
+  // Schroeder's: one random-phase realisation per seed, what the robust method
+  // (ident/robust_frf.h) needs M >= 2 of to tell nonlinear distortion from noise.
+  bool random_phases = false;
   bool IsValid(std::string* why) const;
 };
 

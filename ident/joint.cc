@@ -16,6 +16,7 @@ std::string ToString(CombinedMethod m) {
     case CombinedMethod::kJoint: return "joint G = S_ry/S_ru";
     case CombinedMethod::kLpm: return "local polynomial method (LPM)";
     case CombinedMethod::kLrm: return "local rational method (LRM)";
+    case CombinedMethod::kRobust: return "robust method (periodic excitation)";
   }
   return "?";
 }

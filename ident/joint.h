@@ -53,7 +53,7 @@ enum class StdSource {
 };
 // kLpm, kLrm: the local methods of ident/local_models.h (open or closed loop:
 // frf.estimator says which).
-enum class CombinedMethod { kH1, kH2, kJoint, kLpm, kLrm };
+enum class CombinedMethod { kH1, kH2, kJoint, kLpm, kLrm, kRobust };
 std::string ToString(CombinedMethod m);
 
 struct CombinedResponse {

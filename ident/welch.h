@@ -78,7 +78,8 @@ struct FrequencyResponse {
   std::vector<double> S_uu, S_yy;       // one-sided PSDs [unit^2/Hz]
   std::vector<std::complex<double>> S_uy;
   // Which estimator made H: "welch-h1", "welch-h2", "welch-joint" (ident/joint.h),
-  // "lpm", "lrm" (ident/local_models.h, "-joint" appended in closed loop);
+  // "lpm", "lrm" (ident/local_models.h, "-joint" appended in closed loop),
+  // "robust" (ident/robust_frf.h);
   // empty when unknown (a response file read back).
   std::string estimator;
   // The correlation of the errors of H at bins k and k + l, l = 1..L (index
@@ -86,6 +87,11 @@ struct FrequencyResponse {
   // the bins, as the estimator knows it (the local methods: their windows
   // overlap). Empty: unknown, the fit measures it from its residuals.
   std::vector<std::complex<double>> error_correlation;
+  // The robust method (ident/robust_frf.h), per bin: the variance E|dH|^2 of
+  // H from the noise, and from the nonlinear distortions (the scatter over
+  // the random-phase realisations that the noise does not explain; empty
+  // with one realisation). Empty for the other estimators.
+  std::vector<double> noise_var, distortion_var;
   // Per bin, 1 where a fit used it (FitResult::band.used), set by the caller
   // before writing the response; empty when no fit was made.
   std::vector<char> used_by_fit;

@@ -26,12 +26,18 @@ void WriteCsv(const std::string& tmp, const ident::FrequencyResponse& r) {
   line.Text("f_hz,H_re,H_im,coherence,H_std,H_mag,H_phase_deg,S_uu,S_yy,sample_rate_hz,"
             "num_averages,effective_averages,bin_correlation");
   const bool used = r.used_by_fit.size() == r.f_hz.size();  // the fit's bins, when known
+  // The robust method's noise and nonlinear-distortion variances, when known.
+  const bool noise = r.noise_var.size() == r.f_hz.size(), distortion = r.distortion_var.size() == r.f_hz.size();
+  line.Text(noise ? ",noise_var" : "");
+  line.Text(distortion ? ",distortion_var" : "");
   line.Text(used ? ",used_by_fit\n" : "\n");
   for (size_t k = 0; k < r.f_hz.size(); ++k) {
     line.G(r.f_hz[k], 17).G(r.H[k].real(), 17).G(r.H[k].imag(), 17).G(r.coherence[k], 17).G(r.H_std[k], 17);
     line.G(std::abs(r.H[k]), 17).G(std::arg(r.H[k]) * 180.0 / std::numbers::pi, 17).G(r.S_uu[k], 17);
     line.G(r.S_yy[k], 17).G(r.sample_rate_hz, 17).Int(r.num_averages).G(r.effective_averages, 17);
     line.G(r.bin_correlation, 17);
+    if (noise) line.G(r.noise_var[k], 17);
+    if (distortion) line.G(r.distortion_var[k], 17);
     if (used) line.Int(r.used_by_fit[k] ? 1 : 0);
     line.End();
   }
@@ -94,7 +100,8 @@ ident::FrequencyResponse ReadCsv(const std::string& path) {
   const int i_f = index("f_hz"), i_re = index("H_re"), i_im = index("H_im"), i_coh = index("coherence"),
             i_std = index("H_std"), i_suu = index("S_uu"), i_syy = index("S_yy"),
             i_rate = index("sample_rate_hz"), i_navg = index("num_averages"),
-            i_neff = index("effective_averages"), i_kappa = index("bin_correlation");
+            i_neff = index("effective_averages"), i_kappa = index("bin_correlation"),
+            i_noise = index("noise_var"), i_distortion = index("distortion_var");
   ident::FrequencyResponse r;
   r.num_averages = 0;
   r.effective_averages = 0;
@@ -146,6 +153,8 @@ ident::FrequencyResponse ReadCsv(const std::string& path) {
     r.S_uu.push_back(i_suu >= 0 ? v[i_suu] : 0.0);
     r.S_yy.push_back(i_syy >= 0 ? v[i_syy] : 0.0);
     r.S_uy.push_back(0.0);
+    if (i_noise >= 0) r.noise_var.push_back(v[i_noise]);
+    if (i_distortion >= 0) r.distortion_var.push_back(v[i_distortion]);
     if (i_rate >= 0) r.sample_rate_hz = v[i_rate];
     if (i_navg >= 0) r.num_averages = Count(v[i_navg], path, "num_averages");
     if (i_neff >= 0) r.effective_averages = v[i_neff];

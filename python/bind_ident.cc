@@ -340,6 +340,14 @@ void BindFrequencyResponse(py::module_& m) {
       .def_property_readonly("S_uu", [](const ident::FrequencyResponse& r) { return ToArray(r.S_uu); })
       .def_property_readonly("S_yy", [](const ident::FrequencyResponse& r) { return ToArray(r.S_yy); })
       .def_property_readonly("S_uy", [](const ident::FrequencyResponse& r) { return ToArray(r.S_uy); })
+      .def_readonly("estimator", &ident::FrequencyResponse::estimator,
+                    "which estimator made H ('welch-h1', 'lpm', 'lrm', 'robust', ...; '' when unknown)")
+      .def_property_readonly("noise_var", [](const ident::FrequencyResponse& r) { return ToArray(r.noise_var); },
+                             "estimator='robust': per bin, the variance E|dH|^2 from the noise (else empty)")
+      .def_property_readonly("distortion_var",
+                             [](const ident::FrequencyResponse& r) { return ToArray(r.distortion_var); },
+                             "estimator='robust' with several realisations: per bin, the variance from the "
+                             "nonlinear distortions (else empty)")
       .def("__len__", [](const ident::FrequencyResponse& r) { return r.f_hz.size(); })
       .def("__repr__", [](const ident::FrequencyResponse& r) {
         std::string s = "<zwidth.FrequencyResponse " + std::to_string(r.f_hz.size()) + " bins";
@@ -448,7 +456,7 @@ void BindEstimateLogs(py::module_& m) {
         [](const py::object& paths, int window_length, double overlap, const std::string& window,
            const std::optional<std::string>& detrend, const std::string& estimator, double fmin, double fmax,
            const std::string& reference_column, const std::string& reference_dataset, bool whole_record,
-           int period_samples, const std::string& input_column, const std::string& output_column,
+           int period_samples, int transient_periods, const std::string& input_column, const std::string& output_column,
            const std::string& time_column, const std::string& input_dataset, const std::string& output_dataset,
            const std::string& time_dataset, double rate, double input_scale, double output_scale,
            const std::string& time_unit, const std::string& delimiter) {
@@ -465,11 +473,11 @@ void BindEstimateLogs(py::module_& m) {
             }
           }
           analysis::LogsEstimateOptions o;
-          const bool local = estimator == "lpm" || estimator == "lrm";
+          const bool local = estimator == "lpm" || estimator == "lrm", robust = estimator == "robust";
           const std::string det = detrend ? *detrend : ident::ToString(analysis::DefaultDetrend(whole_record));
           // window_length 0: the library's default rule (the first log's rate and length), as the CLI.
           o.welch = WelchFrom(window_length == 0 ? ident::WelchOptions{}.window_length : window_length, overlap, window,
-                              det, local ? "h1" : estimator, fmin, fmax);
+                              det, local || robust ? "h1" : estimator, fmin, fmax);
           o.welch.window_length = window_length;
           if (local) {
             ident::LocalModelOptions lo;
@@ -484,6 +492,7 @@ void BindEstimateLogs(py::module_& m) {
           o.reference_dataset = reference_dataset;
           o.whole_record = whole_record;
           o.period_samples = period_samples;
+          analysis::ChooseRobust(&o, robust, transient_periods);  // as the CLI (apps/common.cc)
           std::vector<std::string> warnings;
           analysis::LogsEstimate e;
           {
@@ -502,7 +511,9 @@ void BindEstimateLogs(py::module_& m) {
                         py::arg("detrend") = py::none(), py::arg("estimator") = "h1", py::arg("fmin") = d.fmin_hz,
                         py::arg("fmax") = d.fmax_hz, py::arg("reference_column") = "",
                         py::arg("reference_dataset") = "", py::arg("whole_record") = false,
-                        py::arg("period_samples") = 0, py::arg("input_column") = "torque",
+                        py::arg("period_samples") = 0,
+                        py::arg("transient_periods") = ident::RobustOptions{}.transient_periods,
+                        py::arg("input_column") = "torque",
                         py::arg("output_column") = "position", py::arg("time_column") = "t",
                         py::arg("input_dataset") = "/input/torque", py::arg("output_dataset") = "/output/position",
                         py::arg("time_dataset") = "/time", py::arg("rate") = 0.0, py::arg("input_scale") = 1.0,
@@ -516,7 +527,10 @@ as one rectangular segment, with period_samples one segment per period of a
 periodic excitation (detrend default 'mean' then, else 'linear'); a closed
 loop's logged excitation named by reference_column (text, .mat) or
 reference_dataset (HDF5) gives H = S_ry / S_ru; estimator 'h1' | 'h2'
-(Welch) | 'lpm' | 'lrm' (local methods on each whole log, in [fmin, fmax]).
+(Welch) | 'lpm' | 'lrm' (local methods on each whole log, in [fmin, fmax])
+| 'robust' (a periodic excitation of period_samples, each log one
+random-phase realisation, transient_periods dropped first: noise_var and
+distortion_var per line, and the fit's verdict reads them).
 Warnings (samples left out, ...) are raised as UserWarning; errors as
 InputError naming the file.)doc");
 }

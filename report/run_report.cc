@@ -42,6 +42,8 @@ std::string SummaryJson(const analysis::RunAnalysis& a) {
   summary["logs"] = nlohmann::json::array();
   for (const std::string& log : in.logs) summary["logs"].push_back(io::Utf8ForJson(log));
   summary["estimate"] = ident::ToString(in.response.method);
+  // The estimator that made the response (ident::FrequencyResponse::estimator), as the model file's fit says.
+  summary["estimator"] = in.response.frf.estimator.empty() ? std::string("unknown") : in.response.frf.estimator;
   summary["whole_record"] = in.whole_record;
   summary["sample_rate_hz"] = in.response.frf.sample_rate_hz;
   summary["num_samples"] = in.total_samples;

@@ -198,3 +198,57 @@ TEST(FitQuality, SectionsAreNamedFromOneInCanonicalOrder) {
 
 }  // namespace
 }  // namespace zwidth::fit
+
+namespace zwidth::fit {
+namespace {
+
+// The leakage bound of a Hann window (fit/quality.cc, LeakageChecks): a peak
+// of half-power bandwidth bw [Hz] is widened by (4/3) (df / bw)^2 relative.
+// Written here for a section 0.3 bins wide (df / bw = 1 / 0.3 is not under 2
+// bins: r = df / bw = 0.3 < 0.5, so no reason): the bound, 0.12 of c, is
+// 0.61 rad/s; with a damping std of 0.1 it is over 3 std and the warning
+// names the local rational method, with a std of 1 it is under and nothing is said.
+TEST(FitQuality, TheLeakageBoundAboveThreeStdSuggestsTheLocalRationalMethod) {
+  ident::FrequencyResponse sub;
+  sub.sample_rate_hz = 1000.0;
+  sub.window_length = 4096;
+  sub.bin_correlation = 1.94;
+  const double df = 1000.0 / 4096, bw = df / 0.3, c = 2 * std::numbers::pi * bw;
+  const double bound = 4.0 / 3.0 * 0.3 * 0.3 * c;  // 0.61 rad/s
+  for (const double sd : {0.1, 1.0}) {
+    FitResult r;
+    r.plant = model::Plant{1e-3, 5e-3, {{2 * std::numbers::pi * 100, c, 2 * std::numbers::pi * 80, 1e3}}};
+    r.std_errors = model::Plant{0, 0, {{1, sd, 1, 1e3}}};
+    internal::LeakageChecks(sub, &r);
+    EXPECT_TRUE(r.reasons.empty());
+    bool lrm = false;
+    for (const std::string& w : r.warnings) lrm |= w.find("LocalModelOptions::method lrm") != std::string::npos;
+    EXPECT_EQ(lrm, bound > 3 * sd) << "sd " << sd << ", bound " << bound;
+    EXPECT_EQ(lrm, sd == 0.1);
+  }
+}
+
+// The robust method's check (fit/quality.cc, DistortionCheck) on a response
+// written here: bins below half the lowest section frequency decide; a
+// median distortion/noise ratio of 4 there makes the reason, 0.25 does not,
+// and the distortion above the section (not where m and b are set) does not count.
+TEST(FitQuality, DistortionAboveTheNoiseWhereTheRigidBodyIsSetIsAReason) {
+  for (const double low_ratio : {4.0, 0.25}) {
+    ident::FrequencyResponse sub;
+    FitResult r;
+    r.plant = model::Plant{1e-3, 5e-3, {{2 * std::numbers::pi * 100, 50, 2 * std::numbers::pi * 80, 50}}};
+    for (int k = 1; k <= 200; ++k) {
+      sub.f_hz.push_back(k);
+      sub.noise_var.push_back(1e-10);
+      sub.distortion_var.push_back(k < 40 ? low_ratio * 1e-10 : 100e-10);
+    }
+    internal::DistortionCheck(sub, &r);
+    bool reason = false;
+    for (const auto& q : r.reasons) reason |= q.code == "nonlinear_distortion";
+    EXPECT_EQ(reason, low_ratio > 1) << low_ratio;
+    EXPECT_DOUBLE_EQ(r.distortion_to_noise, low_ratio);
+  }
+}
+
+}  // namespace
+}  // namespace zwidth::fit

@@ -31,6 +31,7 @@ TEST(RunReport, WritesEveryFileIntoTheFolderAndNothingWithoutFigures) {
   o.figures = false;
   analysis::RunInput in = TestInput(0.0);
   in.model.fit = {{"quality_reasons", nlohmann::json::array()}};
+  in.response.frf.estimator = "lrm";  // summary.json says which estimator made the response
   const analysis::RunAnalysis a = analysis::Analyse(std::move(in), o);
   {
     io::OutputFolder folder(dir.string(), false);
@@ -38,6 +39,7 @@ TEST(RunReport, WritesEveryFileIntoTheFolderAndNothingWithoutFigures) {
     EXPECT_EQ(r.figures, report::FiguresStatus::kNotRequested);
     folder.Commit();
   }
+  EXPECT_EQ(nlohmann::json::parse(test::ReadFile(dir / "summary.json")).value("estimator", ""), "lrm");
   for (const char* f : {"model.json", "frf.csv", "boundary.csv", "summary.json", "report.html"}) {
     EXPECT_TRUE(std::filesystem::is_regular_file(dir / f)) << f;
   }
