@@ -469,15 +469,15 @@ def test_bad_input_raises_input_error_with_the_cli_message(cli, tmp_path, table1
     short = tmp_path / "short.csv"
     zwidth.simulate(zwidth.Model.table1(), seconds=1).save(str(short))
     # The library names the option field; the CLI prints its flag in its place, Python its keyword.
-    # Python's estimate() windows 4096 samples by default; the CLI's default follows the log (issue 29),
-    # so the CLI is given the same window here.
+    # Both defaults now follow the log (a 1 s log fits its window); a 4096 window is given to both here.
+    # So the message of a window too long for the log is the same one.
     short_cli = cli_message(cli, "estimate", short, "-o", tmp_path / "z.csv", "--window-length", "4096")
     assert "--window-length 512 or less" in short_cli
     with pytest.raises(ValueError) as e:
-        zwidth.estimate(zwidth.read_log(str(short)))
+        zwidth.estimate(zwidth.read_log(str(short)), window_length=4096)
     assert str(e.value) == short_cli.replace("--window-length", "window_length")
     with pytest.raises(ValueError) as e:
-        zwidth.estimate(str(short))
+        zwidth.estimate(str(short), window_length=4096)
     assert str(e.value) == short_cli.replace("--window-length", "window_length")
 
 
