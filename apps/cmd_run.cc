@@ -1,18 +1,15 @@
 // zwidth run: estimate -> fit -> analysis -> report, the job a user runs on a
-// new device log. This file only wires: flags -> analysis::RunOptions, the
-// estimate and the fit (which print as they read and fit, shared with
-// `estimate` and `fit`), analysis::Analyse, report::WriteRunReport, printing.
+// new device log. This file only wires: flags -> report::RunJob (the whole
+// pipeline, report::RunToFolder, which Python's zwidth.run calls too), the
+// messages on stderr and the results on stdout.
 #include <cstdio>
-#include <exception>
-#include <optional>
-#include <system_error>
-#include <thread>
 #include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "analysis/run.h"
+#include "analysis/run_input.h"
 #include "io/printable.h"
 #include "apps/common.h"
 #include "apps/fit_support.h"
@@ -29,43 +26,24 @@ void PrintStage(const std::string& name, double ms) { std::fprintf(stderr, "  %-
 
 }  // namespace
 
-// With a reference, its Z-width (which needs only the log's period) is
-// computed on a thread of its own while the fit runs: the fit leaves a core
-// idle while it converges from one start.
+// The CLI's messages of a run: the estimate's lines, the fit's warnings, the
+// notes and the stage times on stderr (in its flags), unless MessagesQuiet().
+analysis::RunMessages RunMessagesOfCli() {
+  analysis::RunMessages m;
+  if (MessagesQuiet()) return m;
+  m.estimate = [](const std::string& line) { std::fprintf(stderr, "%s\n", io::Printable(WithFlags(line)).c_str()); };
+  m.fit.warning = [](const std::string& w) { std::fprintf(stderr, "warning: %s\n", io::Printable(WithFlags(w)).c_str()); };
+  m.note = [](const std::string& n) { std::fprintf(stderr, "note: %s\n", n.c_str()); };
+  m.stage = [](const std::string& name, double ms) { PrintStage(name, ms); };
+  return m;
+}
+
 analysis::RunInput EstimateAndFit(const RunFlags& f, const analysis::RunOptions& o, analysis::RunInput in,
                                   double* t_total_ms, bool reference_thread) {
-  StageTimer timer(!MessagesQuiet());
-  LogsEstimate est = EstimateFromLogs(f.logs, f.est, true);
-  in.response = std::move(est.response);
-  in.total_samples = est.total_samples;
-  in.whole_record = f.est.whole_record;
-  *t_total_ms = timer.Lap("estimate (read + Welch)");
-  // The reference's delay is counted in its own period: in the log's (or refused).
-  if (in.reference) app::ConvertDelayToPeriod(&*in.reference, in.response.frf.period_s(), "the reference");
-  std::exception_ptr ref_error;
-  std::optional<analysis::ReferenceStability> ref;
-  {
-    std::jthread ref_thread;
-    if (in.reference && reference_thread) {
-      try {
-        ref_thread = std::jthread([&] {
-          try {
-            ref = analysis::ReferenceStabilityOf(*in.reference, in.response.frf.period_s(), o.delays);
-          } catch (...) {
-            ref_error = std::current_exception();
-          }
-        });
-      } catch (const std::system_error&) {
-        // No thread to be had: Analyse computes the reference after the fit.
-      }
-    }
-    in.model = FitToModelFile(in.response.frf, f.fit.o, in.source, &in.fit);
-  }  // joined
-  if (ref_error) std::rethrow_exception(ref_error);
-  in.reference_stability = std::move(ref);
-  for (std::string& w : in.fit.warnings) w = WithFlags(w);  // the report shows the CLI's flags
-  *t_total_ms += timer.Lap(in.reference ? "fit (+ reference Z-width)" : "fit");
-  return in;
+  analysis::RunMessages m = RunMessagesOfCli();
+  m.fit.words = WithFlags;  // the report and model.json show the CLI's flags
+  return analysis::EstimateAndFit(std::move(in), {f.est.Options(true), f.fit.o, reference_thread}, o.delays, m,
+                                  t_total_ms);
 }
 
 analysis::RunOptions ResolveRunOptions(RunFlags* f, analysis::RunInput* in) {
@@ -103,12 +81,16 @@ void Run(RunFlags& f) {
   // two runs into one folder cannot mix.
   io::OutputFolder folder(f.outdir, f.force);
   std::fprintf(stderr, "zwidth run %s -> %s\n", io::Printable(in.source).c_str(), io::Printable(f.outdir).c_str());
-  double t_total = 0.0;
-  in = EstimateAndFit(f, o, std::move(in), &t_total);
-  ResolveRunLoop(f, in.response.frf.period_s(), &o);
-  const analysis::RunAnalysis a = analysis::Analyse(std::move(in), o);
-  const std::string fit_report = FitReport(a.input.fit);  // the CLI's wording, for the terminal and report.html
-  const report::RunReport rep = report::WriteRunReport(a, folder, {.draw_figures = true, .png = f.png, .fit_report = fit_report, .command_line = CommandLine()});
+  analysis::RunMessages m = RunMessagesOfCli();
+  m.fit.words = WithFlags;  // the report and model.json show the CLI's flags
+  report::RunJob job{std::move(in), {f.est.Options(true), f.fit.o}, o,
+                     [&f](double period_s) { return ResolveLoops(f.loop, period_s)[0]; },
+                     {.draw_figures = true, .png = f.png, .fit_report = "", .command_line = CommandLine()}};
+  const report::RunJobResult r = report::RunToFolder(std::move(job), folder, m);
+  const analysis::RunAnalysis& a = r.analysis;
+  const report::RunReport& rep = r.report;
+  const std::string& fit_report = r.fit_report;
+  double t_total = r.estimate_fit_ms;
   for (const analysis::RunStage& s : a.stages) {
     if (s.name.rfind("figure", 0) == 0) continue;
     PrintStage(s.name, s.ms);

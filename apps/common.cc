@@ -31,21 +31,7 @@ std::string EstimateFlags::ResolvedDetrend() const {
 }
 
 ident::WelchOptions EstimateFlags::Resolve() const {
-  ident::WelchOptions o = welch;
-  if (!ident::FromString(window, &o.window)) {
-    throw InputError("--window '" + window + "' is not one of hann, hamming, rect");
-  }
-  if (!ident::FromString(ResolvedDetrend(), &o.detrend)) {
-    throw InputError("--detrend '" + detrend + "' is not one of none, mean, linear");
-  }
-  if (!IsLocal() && !IsRobust() && !ident::FromString(estimator, &o.estimator)) {
-    throw InputError("--estimator '" + estimator + "' is not one of h1, h2, lpm, lrm, robust");
-  }
-  std::string why;
-  ident::WelchOptions check = o;
-  if (check.window_length == 0) check.window_length = ident::WelchOptions{}.window_length;  // resolved per log
-  if (!check.IsValid(&why)) throw InputError(why);
-  return o;
+  return ident::ParseWelchOptions(welch, window, ResolvedDetrend(), estimator);  // InputError in fields
 }
 
 ident::LocalModelOptions EstimateFlags::ResolveLocal() const {

@@ -26,9 +26,7 @@
 
 namespace zwidth::app {
 io::ModelFile ReadReference(const std::string& flag, bool* is_table1) {
-  const bool t1 = flag == "table1";
-  if (is_table1) *is_table1 = t1;
-  return t1 ? io::Table1Model() : io::ReadModelJsonFor(flag, "--reference");
+  return io::ReadReferenceModel(flag, "--reference", is_table1);
 }
 
 void ResolveModesFlag(const std::string& flag, fit::FitOptions* o) {
@@ -77,71 +75,12 @@ void ResolveDelayFlag(const std::string& flag, fit::FitOptions* o) {
     const int d = std::stoi(flag, &pos);
     if (pos != flag.size() || d < 0) throw std::invalid_argument("");
     o->delay_samples = d;
+    o->auto_delay = false;
   } catch (const std::exception&) {
     throw InputError("--delay-samples '" + flag + "': expected 'auto' or an integer >= 0");
   }
 }
 
-namespace {
-
-// A poor fit of a response that eq. (1) cannot have at all: a reversed sign
-// (phase near 0 deg where the rigid body gives -90..-180) or the input and
-// output swapped (|H| rising with frequency). Read from the response, not the
-// fit: the median phase of the lowest tenth of the used bins, and the slope of
-// log |H| against log f over all of them, when their median coherence is at
-// least 0.5 (a response of quantisation noise has any phase).
-std::optional<fit::QualityReason> SignOrSwap(const ident::FrequencyResponse& frf, const fit::FitResult& r) {
-  std::vector<size_t> used;
-  for (size_t k = 0; k < frf.f_hz.size(); ++k) {
-    const bool in_band = k < r.band.used.size() ? r.band.used[k] != 0 : true;
-    if (in_band && frf.f_hz[k] > 0.0 && std::abs(frf.H[k]) > 0.0) used.push_back(k);
-  }
-  if (used.size() < 8) return std::nullopt;
-  // Only a response that is measured at all (not quantisation or noise).
-  std::vector<double> coh;
-  for (size_t k : used) coh.push_back(frf.coherence[k]);
-  std::nth_element(coh.begin(), coh.begin() + coh.size() / 2, coh.end());
-  if (!(coh[coh.size() / 2] >= 0.5)) return std::nullopt;
-  // Least-squares slope of log10 |H| over log10 f [decades per decade].
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  for (size_t k : used) {
-    const double x = std::log10(frf.f_hz[k]), y = std::log10(std::abs(frf.H[k]));
-    sx += x; sy += y; sxx += x * x; sxy += x * y;
-  }
-  const double n = static_cast<double>(used.size());
-  const double slope = (n * sxy - sx * sy) / (n * sxx - sx * sx);
-  const size_t low = std::max<size_t>(4, used.size() / 10);
-  std::vector<double> phase;
-  for (size_t i = 0; i < low; ++i) phase.push_back(std::arg(frf.H[used[i]]) * 180.0 / std::numbers::pi);
-  std::nth_element(phase.begin(), phase.begin() + phase.size() / 2, phase.end());
-  const double median_phase = phase[phase.size() / 2];
-  auto band_to = [&](size_t last) {  // "f_first-f_last Hz" of the used bins 0..last
-    char b[80];
-    std::snprintf(b, sizeof b, "%.4g-%.4g Hz", frf.f_hz[used.front()], frf.f_hz[used[last]]);
-    return std::string(b);
-  };
-  const std::string band = band_to(used.size() - 1), low_band = band_to(low - 1);
-  char msg[600];
-  if (slope > 0.5) {
-    std::snprintf(msg, sizeof msg,
-                  "|H| rises with frequency (log-log slope %+.2f over %s), while eq. (1) falls (-1 to -2 decades per "
-                  "decade): the response looks inverted (1/G)", slope, band.c_str());
-    return fit::QualityReason{"columns_swapped", msg,
-                              "are the input and output columns swapped? check LogSelect::input_column (the torque "
-                              "or force) and LogSelect::output_column (the position)"};
-  }
-  if (slope < -0.5 && std::abs(median_phase) < 60.0) {
-    std::snprintf(msg, sizeof msg,
-                  "the response's phase at low frequency is %.0f deg (median over %s), while eq. (1)'s rigid body "
-                  "needs -90 to -180 deg there", median_phase, low_band.c_str());
-    return fit::QualityReason{"sign_reversed", msg,
-                              "is the output's (or the input's) sign reversed, e.g. an encoder counting the other "
-                              "way? fit with LogSelect::output_scale -1 (or LogSelect::input_scale -1)"};
-  }
-  return std::nullopt;
-}
-
-}  // namespace
 
 void AddFrictionFlag(CLI::App* cmd, std::string* flag) {
   cmd->add_option("--friction", *flag,
@@ -186,79 +125,14 @@ std::string FrictionLine(const fit::FrictionFitResult& ff) {
   return s;
 }
 
-namespace {
-
-// The friction fit's record in model.json's "fit" (the linear-only b beside).
-nlohmann::json FrictionRecord(const fit::FrictionFitResult& ff) {
-  return {{"status", fit::ToString(ff.status)},
-          {"detected", ff.detected},
-          {"detection_coulomb", ff.detection_coulomb},
-          {"detection_coulomb_std", ff.detection_coulomb_std},
-          {"idim_b", ff.idim_b},
-          {"idim_b_std", ff.idim_b_std},
-          {"linear_only_b", ff.linear_b},
-          {"linear_only_b_std", ff.linear_b_std},
-          {"cutoff_hz", ff.cutoff_hz},
-          {"rows_used", ff.rows_used},
-          {"iterations", ff.iterations},
-          {"message", ff.message}};
-}
-
-}  // namespace
 
 io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::FitOptions& o,
                              const std::string& source, fit::FitResult* out, const FrictionInput* friction,
                              fit::FrictionFitResult* friction_out) {
-  // Too few segments at the shortest window: the library's advice (a shorter
-  // window) cannot apply; the log is too short.
-  constexpr int kShortestWindow = 16;  // WelchOptions::window_length >= 16
-  if (frf.num_averages < o.min_averages && !o.allow_few_averages && frf.window_length > 0 &&
-      frf.window_length <= kShortestWindow) {  // 0: a saved response, whose window is not known
-    throw InputError("the log is too short: " + std::to_string(frf.num_averages) + " Welch segment(s) of " +
-                     std::to_string(frf.window_length) + " samples (the shortest window), fewer than the " +
-                     std::to_string(o.min_averages) + " a per-bin std needs; record a longer log (at least " +
-                     std::to_string((o.min_averages + 1) * frf.window_length / 2) +
-                     " samples at 50 % overlap), or FitOptions::allow_few_averages to fit anyway (judged poor)");
-  }
-  // Ceres' glog output (e.g. "Covariance matrix is near rank deficient") is
-  // kept off the terminal; the fit is in a plugin loaded here (fit/fit_api.h).
-  fit::FitResult r = fit::FitLibrary().fit_model_quiet(frf, o);
-  if (r.quality == fit::FitQuality::kPoor) {  // the likeliest cause first, before "more modes"
-    if (auto reason = SignOrSwap(frf, r)) r.reasons.insert(r.reasons.begin(), *reason);
-  }
-  fit::FrictionFitResult ff;
-  // Not on a log whose sign or columns look wrong: its friction would mean nothing.
-  const bool broken = !r.reasons.empty() && (r.reasons.front().code == "sign_reversed" ||
-                                             r.reasons.front().code == "columns_swapped");
-  if (friction && r.status == fit::FitStatus::kConverged && !broken) {
-    const io::Log log = io::ReadLog(friction->path, friction->select);
-    try {
-      ff = fit::FitLibrary().fit_friction_quiet(log.input, log.output, log.info.sample_rate_hz, r, o, friction->options);
-    } catch (const InputError& e) {  // e.g. too few usable samples: auto goes on linear-only
-      if (friction->options.model == fit::FrictionModel::kCoulomb) throw;
-      r.warnings.push_back(std::string("friction not checked: ") + e.what());
-    }
-    if (ff.status == fit::FrictionFitStatus::kFailed) throw ComputationError(ff.message);
-    if (ff.status != fit::FrictionFitStatus::kNotRun) r = ff.fit;
-  }
-  if (out) *out = r;
-  if (friction_out) *friction_out = ff;
-  for (const std::string& w : r.warnings) if (!MessagesQuiet()) std::fprintf(stderr, "warning: %s\n", io::Printable(WithFlags(w)).c_str());
-  if (r.status != fit::FitStatus::kConverged) throw ComputationError(r.message);
-  io::ModelFile mf = io::FittedModelFile(r, frf, o, source);
-  if (ff.status == fit::FrictionFitStatus::kFitted) {
-    mf.friction = ff.friction;
-    mf.friction_std = ff.friction_std;
-  }
-  if (ff.status != fit::FrictionFitStatus::kNotRun && mf.fit.is_object()) mf.fit["friction"] = FrictionRecord(ff);
-  // The files the CLI writes (model JSON, run's summary.json) give its flags:
-  // every text of the fit's record (reasons, warnings, order and delay choices).
-  std::function<void(nlohmann::json&)> flags = [&](nlohmann::json& j) {
-    if (j.is_string()) j = WithFlags(j.get<std::string>());
-    else if (j.is_array() || j.is_object()) for (auto& x : j) flags(x);
-  };
-  flags(mf.fit);
-  return mf;
+  analysis::FitMessages messages{.words = WithFlags, .warning = [](const std::string& w) {
+    if (!MessagesQuiet()) std::fprintf(stderr, "warning: %s\n", io::Printable(WithFlags(w)).c_str());
+  }};
+  return analysis::FitToModelFile(frf, o, source, messages, out, friction, friction_out);
 }
 
 std::string ParameterTable(const io::ModelFile& mf, bool linear) { return analysis::ParameterTable(mf, linear); }

@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "analysis/fit_model_file.h"
 #include "apps/common.h"
 #include "fit/fit.h"
 #include "fit/friction_fit.h"
@@ -27,10 +28,9 @@ void ResolveModesFlag(const std::string& flag, fit::FitOptions* o);
 // --min-coherence. Resolve() after parsing: the strings, and the band from
 // the Welch flags (--fmin/--fmax also limit a saved response's bins).
 struct FitFlags {
-  // delay: "auto" by default (every device tried has an input delay; a fit
-  // that assumes none is poor there, chi2/dof 15.7-12283).
-  std::string modes = "2", delay = "auto";
-  fit::FitOptions o;
+  fit::FitOptions o = fit::UserFitOptions();  // the library's defaults of a user's fit
+  std::string modes = o.auto_modes ? "auto" : std::to_string(o.num_modes);
+  std::string delay = o.auto_delay ? "auto" : std::to_string(o.delay_samples);
   void Resolve(double fmin_hz, double fmax_hz);
 };
 void AddFitFlags(CLI::App* cmd, FitFlags* flags);
@@ -43,13 +43,7 @@ std::string FitReport(const fit::FitResult& r);
 void AddFrictionFlag(CLI::App* cmd, std::string* flag);
 fit::FrictionModel ResolveFrictionFlag(const std::string& flag);  // InputError naming the flag
 
-// The time-domain log that the friction fit reads again (the estimate streams
-// it), with the estimate's column selection and Welch options.
-struct FrictionInput {
-  std::string path;
-  io::LogSelect select;
-  fit::FrictionFitOptions options;
-};
+using analysis::FrictionInput;  // analysis/fit_model_file.h
 
 // The friction fit's input for `fit`: the one time-domain log with the
 // estimate's selection and Welch options; none (with a warning for auto) for
@@ -61,9 +55,8 @@ std::optional<FrictionInput> FrictionInputFor(const std::vector<std::string>& in
 // verdict's `friction` reason speaks for a detection that was not fitted).
 std::string FrictionLine(const fit::FrictionFitResult& ff);
 
-// Fits and packs the model file (std, fit metrics); throws ComputationError
-// when the fit does not converge. With `friction`, the friction fit
-// (fit::FitFriction) follows: its linear part and friction go into the file.
+// analysis::FitToModelFile in the CLI's words (its flags), the fit's warnings
+// on stderr unless MessagesQuiet().
 io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::FitOptions& o,
                              const std::string& source, fit::FitResult* result = nullptr,
                              const FrictionInput* friction = nullptr, fit::FrictionFitResult* friction_result = nullptr);

@@ -67,6 +67,17 @@ struct FitOptions {
   bool IsValid(std::string* why) const;
 };
 
+// The options a user's fit starts from: the one source of the defaults of
+// `zwidth fit` / `run` (FitFlags) and of Python's fit() and run(). FitOptions{}
+// with the input delay searched (auto_delay): every device tried has one, and
+// a fit that assumes none is poor there (chi2/dof 15.7-12283). FitOptions{}
+// itself keeps a fixed delay of 0 for the library's own callers.
+inline FitOptions UserFitOptions() {
+  FitOptions o;
+  o.auto_delay = true;
+  return o;
+}
+
 enum class FitStatus {
   kNotRun,        // sentinel
   kConverged,     // the numbers can be used

@@ -1,4 +1,5 @@
 #include "ident/welch.h"
+#include "ident/local_models.h"
 
 #include <algorithm>
 #include <cassert>
@@ -88,6 +89,31 @@ std::vector<double> MakeWindow(Window w, int n) {
 
 int WelchOptions::overlap_samples() const {
   return static_cast<int>(std::floor(overlap * window_length));
+}
+
+WelchOptions ParseWelchOptions(const WelchOptions& numbers, const std::string& window, const std::string& detrend,
+                               const std::string& estimator, bool* local) {
+  WelchOptions o = numbers;
+  auto shown = [](const std::string& w) { return "'" + w.substr(0, 20) + "'"; };
+  if (!FromString(window, &o.window)) {
+    throw InputError("WelchOptions::window " + shown(window) + " is not one of hann, hamming, rect");
+  }
+  if (!FromString(detrend, &o.detrend)) {
+    throw InputError("WelchOptions::detrend " + shown(detrend) + " is not one of none, mean, linear");
+  }
+  LocalMethod method;
+  const bool is_local = FromString(estimator, &method);
+  if (local) *local = is_local;
+  if (is_local || estimator == "robust") {  // not Welch: the Welch part keeps H1 (local: *local says so)
+    o.estimator = Estimator::kH1;
+  } else if (!FromString(estimator, &o.estimator)) {
+    throw InputError("WelchOptions::estimator " + shown(estimator) + " is not one of h1, h2, lpm, lrm, robust");
+  }
+  std::string why;
+  WelchOptions check = o;
+  if (check.window_length == 0) check.window_length = WelchOptions{}.window_length;  // resolved per log
+  if (!check.IsValid(&why)) throw InputError(why);
+  return o;
 }
 
 bool WelchOptions::IsValid(std::string* why) const {

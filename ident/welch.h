@@ -56,6 +56,17 @@ struct WelchOptions {
   bool IsValid(std::string* why) const;
 };
 
+// The Welch options from the words a user types (the CLI's flags, Python's
+// keywords; the one parser both call): window hann | hamming | rect, detrend
+// none | mean | linear, estimator h1 | h2, or lpm | lrm (the local methods,
+// ident/local_models.h: *local set, the estimator left h1), or robust (ident/robust_frf.h; the estimator left h1). The numbers come
+// from `numbers`; window_length 0 (the front ends' default:
+// DefaultWindowLength, resolved per log) is accepted. Throws InputError
+// naming the field (WelchOptions::window ...) for an unknown word or a value
+// out of range (WelchOptions::IsValid).
+WelchOptions ParseWelchOptions(const WelchOptions& numbers, const std::string& window, const std::string& detrend,
+                               const std::string& estimator, bool* local = nullptr);
+
 struct FrequencyResponse {
   double sample_rate_hz = 0.0;
   // The sample period T = 1 / sample_rate_hz [s] of the log it was estimated

@@ -18,6 +18,12 @@ ModelFile Table1Model() {
   return table1;
 }
 
+ModelFile ReadReferenceModel(const std::string& spec, const std::string& what, bool* is_table1) {
+  const bool t1 = spec == "table1";
+  if (is_table1) *is_table1 = t1;
+  return t1 ? Table1Model() : ReadModelJsonFor(spec, what);
+}
+
 std::vector<Table2Point> Table2Points() {
   // Columns delay_ms,B,K_cr,f_cr_hz,note. The paper samples at T = 1 ms, so the
   // delay in ms is the delay in samples. Rows with a note are the two misprinted

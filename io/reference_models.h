@@ -3,6 +3,7 @@
 // Table II (the relay experiment's measured K_CR and f_CR per delay and B).
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "io/model_json.h"
@@ -11,6 +12,11 @@ namespace zwidth::io {
 
 // Table I as a model file (parsed from the embedded datasets/phantom/table1.json).
 ModelFile Table1Model();
+
+// A run's reference model: "table1" (Table I, built in; *is_table1 set) or a
+// model JSON's path, read with io::ReadModelJsonFor(spec, what) (`what`: the
+// option that named it, in the caller's words: "--reference", "reference").
+ModelFile ReadReferenceModel(const std::string& spec, const std::string& what, bool* is_table1 = nullptr);
 
 struct Table2Point {
   int delay_samples = 0;

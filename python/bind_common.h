@@ -15,6 +15,8 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -27,6 +29,7 @@
 
 #include "io/model_json.h"
 #include "model/c_locale.h"
+#include "stability/haptic_loop.h"
 
 namespace zwidth::python {
 
@@ -143,9 +146,27 @@ inline py::object CovarianceOf(const io::ModelFile& mf) { return SquareArray(mf.
 // Under the GIL.
 double ResolvePeriod(const std::optional<double>& period_s, io::ModelFile* model);
 
+// A path or a sequence of paths (str or os.PathLike), as estimate_logs and
+// run take them; TypeError for another item.
+std::vector<std::string> PathsFrom(const py::object& paths);
+
+// m.def(name, f, args..., extra...) with the keyword arguments given as a tuple.
+template <class F, class Args, class... Extra>
+void DefWith(py::module_& m, const char* name, F&& f, Args&& args, Extra&&... extra) {
+  std::apply([&](auto&&... a) { m.def(name, std::forward<F>(f), a..., std::forward<Extra>(extra)...); },
+             std::forward<Args>(args));
+}
+
+// The CLI's loop flags (apps/loop_flags.cc) as keywords: a first-order
+// velocity low-pass at velocity_filter_hz (None: the raw difference) and the
+// user's hand (M, B, K) (None: nobody holds the device).
+stability::LoopOptions LoopFrom(std::optional<double> velocity_filter_hz,
+                                std::optional<std::tuple<double, double, double>> hand, double T);
+
 void BindModel(py::module_& m);
 void BindIdent(py::module_& m);
 void BindFit(py::module_& m);
 void BindStability(py::module_& m);
+void BindRun(py::module_& m);  // zwidth.run (bind_run.cc)
 
 }  // namespace zwidth::python

@@ -44,13 +44,14 @@ fit::FitOptions OptionsFrom(const py::object& modes, int max_modes, const py::ob
                             double min_damping_ratio, double max_pole_damping_ratio,
                             double max_zero_damping_ratio, double max_frequency_fraction,
                             double relative_std_floor, double function_tolerance) {
-  fit::FitOptions o;
+  fit::FitOptions o = fit::UserFitOptions();
   if (py::isinstance<py::str>(modes)) {
     const std::string s = modes.cast<std::string>();
     if (s != "auto") throw InputError("modes '" + s + "': expected 'auto' or an integer >= 0");
     o.auto_modes = true;
   } else {
     o.num_modes = Integer(modes, "modes");
+    o.auto_modes = false;
   }
   o.max_modes = max_modes;
   if (py::isinstance<py::str>(delay_samples)) {
@@ -59,6 +60,7 @@ fit::FitOptions OptionsFrom(const py::object& modes, int max_modes, const py::ob
     o.auto_delay = true;
   } else {
     o.delay_samples = Integer(delay_samples, "delay_samples");
+    o.auto_delay = false;
   }
   o.max_auto_delay = max_auto_delay;
   o.allow_few_averages = allow_short;
@@ -235,24 +237,13 @@ void BindFitResult(py::module_& m) {
 ;
 }
 
-// zwidth.fit: FitOptions from keywords (OptionsFrom), then RunFit.
-void BindFitFunction(py::module_& m) {
-  const fit::FitOptions d;  // the defaults of every keyword
-  m.def("fit",
-        [](const ident::FrequencyResponse& frf, const py::object& modes, int max_modes, const py::object& delay_samples,
-           int max_auto_delay, bool allow_short, double fmin, double fmax, double min_input_power_ratio,
-           double min_coherence, std::optional<io::ModelFile> init, int max_starts, int max_iterations, double min_damping_ratio,
-           double max_pole_damping_ratio, double max_zero_damping_ratio, double max_frequency_fraction,
-           double relative_std_floor, double function_tolerance, const std::string& name) {
-          const fit::FitOptions o =
-              OptionsFrom(modes, max_modes, delay_samples, max_auto_delay, allow_short, fmin, fmax,
-                          min_input_power_ratio, min_coherence, std::move(init), max_starts, max_iterations,
-                          min_damping_ratio, max_pole_damping_ratio, max_zero_damping_ratio,
-                          max_frequency_fraction, relative_std_floor, function_tolerance);
-          return RunFit(frf, o, name);
-        },
-        py::arg("frf"), py::arg("modes") = d.num_modes,
-        py::arg("max_modes") = d.max_modes, py::arg("delay_samples") = d.delay_samples,
+// fit()'s keywords (FitOptions' defaults), shared by zwidth.run (through _fit_options).
+auto FitArgs() {
+  const fit::FitOptions d = fit::UserFitOptions();  // the defaults of every keyword, as the CLI's
+  return std::make_tuple(
+        py::arg("modes") = d.auto_modes ? py::object(py::str("auto")) : py::object(py::int_(d.num_modes)),
+        py::arg("max_modes") = d.max_modes,
+        py::arg("delay_samples") = d.auto_delay ? py::object(py::str("auto")) : py::object(py::int_(d.delay_samples)),
         py::arg("max_auto_delay") = d.max_auto_delay,
         py::arg("allow_short") = d.allow_few_averages,
         py::arg("fmin") = d.band.fmin_hz, py::arg("fmax") = d.band.fmax_hz,
@@ -265,7 +256,26 @@ void BindFitFunction(py::module_& m) {
         py::arg("max_zero_damping_ratio") = d.max_zero_damping_ratio,
         py::arg("max_frequency_fraction") = d.max_frequency_fraction,
         py::arg("relative_std_floor") = d.relative_std_floor,
-        py::arg("function_tolerance") = d.function_tolerance, py::arg("name") = "",
+        py::arg("function_tolerance") = d.function_tolerance);
+}
+
+// zwidth.fit: FitOptions from keywords (OptionsFrom), then RunFit.
+void BindFitFunction(py::module_& m) {
+  DefWith(m, "fit",
+        [](const ident::FrequencyResponse& frf, const py::object& modes, int max_modes, const py::object& delay_samples,
+           int max_auto_delay, bool allow_short, double fmin, double fmax, double min_input_power_ratio,
+           double min_coherence, std::optional<io::ModelFile> init, int max_starts, int max_iterations, double min_damping_ratio,
+           double max_pole_damping_ratio, double max_zero_damping_ratio, double max_frequency_fraction,
+           double relative_std_floor, double function_tolerance, const std::string& name) {
+          const fit::FitOptions o =
+              OptionsFrom(modes, max_modes, delay_samples, max_auto_delay, allow_short, fmin, fmax,
+                          min_input_power_ratio, min_coherence, std::move(init), max_starts, max_iterations,
+                          min_damping_ratio, max_pole_damping_ratio, max_zero_damping_ratio,
+                          max_frequency_fraction, relative_std_floor, function_tolerance);
+          return RunFit(frf, o, name);
+        },
+        std::tuple_cat(std::make_tuple(py::arg("frf")), FitArgs(), std::make_tuple(py::arg("name") = "")),
+
         R"doc(Fits eq. (1) with `modes` sections to a FrequencyResponse as `zwidth fit`
 does (Ceres; residual against the exact ZOH response weighted by the per-bin
 std). modes: an integer >= 0 or 'auto' (0..max_modes, lowest BIC among the
@@ -282,6 +292,8 @@ using the numbers; bad options raise InputError.)doc");
 }  // namespace
 
 void BindFit(py::module_& m) {
+  py::class_<fit::FitOptions>(m, "_FitOptions", "fit options (zwidth.run's, from _fit_options)");
+  DefWith(m, "_fit_options", &OptionsFrom, FitArgs(), "fit()'s options from its keywords (for zwidth.run).");
   BindFitResult(m);
   BindFitFunction(m);
 }

@@ -29,6 +29,8 @@ struct PyLog {
   double period_s() const { return model::SamplePeriod(sample_rate_hz); }
 };
 
+// The Welch keywords as options: the library's one parser (ident::ParseWelchOptions,
+// as the CLI's EstimateFlags::Resolve); window_length 0 = ident::DefaultWindowLength.
 ident::WelchOptions WelchFrom(int window_length, double overlap, const std::string& window,
                               const std::string& detrend, const std::string& estimator, double fmin,
                               double fmax) {
@@ -37,20 +39,7 @@ ident::WelchOptions WelchFrom(int window_length, double overlap, const std::stri
   o.overlap = overlap;
   o.fmin_hz = fmin;
   o.fmax_hz = fmax;
-  // The CLI's messages (apps/common.cc), with the keyword names.
-  if (!ident::FromString(window, &o.window)) {
-    throw InputError("window '" + window + "' is not one of hann, hamming, rect");
-  }
-  if (!ident::FromString(detrend, &o.detrend)) {
-    throw InputError("detrend '" + detrend + "' is not one of none, mean, linear");
-  }
-  ident::LocalMethod local;
-  if (!ident::FromString(estimator, &o.estimator) && !ident::FromString(estimator, &local)) {
-    throw InputError("estimator '" + estimator + "' is not one of h1, h2, lpm, lrm");
-  }
-  std::string why;
-  if (!o.IsValid(&why)) throw InputError(why);
-  return o;
+  return ident::ParseWelchOptions(o, window, detrend, estimator);
 }
 
 ident::FrequencyResponse Estimate(const std::vector<double>& u, const std::vector<double>& y,
@@ -62,10 +51,12 @@ ident::FrequencyResponse Estimate(const std::vector<double>& u, const std::vecto
   if (!(sample_rate_hz > 0.0 && std::isfinite(sample_rate_hz))) {
     throw InputError("sample_rate_hz = " + std::to_string(sample_rate_hz) + ": must be finite and > 0");
   }
+  ident::WelchOptions w = o;  // window_length 0: the CLI's rule of the rate and length
+  if (w.window_length == 0) w.window_length = ident::DefaultWindowLength(sample_rate_hz, u.size());
   py::gil_scoped_release release;
   // Pushed in one call: the estimator's result does not depend on how the
   // samples are chunked, so this equals the CLI's streaming pass.
-  ident::WelchEstimator est(o);
+  ident::WelchEstimator est(w);
   est.Push(u.data(), y.data(), u.size());
   return est.Finish(sample_rate_hz);
 }
@@ -84,7 +75,7 @@ std::optional<ident::LocalModelOptions> LocalFrom(const std::string& estimator, 
                                                    const LocalArgs& a) {
   ident::LocalModelOptions o;
   if (!ident::FromString(estimator, &o.method)) return std::nullopt;
-  if (welch.window_length != ident::WelchOptions{}.window_length || welch.overlap != ident::WelchOptions{}.overlap) {
+  if (welch.window_length != 0 || welch.overlap != ident::WelchOptions{}.overlap) {
     throw InputError("estimator='" + estimator + "' fits a local model on the whole log: drop window_length and "
                      "overlap (Welch keywords)");
   }
@@ -97,6 +88,24 @@ std::optional<ident::LocalModelOptions> LocalFrom(const std::string& estimator, 
   std::string why;
   if (!o.IsValid(&why)) throw InputError(why);
   return o;
+}
+
+// analysis::EstimateFromLogs (the CLI's estimate of log files), its warnings
+// raised as UserWarning in this module's keywords.
+ident::FrequencyResponse EstimateLogsWarned(const std::vector<std::string>& files,
+                                            const analysis::LogsEstimateOptions& o) {
+  std::vector<std::string> warnings;
+  analysis::LogsEstimate e;
+  {
+    py::gil_scoped_release release;
+    ScopedCLocale c;
+    e = analysis::EstimateFromLogs(files, o, [&](const std::string& line) {
+      if (line.rfind("warning: ", 0) == 0) warnings.push_back(io::WithKeywords(line.substr(9)));
+    });
+  }
+  const py::object warn = py::module_::import("warnings").attr("warn");
+  for (const std::string& w : warnings) warn(w, py::module_::import("builtins").attr("UserWarning"), 2);
+  return std::move(e.response.frf);
 }
 
 // Welch's estimate, or the local one (one run, open loop) when `local` is set.
@@ -156,19 +165,12 @@ auto SelectorArgs() {
 // The keywords of the Welch options (WelchFrom) with WelchOptions' defaults.
 auto WelchArgs() {
   const ident::WelchOptions d;
-  return std::make_tuple(py::arg("window_length") = d.window_length, py::arg("overlap") = d.overlap,
+  return std::make_tuple(py::arg("window_length") = 0, py::arg("overlap") = d.overlap,
                          py::arg("window") = "hann", py::arg("detrend") = "linear", py::arg("estimator") = "h1",
                          py::arg("fmin") = d.fmin_hz, py::arg("fmax") = d.fmax_hz,
                          py::arg("local_half_width") = LocalArgs{}.half_width, py::arg("local_order") = LocalArgs{}.order,
                          py::arg("local_denominator_order") = LocalArgs{}.denominator_order,
                          py::arg("local_differences") = LocalArgs{}.differences);
-}
-
-// m.def(name, f, args..., extra...) with the keyword arguments given as a tuple.
-template <class F, class Args, class... Extra>
-void DefWith(py::module_& m, const char* name, F&& f, Args&& args, Extra&&... extra) {
-  std::apply([&](auto&&... a) { m.def(name, std::forward<F>(f), a..., std::forward<Extra>(extra)...); },
-             std::forward<Args>(args));
 }
 
 // The checks of a log made in memory: what the CLI's readers refuse in a file.
@@ -395,25 +397,13 @@ void BindEstimate(py::module_& m) {
                                              time_dataset, rate, input_scale, output_scale, time_unit, delimiter);
           const auto local =
               LocalFrom(estimator, o, {local_half_width, local_order, local_denominator_order, local_differences});
-          py::gil_scoped_release release;
-          ScopedCLocale c;
-          if (local) {  // the whole log (as the CLI's EstimateLocalFromLogs)
-            const io::Log log = io::ReadLog(path, s);
-            try {
-              return ident::EstimateLocal({{log.input, log.output, {}}}, log.info.sample_rate_hz, *local).frf;
-            } catch (const InputError& e) {
-              throw InputError(path + ": " + e.what());
-            }
-          }
-          // The CLI's streaming pass (apps/common.cc EstimateFromLog): memory for a few windows.
-          ident::WelchEstimator est(o);
-          const io::LogInfo info =
-              io::StreamLog(path, s, [&](const double* u, const double* y, size_t n) { est.Push(u, y, n); });
-          try {
-            return est.Finish(info.sample_rate_hz);
-          } catch (const InputError& e) {
-            throw InputError(path + ": " + e.what());
-          }
+          // The CLI's `zwidth estimate LOG` (analysis::EstimateFromLogs): Welch streamed
+          // (a few windows in memory), the window of the log's rate and length by default.
+          analysis::LogsEstimateOptions lo;
+          lo.select = s;
+          lo.welch = o;
+          lo.local = local;
+          return EstimateLogsWarned({path}, lo);
         },
         std::tuple_cat(std::make_tuple(py::arg("path")), WelchArgs(), SelectorArgs()),
         "estimate(path, ...): streamed from a log file as `zwidth estimate` does (a few windows in memory, "
@@ -447,67 +437,49 @@ void BindEstimate(py::module_& m) {
         std::tuple_cat(std::make_tuple(py::arg("log")), WelchArgs()), "estimate(log, ...): the same from a Log.");
 }
 
+// estimate_logs()'s options from its keywords (the CLI's EstimateFlags::Options).
+analysis::LogsEstimateOptions LogsOptionsFrom(int window_length, double overlap, const std::string& window,
+                                              const std::optional<std::string>& detrend, const std::string& estimator,
+                                              double fmin, double fmax, const std::string& reference_column,
+                                              const std::string& reference_dataset, bool whole_record,
+                                              int period_samples, int transient_periods,
+                                              const std::string& input_column,
+                                              const std::string& output_column, const std::string& time_column,
+                                              const std::string& input_dataset, const std::string& output_dataset,
+                                              const std::string& time_dataset, double rate, double input_scale,
+                                              double output_scale, const std::string& time_unit,
+                                              const std::string& delimiter) {
+  analysis::LogsEstimateOptions o;
+  const bool local = estimator == "lpm" || estimator == "lrm", robust = estimator == "robust";
+  const std::string det = detrend ? *detrend : ident::ToString(analysis::DefaultDetrend(whole_record));
+  // window_length 0: the library's default rule (the first log's rate and length), as the CLI.
+  o.welch = WelchFrom(window_length, overlap, window, det, local || robust ? "h1" : estimator, fmin, fmax);
+  if (local) {
+    ident::LocalModelOptions lo;
+    ident::FromString(estimator, &lo.method);
+    lo.fmin_hz = fmin;
+    lo.fmax_hz = fmax;
+    o.local = lo;
+  }
+  o.select = SelectFrom(input_column, output_column, time_column, input_dataset, output_dataset,
+                        time_dataset, rate, input_scale, output_scale, time_unit, delimiter);
+  o.reference_column = reference_column;
+  o.reference_dataset = reference_dataset;
+  o.whole_record = whole_record;
+  o.period_samples = period_samples;
+  analysis::ChooseRobust(&o, robust, transient_periods);  // as the CLI (apps/common.cc)
+  return o;
+}
+
 // zwidth.estimate_logs: several runs, whole records, periods, closed loop
 // and the local methods, by the library's one estimate of logs
 // (analysis::EstimateFromLogs, what `zwidth estimate/fit/run LOG...` use).
 void BindEstimateLogs(py::module_& m) {
   const ident::WelchOptions d;
-  DefWith(m, "estimate_logs",
-        [](const py::object& paths, int window_length, double overlap, const std::string& window,
-           const std::optional<std::string>& detrend, const std::string& estimator, double fmin, double fmax,
-           const std::string& reference_column, const std::string& reference_dataset, bool whole_record,
-           int period_samples, int transient_periods, const std::string& input_column, const std::string& output_column,
-           const std::string& time_column, const std::string& input_dataset, const std::string& output_dataset,
-           const std::string& time_dataset, double rate, double input_scale, double output_scale,
-           const std::string& time_unit, const std::string& delimiter) {
-          std::vector<std::string> files;
-          if (py::isinstance<py::str>(paths)) {
-            files.push_back(paths.cast<std::string>());
-          } else {
-            for (const py::handle& p : paths) {
-              if (!py::isinstance<py::str>(p) && !py::hasattr(p, "__fspath__")) {
-                throw py::type_error("paths: expected a path or a sequence of paths, got an item of type " +
-                                     py::str(py::type::of(p).attr("__name__")).cast<std::string>());
-              }
-              files.push_back(py::str(py::module_::import("os").attr("fspath")(p)).cast<std::string>());
-            }
-          }
-          analysis::LogsEstimateOptions o;
-          const bool local = estimator == "lpm" || estimator == "lrm", robust = estimator == "robust";
-          const std::string det = detrend ? *detrend : ident::ToString(analysis::DefaultDetrend(whole_record));
-          // window_length 0: the library's default rule (the first log's rate and length), as the CLI.
-          o.welch = WelchFrom(window_length == 0 ? ident::WelchOptions{}.window_length : window_length, overlap, window,
-                              det, local || robust ? "h1" : estimator, fmin, fmax);
-          o.welch.window_length = window_length;
-          if (local) {
-            ident::LocalModelOptions lo;
-            ident::FromString(estimator, &lo.method);
-            lo.fmin_hz = fmin;
-            lo.fmax_hz = fmax;
-            o.local = lo;
-          }
-          o.select = SelectFrom(input_column, output_column, time_column, input_dataset, output_dataset,
-                                time_dataset, rate, input_scale, output_scale, time_unit, delimiter);
-          o.reference_column = reference_column;
-          o.reference_dataset = reference_dataset;
-          o.whole_record = whole_record;
-          o.period_samples = period_samples;
-          analysis::ChooseRobust(&o, robust, transient_periods);  // as the CLI (apps/common.cc)
-          std::vector<std::string> warnings;
-          analysis::LogsEstimate e;
-          {
-            py::gil_scoped_release release;
-            ScopedCLocale c;
-            e = analysis::EstimateFromLogs(files, o, [&](const std::string& line) {
-              if (line.rfind("warning: ", 0) == 0) warnings.push_back(io::WithKeywords(line.substr(9)));
-            });
-          }
-          const py::object warn = py::module_::import("warnings").attr("warn");
-          for (const std::string& w : warnings) warn(w, py::module_::import("builtins").attr("UserWarning"), 2);
-          return std::move(e.response.frf);
-        },
-        std::make_tuple(py::arg("paths"), py::arg("window_length") = 0,
-                        py::arg("overlap") = d.overlap, py::arg("window") = "hann",
+  py::class_<analysis::LogsEstimateOptions>(m, "_LogsEstimateOptions",
+                                             "estimate options (estimate_logs' and run's, from _estimate_logs_options)");
+  DefWith(m, "_estimate_logs_options", &LogsOptionsFrom,
+          std::make_tuple(py::arg("window_length") = 0, py::arg("overlap") = d.overlap, py::arg("window") = "hann",
                         py::arg("detrend") = py::none(), py::arg("estimator") = "h1", py::arg("fmin") = d.fmin_hz,
                         py::arg("fmax") = d.fmax_hz, py::arg("reference_column") = "",
                         py::arg("reference_dataset") = "", py::arg("whole_record") = false,
@@ -518,7 +490,7 @@ void BindEstimateLogs(py::module_& m) {
                         py::arg("input_dataset") = "/input/torque", py::arg("output_dataset") = "/output/position",
                         py::arg("time_dataset") = "/time", py::arg("rate") = 0.0, py::arg("input_scale") = 1.0,
                         py::arg("output_scale") = 1.0, py::arg("time_unit") = "", py::arg("delimiter") = ""),
-        R"doc(The frequency response of one device from one or several log files, as
+          R"doc(The frequency response of one device from one or several log files, as
 `zwidth estimate LOG...` computes it (the same library function): runs
 averaged (the same samples twice refused); window_length 0 (the default)
 is the CLI's rule: the power of two nearest 4.096 s at the first log's rate,
@@ -533,6 +505,11 @@ random-phase realisation, transient_periods dropped first: noise_var and
 distortion_var per line, and the fit's verdict reads them).
 Warnings (samples left out, ...) are raised as UserWarning; errors as
 InputError naming the file.)doc");
+  m.def("_estimate_logs", [](const py::object& paths, const analysis::LogsEstimateOptions& o) {
+          const std::vector<std::string> files = PathsFrom(paths);
+          return EstimateLogsWarned(files, o);
+        },
+        py::arg("paths"), py::arg("options"), "estimate_logs(paths, **keywords) with the options made.");
 }
 
 // zwidth.simulate: a simulated log.
@@ -570,6 +547,22 @@ same samples.)doc");
 }
 
 }  // namespace
+
+std::vector<std::string> PathsFrom(const py::object& paths) {
+  std::vector<std::string> files;
+  if (py::isinstance<py::str>(paths)) {
+    files.push_back(paths.cast<std::string>());
+  } else {
+    for (const py::handle& p : paths) {
+      if (!py::isinstance<py::str>(p) && !py::hasattr(p, "__fspath__")) {
+        throw py::type_error("paths: expected a path or a sequence of paths, got an item of type " +
+                             py::str(py::type::of(p).attr("__name__")).cast<std::string>());
+      }
+      files.push_back(py::str(py::module_::import("os").attr("fspath")(p)).cast<std::string>());
+    }
+  }
+  return files;
+}
 
 // zwidth.validate: a model on a log it was not fitted to (analysis/validate.h),
 // as `zwidth validate MODEL LOG -o` reports it.

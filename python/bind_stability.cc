@@ -29,9 +29,8 @@ struct PyZWidth {
   std::unique_ptr<stability::ZWidth> z;
 };
 
-// The CLI's loop flags (apps/loop_flags.cc) as keywords: a first-order
-// velocity low-pass at velocity_filter_hz (None: the raw difference) and the
-// user's hand (M, B, K) (None: nobody holds the device).
+}  // namespace
+
 stability::LoopOptions LoopFrom(std::optional<double> velocity_filter_hz,
                                 std::optional<std::tuple<double, double, double>> hand, double T) {
   stability::LoopOptions l;
@@ -44,6 +43,8 @@ stability::LoopOptions LoopFrom(std::optional<double> velocity_filter_hz,
   if (!l.IsValid(&why)) throw InputError(why);
   return l;
 }
+
+namespace {
 
 
 void CheckDelay(int d, const char* name) {

@@ -129,4 +129,5 @@ PYBIND11_MODULE(_zwidth, m) {
   BindIdent(m);
   BindFit(m);
   BindStability(m);
+  BindRun(m);
 }

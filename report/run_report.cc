@@ -14,6 +14,7 @@
 #include "io/provenance.h"
 #include "io/stability_files.h"
 #include "model/c_locale.h"
+#include "model/error.h"
 #include "report/report_internal.h"
 
 namespace zwidth::report {
@@ -111,6 +112,20 @@ RunReport WriteRunReport(const analysis::RunAnalysis& a, const io::OutputFolder&
   const std::map<std::string, std::string> svgs =
       r.figures == FiguresStatus::kDrawn ? DrawnSvgs(fig) : std::map<std::string, std::string>{};
   io::WriteTextAtomically((out / "report.html").string(), RunHtml(a, svgs, options.fit_report, options.command_line));
+  return r;
+}
+
+RunJobResult RunToFolder(RunJob job, const io::OutputFolder& folder, const analysis::RunMessages& messages) {
+  std::string why;  // before anything is read
+  if (!job.options.IsValid(&why)) throw InputError(why);
+  double ms = 0.0;
+  analysis::RunInput in = analysis::EstimateAndFit(std::move(job.input), job.estimate_fit, job.options.delays, messages, &ms);
+  if (job.loop) job.options.loop = job.loop(in.response.frf.period_s());
+  RunJobResult r{analysis::Analyse(std::move(in), job.options), {}, {}, ms};
+  r.fit_report = job.report.fit_report.empty() ? messages.fit.Words(analysis::FitReport(r.analysis.input.fit))
+                                               : job.report.fit_report;
+  job.report.fit_report = r.fit_report;
+  r.report = WriteRunReport(r.analysis, folder, job.report);
   return r;
 }
 

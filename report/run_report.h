@@ -5,10 +5,12 @@
 // only into the output folder's temporary path; the caller commits it.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "analysis/run.h"
+#include "analysis/run_input.h"
 #include "io/atomic_file.h"
 
 namespace zwidth::report {
@@ -45,5 +47,29 @@ struct RunReport {
 // Throws io's errors when a file cannot be written.
 RunReport WriteRunReport(const analysis::RunAnalysis& analysis, const io::OutputFolder& folder,
                          const RunReportOptions& options = {});
+
+// The whole of `zwidth run` below the front ends (the CLI and Python's
+// zwidth.run call it): the estimate and the fit (analysis::EstimateAndFit),
+// the run's loop at the log's period, analysis::Analyse, and WriteRunReport
+// into the folder (the caller commits it).
+struct RunJob {
+  analysis::RunInput input;  // logs, source and the reference (when any)
+  analysis::EstimateFitOptions estimate_fit;
+  analysis::RunOptions options;
+  // The run's loop for the log's period (a velocity filter's coefficients
+  // depend on it); options.loop when empty.
+  std::function<stability::LoopOptions(double period_s)> loop;
+  RunReportOptions report;  // fit_report: messages.fit.Words(analysis::FitReport) when empty
+};
+
+struct RunJobResult {
+  analysis::RunAnalysis analysis;
+  RunReport report;
+  std::string fit_report;         // as report.html shows it
+  double estimate_fit_ms = 0.0;   // the estimate and fit stages [ms]
+};
+
+// Throws as EstimateAndFit, Analyse and WriteRunReport; nothing is committed.
+RunJobResult RunToFolder(RunJob job, const io::OutputFolder& folder, const analysis::RunMessages& messages = {});
 
 }  // namespace zwidth::report

@@ -28,7 +28,7 @@ from . import _signatures
 
 __all__ = ["__version__", "InputError", "ComputationError", "FitQualityWarning", "Model", "Log",
            "FrequencyResponse", "FitResult", "CriticalPoint", "ZWidth", "RelayResult", "read_log",
-           "estimate", "estimate_logs", "simulate", "fit", "relay", "check", "validate", "build_info", "set_num_threads",
+           "estimate", "estimate_logs", "simulate", "fit", "run", "relay", "check", "validate", "build_info", "set_num_threads",
            "num_threads", "from_frd", "to_frd"]
 
 
@@ -53,7 +53,6 @@ for _e in (InputError, ComputationError):
     _e.__module__ = "zwidth"
 
 read_log = _signatures.wrap(_zwidth.read_log)
-estimate_logs = _signatures.wrap(_zwidth.estimate_logs)
 simulate = _signatures.wrap(_zwidth.simulate)
 relay = _signatures.wrap(_zwidth.relay)
 check = _signatures.wrap(_zwidth.check)
@@ -144,6 +143,87 @@ fit.__doc__ = _fit_plain.__doc__ + """
 data may also be a Log or a log file's path: it is estimated first, with estimate's
 keywords (window_length=..., input_column=...) passed through estimate_options.
 A poor fit (quality != 'good') raises the warning FitQualityWarning with its reasons."""
+
+
+def _keywords_signature(first, options, extra=(), ret=None):
+    """first's parameters, then the keywords of the option makers `options` (keyword-only)."""
+    import inspect
+    P = inspect.Parameter
+    params, seen = list(first), {p.name for p in first}
+    for f in options:
+        for p in _signatures.signature(_signatures.overloads(f)[0][0]).parameters.values():
+            if p.name not in seen:
+                seen.add(p.name)
+                params.append(p.replace(kind=P.KEYWORD_ONLY))
+    return inspect.Signature(params + list(extra), return_annotation=ret or inspect.Signature.empty)
+
+
+def _names(f):
+    return set(_signatures.signature(_signatures.overloads(f)[0][0]).parameters)
+
+
+def estimate_logs(paths, **options):
+    return _zwidth._estimate_logs(paths, _zwidth._estimate_logs_options(**options))
+
+
+def _estimate_logs_signature():
+    import inspect
+    P = inspect.Parameter
+    return _keywords_signature([P("paths", P.POSITIONAL_OR_KEYWORD, annotation="str | os.PathLike | list")],
+                               [_zwidth._estimate_logs_options], ret="FrequencyResponse")
+
+
+estimate_logs.__signature__ = _estimate_logs_signature()
+estimate_logs.__doc__ = _signatures.overloads(_zwidth._estimate_logs_options)[1]
+
+
+def run(logs, out_dir, **options):
+    # options: run's own (_run's keywords), estimate_logs' and fit's; fmin/fmax bound both the
+    # estimate and the fit's band, as `zwidth run --fmin/--fmax`; modes defaults to 'auto' as `run`.
+    own = _names(_zwidth._run) - {"logs", "out_dir", "estimate", "fit", "command_line"}
+    est_names = _names(_zwidth._estimate_logs_options)
+    fit_names = _names(_zwidth._fit_options)
+    unknown = sorted(set(options) - own - est_names - fit_names)
+    if unknown:
+        raise TypeError(f"run() got unexpected keyword arguments {unknown}")
+    est = {k: v for k, v in options.items() if k in est_names}
+    fit_kw = {k: v for k, v in options.items() if k in fit_names}
+    fit_kw.setdefault("modes", "auto")
+    est_defaults = _signatures.signature(_signatures.overloads(_zwidth._estimate_logs_options)[0][0]).parameters
+    for k in ("fmin", "fmax"):  # the fit's band is the estimate's, as FitFlags::Resolve
+        fit_kw[k] = est.get(k, est_defaults[k].default)
+    run_kw = {k: v for k, v in options.items() if k in own}
+    logs = [os.fspath(p) for p in logs] if not isinstance(logs, (str, os.PathLike)) else os.fspath(logs)
+    call = "zwidth.run(" + ", ".join([repr(logs), repr(os.fspath(out_dir))] +
+                                     [f"{k}={v!r}" for k, v in options.items()]) + ")"
+    return _zwidth._run(logs, os.fspath(out_dir), _zwidth._estimate_logs_options(**est),
+                        _zwidth._fit_options(**fit_kw), command_line=call, **run_kw)
+
+
+def _run_signature():
+    import inspect
+    P = inspect.Parameter
+    first = [P("logs", P.POSITIONAL_OR_KEYWORD, annotation="str | os.PathLike | list"),
+             P("out_dir", P.POSITIONAL_OR_KEYWORD, annotation="str | os.PathLike")]
+    own = [p.replace(kind=P.KEYWORD_ONLY)
+           for p in _signatures.signature(_signatures.overloads(_zwidth._run)[0][0]).parameters.values()
+           if p.name not in ("logs", "out_dir", "estimate", "fit", "command_line")]
+    sig = _keywords_signature(first + own, [_zwidth._estimate_logs_options, _zwidth._fit_options], ret="dict")
+    params = [p.replace(default="auto") if p.name == "modes" else p for p in sig.parameters.values()]
+    return sig.replace(parameters=params)
+
+
+run.__signature__ = _run_signature()
+run.__doc__ = """`zwidth run LOG... -o OUT_DIR` from Python: the same library function writes the same
+folder (summary.json, model.json, frf.csv, boundary.csv, report.html, figures/), byte for byte
+but for the provenance's command and date; nothing on stdout. Keywords: run's own (force,
+figures (False: --no-figures), png, reference ('table1' or a model JSON's path), delays, units,
+velocity_filter_hz, hand (M, B, K), b_step, b_points, report_filter_hz), estimate_logs' (the
+window, the selectors, whole_record, ...; fmin/fmax also bound the fit) and fit's (modes, default
+'auto' as `zwidth run`, delay_samples, allow_short, ...). OUT_DIR must be new or empty (or
+force=True); its parent must exist; nothing is left behind on an error or Ctrl-C. Warnings
+(a poor fit's, the estimate's) are raised as UserWarning; a poor fit also as
+FitQualityWarning. Returns a dict: out_dir, quality ('good'/'poor'), figures, fit_report."""
 
 
 def build_info():

@@ -49,7 +49,7 @@ def test_one_run_is_the_welch_estimate_of_that_log(two_runs):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         a = zwidth.estimate_logs(two_runs[0], window_length=4096)
-        b = zwidth.estimate(two_runs[0])
+        b = zwidth.estimate(two_runs[0], window_length=4096)
     np.testing.assert_allclose(np.asarray(a.H), np.asarray(b.H), rtol=1e-12, atol=0)
     # Two runs average twice the segments of one.
     with warnings.catch_warnings():

@@ -164,14 +164,14 @@ def fitted(log_h5):
 
 def test_fit_equals_cli_bit_for_bit(cli, log_h5, tmp_path, fitted):
     out = tmp_path / "m.json"
-    cli("fit", log_h5, "-o", out, "--delay-samples", "0")  # Python's fit default (the CLI's is auto)
+    cli("fit", log_h5, "-o", out)  # the defaults of both (delay_samples auto, fit::UserFitOptions)
     ref = zwidth.Model.load(str(out))
     got = fitted.model
     assert fitted.converged and fitted.status == "converged"
     assert (got.m, got.b, got.modes, got.delay_samples) == (ref.m, ref.b, ref.modes, ref.delay_samples)
     assert got.std == ref.std
     assert fitted.chi2_per_dof == ref.fit_info["chi2_per_dof"]
-    assert fitted.brief_report() in cli("fit", log_h5, "-o", tmp_path / "m2.json", "--delay-samples", "0").stdout
+    assert fitted.brief_report() in cli("fit", log_h5, "-o", tmp_path / "m2.json").stdout
 
 
 def test_fit_recovers_table1_within_its_std(fitted, table1_json):
@@ -469,15 +469,15 @@ def test_bad_input_raises_input_error_with_the_cli_message(cli, tmp_path, table1
     short = tmp_path / "short.csv"
     zwidth.simulate(zwidth.Model.table1(), seconds=1).save(str(short))
     # The library names the option field; the CLI prints its flag in its place, Python its keyword.
-    # Python's estimate() windows 4096 samples by default; the CLI's default follows the log (issue 29),
-    # so the CLI is given the same window here.
+    # Both defaults now follow the log (a 1 s log fits its window); a 4096 window is given to both here.
+    # So the message of a window too long for the log is the same one.
     short_cli = cli_message(cli, "estimate", short, "-o", tmp_path / "z.csv", "--window-length", "4096")
     assert "--window-length 512 or less" in short_cli
     with pytest.raises(ValueError) as e:
-        zwidth.estimate(zwidth.read_log(str(short)))
+        zwidth.estimate(zwidth.read_log(str(short)), window_length=4096)
     assert str(e.value) == short_cli.replace("--window-length", "window_length")
     with pytest.raises(ValueError) as e:
-        zwidth.estimate(str(short))
+        zwidth.estimate(str(short), window_length=4096)
     assert str(e.value) == short_cli.replace("--window-length", "window_length")
 
 

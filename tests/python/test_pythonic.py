@@ -207,7 +207,7 @@ def test_every_function_and_method_has_a_signature_and_a_docstring():
     assert list(inspect.signature(zwidth.fit).parameters)[:3] == ["data", "modes", "max_modes"]
     assert list(inspect.signature(zwidth.Model.save).parameters) == ["self", "path"]
     assert list(inspect.signature(zwidth.Model).parameters)[:2] == ["m", "b"]
-    assert inspect.signature(zwidth.estimate).parameters["window_length"].default == 4096
+    assert inspect.signature(zwidth.estimate).parameters["window_length"].default == 0  # the CLI's rule of the rate and length
 
 
 def test_stubs_match_the_module():

@@ -1,0 +1,47 @@
+// A fit as `zwidth fit` and `run` keep it: fit::FitModel (glog quiet, through
+// fit::FitLibrary), the sign / swapped-columns diagnosis of a poor fit, the
+// friction fit when asked, and the model file (std, fit record). The one
+// place that rule lives: the CLI's `fit`, `run`, `batch` and Python's
+// zwidth.run call it. Prints nothing.
+#pragma once
+
+#include <functional>
+#include <string>
+
+#include "fit/fit.h"
+#include "fit/friction_fit.h"
+#include "ident/welch.h"
+#include "io/log.h"
+#include "io/model_json.h"
+
+namespace zwidth::analysis {
+
+// The time-domain log that the friction fit reads again (the estimate streams
+// it), with the estimate's column selection and Welch options.
+struct FrictionInput {
+  std::string path;
+  io::LogSelect select;
+  fit::FrictionFitOptions options;
+};
+
+// How the caller shows the library's texts, which name option fields.
+struct FitMessages {
+  // A text in the caller's words (io::WithFlags, io::WithKeywords); as is when empty.
+  std::function<std::string(const std::string&)> words;
+  // Each of the fit's warnings as the library writes it (naming fields), when
+  // the fit ends; dropped when empty.
+  std::function<void(const std::string&)> warning;
+  std::string Words(const std::string& s) const { return words ? words(s) : s; }
+};
+
+// Fits and packs the model file (std, fit metrics; every text of its "fit"
+// record in messages.words); throws ComputationError when the fit does not
+// converge, InputError for a log too short for the shortest window. With
+// `friction`, the friction fit (fit::FitFriction) follows: its linear part and
+// friction go into the file.
+io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::FitOptions& o,
+                             const std::string& source, const FitMessages& messages = {},
+                             fit::FitResult* result = nullptr, const FrictionInput* friction = nullptr,
+                             fit::FrictionFitResult* friction_result = nullptr);
+
+}  // namespace zwidth::analysis

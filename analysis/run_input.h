@@ -1,0 +1,41 @@
+// The estimate and the fit of `zwidth run` (and of each unit of `batch`), as
+// a RunInput for analysis::Analyse: the logs' response
+// (analysis::EstimateFromLogs), the reference's delay in the log's period
+// (io::ConvertDelayToPeriod) and its Z-width on a thread of its own while the
+// fit runs (FitToModelFile). The CLI and Python's zwidth.run call it.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "analysis/fit_model_file.h"
+#include "analysis/logs_estimate.h"
+#include "analysis/run.h"
+
+namespace zwidth::analysis {
+
+struct EstimateFitOptions {
+  LogsEstimateOptions estimate;  // for the fit (for_fit is set)
+  fit::FitOptions fit;
+  // With a reference: its Z-width on a thread of its own while the fit runs.
+  bool reference_thread = true;
+};
+
+// What the caller shows as the run goes (each may be empty): the estimate's
+// lines (EstimateNote, naming fields), the fit's words and warnings, a note
+// ("the reference's delay_samples ... converted"), and each stage's time.
+struct RunMessages {
+  EstimateNote estimate;
+  FitMessages fit;
+  std::function<void(const std::string& note)> note;
+  std::function<void(const std::string& stage, double ms)> stage;
+};
+
+// `in` holds logs, source and the reference (when any); returns it with the
+// response, the fit, the model and the reference's Z-width. *ms: the time of
+// the two stages. Throws as EstimateFromLogs and FitToModelFile.
+RunInput EstimateAndFit(RunInput in, const EstimateFitOptions& options, const std::vector<int>& delays,
+                        const RunMessages& messages = {}, double* ms = nullptr);
+
+}  // namespace zwidth::analysis
