@@ -23,6 +23,8 @@
 #include "apps/run_flags.h"
 #include "io/atomic_file.h"
 #include "io/batch_table.h"
+#include "io/design_file.h"
+#include "io/model_json.h"
 #include "io/printable.h"
 #include "io/provenance.h"
 #include "model/error.h"
@@ -133,7 +135,22 @@ void Batch(BatchFlags& b, const CLI::App* cmd) {
   }
   analysis::RunInput ref;  // the reference, read once
   analysis::BatchOptions o;
+  // --reference DESIGN.json: the design's model is the reference, its tolerances the specs.
+  std::optional<io::Design> design;
+  if (!f.reference.empty() && io::IsDesignFile(f.reference)) {
+    design = io::ReadDesign(f.reference);
+    f.reference.clear();
+  }
   o.run = ResolveRunOptions(&f, &ref);
+  if (design) {
+    ref.reference = design->model;
+    ref.reference_name = design->model_name;
+    ref.reference_is_table1 = design->model_is_table1;
+    io::ModelFile dm = design->model;
+    std::string note;
+    const double T = io::ResolveModelPeriod(std::nullopt, &dm, &note);
+    o.specs = analysis::DesignSpecs(*design, analysis::ReferenceStabilityOf(dm, T, o.run.delays));
+  }
   for (const std::string& s : b.specs) o.specs.push_back(analysis::ParseBatchSpec(s, o.run.delays));
   const std::vector<io::BatchEntry> units = b.manifest.empty() ? io::EntriesFromArguments(b.logs) : io::ReadManifest(b.manifest);
   std::vector<std::string> inputs;
@@ -229,6 +246,9 @@ void AddBatchCommand(CLI::App& app) {
                   "a verdict per unit (pass, marginal: within noise of a limit, fail) from the value and its std");
   cmd->add_flag("--restart", b->restart, "compute every unit, ignoring the rows of an existing table");
   AddRunAnalysisFlags(cmd, &b->run);
+  cmd->get_option("--reference")
+      ->description("compare with table1 or a model JSON, or judge every unit against a design: DESIGN.json "
+                    "({\"format\": \"zwidth-design\", \"model\": ..., \"tolerances\": [...]}, docs/fleet.md)");
   cmd->callback([b, cmd] { Batch(*b, cmd); });
 }
 
