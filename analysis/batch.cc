@@ -34,7 +34,7 @@ std::string Full(double v) {
 // by index, the delays by value; each std after its value.
 const std::vector<std::string>& FixedColumns() {
   static const std::vector<std::string> c = {"serial", "logs", "status", "error", "verdict", "verdict_reasons",
-                                             "p_min", "input_hash", "sample_rate_hz",
+                                             "p_min", "outlier", "outlier_d2", "outlier_reasons", "input_hash", "sample_rate_hz",
                                              "fit_quality", "fit_reasons", "warnings", "m", "m_std", "b", "b_std",
                                              "delay_samples", "modes"};
   return c;
@@ -149,6 +149,12 @@ void ApplySpecs(const std::vector<BatchSpec>& specs, Cells* cells) {
     }
   }
   c["verdict"] = p_min >= 0.95 ? "pass" : p_min <= 0.05 ? "fail" : "marginal";
+  // A poor fit's values (and their std) are not to be trusted to pass a unit: it fails on its fit.
+  if (auto q = c.find("fit_quality"); q != c.end() && q->second == "poor") {
+    c["verdict"] = "fail";
+    reasons = "the fit is poor (" + c["fit_reasons"] + "): its values cannot pass a unit" +
+              (reasons.empty() ? "" : "; " + reasons);
+  }
   c["verdict_reasons"] = reasons;
   c["p_min"] = Full(p_min);
 }
@@ -163,8 +169,8 @@ std::vector<BatchSpec> DesignSpecs(const io::Design& design, const ReferenceStab
       if (d == design_zwidth.delays.end()) {
         std::string list;
         for (int x : design_zwidth.delays) list += (list.empty() ? "" : ",") + std::to_string(x);
-        throw InputError(t.where + ": delay " + std::to_string(t.delay) + " is not one of the run's --delays " + list +
-                         "; add it to --delays");
+        throw InputError(t.where + ": delay " + std::to_string(t.delay) + " is not one of the run's RunOptions::delays " + list +
+                         "; add it to RunOptions::delays");
       }
       const stability::DelaySummary& s = design_zwidth.summaries[d - design_zwidth.delays.begin()];
       value = t.figure == "K_cr_at_zero_B" ? s.K_cr_at_zero_B : t.figure == "K_cr_max" ? s.K_cr_max
@@ -219,7 +225,7 @@ bool BatchOptions::IsValid(std::string* why) const {
       if (specs[k].column == specs[i].column && specs[k].at_least == specs[i].at_least) {
         *why = "BatchOptions::specs: '" + specs[k].text + "' and '" + specs[i].text + "' both bound " +
                specs[i].column + (specs[i].at_least ? " from below" : " from above") +
-               "; keep one (a --spec beside a design's tolerance on the same column, or a spec given twice)";
+               "; keep one (a spec beside a design's tolerance on the same column, or a spec given twice)";
         return false;
       }
     }

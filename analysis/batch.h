@@ -36,7 +36,8 @@ struct BatchSpec {
 BatchSpec ParseBatchSpec(const std::string& text, const std::vector<int>& delays);
 // The verdict of a row's cells (status ok) against the specs: sets "verdict"
 // (pass: every spec met with P >= 0.95; fail: some spec with P <= 0.05;
-// marginal: else, within noise of a limit), "verdict_reasons" (each spec not
+// marginal: else, within noise of a limit; fail too when the row's
+// fit_quality is poor, whatever P), "verdict_reasons" (each spec not
 // surely met, with value, std and P) and "p_min" (the least P). Nothing
 // without specs.
 // Also "p_<column>_min" (a >= spec) or "p_<column>_max" (<=): each spec's P.

@@ -202,7 +202,7 @@ Design ParseDesign(const std::string& text, const std::string& source, const std
       if (dl == e.end() || !dl->is_number_integer() || dl->get<std::int64_t>() < 0 ||
           dl->get<std::int64_t>() > kMaxDelaySamples) {
         throw InputError(key_at("delay") + ": a figure needs \"delay\": the loop's delay in samples, an integer in [0, " +
-                         std::to_string(kMaxDelaySamples) + "] that --delays computes");
+                         std::to_string(kMaxDelaySamples) + "] that RunOptions::delays computes");
       }
       tol.is_figure = true;
       tol.figure = f.get<std::string>();
