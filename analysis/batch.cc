@@ -34,7 +34,7 @@ std::string Full(double v) {
 // by index, the delays by value; each std after its value.
 const std::vector<std::string>& FixedColumns() {
   static const std::vector<std::string> c = {"serial", "logs", "status", "error", "verdict", "verdict_reasons",
-                                             "p_min", "input_hash", "sample_rate_hz",
+                                             "p_min", "outlier", "outlier_d2", "outlier_reasons", "input_hash", "sample_rate_hz",
                                              "fit_quality", "fit_reasons", "warnings", "m", "m_std", "b", "b_std",
                                              "delay_samples", "modes"};
   return c;
@@ -116,8 +116,12 @@ BatchSpec ParseBatchSpec(const std::string& text, const std::vector<int>& delays
 }
 
 void ApplySpecs(const std::vector<BatchSpec>& specs, Cells* cells) {
-  if (specs.empty()) return;
   Cells& c = *cells;
+  for (auto it = c.begin(); it != c.end();) {
+    const bool verdict = it->first == "verdict" || it->first == "verdict_reasons" || it->first.rfind("p_", 0) == 0;
+    it = verdict ? c.erase(it) : std::next(it);
+  }
+  if (specs.empty()) return;
   if (c["status"] != "ok") {
     c["verdict"] = "error";
     return;
@@ -137,6 +141,7 @@ void ApplySpecs(const std::vector<BatchSpec>& specs, Cells* cells) {
       p = 0.5 * std::erfc(-z / std::sqrt(2.0));  // Phi(z)
     }
     p_min = std::min(p_min, p);
+    c["p_" + s.column + (s.at_least ? "_min" : "_max")] = Full(p);
     if (p < 0.95) {
       char b[160];
       std::snprintf(b, sizeof b, " (value %.6g, std %.3g, P = %.3g)", v, sd, p);
@@ -144,14 +149,86 @@ void ApplySpecs(const std::vector<BatchSpec>& specs, Cells* cells) {
     }
   }
   c["verdict"] = p_min >= 0.95 ? "pass" : p_min <= 0.05 ? "fail" : "marginal";
+  // A poor fit's values (and their std) are not to be trusted to pass a unit: it fails on its fit.
+  if (auto q = c.find("fit_quality"); q != c.end() && q->second == "poor") {
+    c["verdict"] = "fail";
+    reasons = "the fit is poor (" + c["fit_reasons"] + "): its values cannot pass a unit" +
+              (reasons.empty() ? "" : "; " + reasons);
+  }
   c["verdict_reasons"] = reasons;
   c["p_min"] = Full(p_min);
+}
+
+std::vector<BatchSpec> DesignSpecs(const io::Design& design, const ReferenceStability& design_zwidth) {
+  std::vector<BatchSpec> out;
+  const model::Plant& p = design.model.plant;
+  for (const io::DesignTolerance& t : design.tolerances) {
+    double value = std::numeric_limits<double>::quiet_NaN();
+    if (t.is_figure) {
+      const auto d = std::find(design_zwidth.delays.begin(), design_zwidth.delays.end(), t.delay);
+      if (d == design_zwidth.delays.end()) {
+        std::string list;
+        for (int x : design_zwidth.delays) list += (list.empty() ? "" : ",") + std::to_string(x);
+        throw InputError(t.where + ": delay " + std::to_string(t.delay) + " is not one of the run's RunOptions::delays " + list +
+                         "; add it to RunOptions::delays");
+      }
+      const stability::DelaySummary& s = design_zwidth.summaries[d - design_zwidth.delays.begin()];
+      value = t.figure == "K_cr_at_zero_B" ? s.K_cr_at_zero_B : t.figure == "K_cr_max" ? s.K_cr_max
+            : t.figure == "B_t" ? s.B_t : t.figure == "B_max" ? s.B_max : s.B_max_from_zero;
+    } else if (t.column == "m" || t.column == "b") {
+      value = t.column == "m" ? p.m : p.b;
+    } else {
+      const size_t us = t.column.find('_');
+      const size_t i = std::stoul(t.column.substr(4, us - 4));
+      if (i > p.modes.size()) {
+        throw InputError(t.where + ": the design's model has " + std::to_string(p.modes.size()) + " mode(s), no " +
+                         t.column + "; name a mode it has, or give min/max");
+      }
+      const model::Mode& m = p.modes[i - 1];
+      const std::string f = t.column.substr(us + 1);
+      value = f == "omega" ? m.omega : f == "c" ? m.c : f == "v" ? m.v : m.d;
+    }
+    const bool around = t.relative || t.absolute;
+    if (around && !std::isfinite(value)) {
+      throw InputError(t.where + ": the design's " + t.column + " is " + Full(value) +
+                       ", no value to be relative to; give min and/or max");
+    }
+    const double half = t.relative ? *t.relative * std::abs(value) : t.absolute ? *t.absolute : 0.0;
+    const std::optional<double> lo = around ? std::optional<double>(value - half) : t.min;
+    const std::optional<double> hi = around ? std::optional<double>(value + half) : t.max;
+    char how[160] = "";
+    if (t.relative) std::snprintf(how, sizeof how, ", design %.6g +- %.3g %%", value, 100 * *t.relative);
+    if (t.absolute) std::snprintf(how, sizeof how, ", design %.6g +- %.6g", value, *t.absolute);
+    for (int side = 0; side < 2; ++side) {
+      const std::optional<double>& b = side == 0 ? lo : hi;
+      if (!b) continue;
+      BatchSpec s;
+      s.column = t.column;
+      s.at_least = side == 0;
+      s.bound = *b;
+      char bound[40];
+      std::snprintf(bound, sizeof bound, "%.6g", *b);
+      s.text = t.column + (s.at_least ? ">=" : "<=") + bound + " (" + t.where + how + ")";
+      out.push_back(std::move(s));
+    }
+  }
+  return out;
 }
 
 bool BatchOptions::IsValid(std::string* why) const {
   if (threads < 0) {
     *why = "BatchOptions::threads = " + std::to_string(threads) + ": must be >= 0 (0 for the cores available)";
     return false;
+  }
+  for (size_t i = 0; i < specs.size(); ++i) {
+    for (size_t k = 0; k < i; ++k) {
+      if (specs[k].column == specs[i].column && specs[k].at_least == specs[i].at_least) {
+        *why = "BatchOptions::specs: '" + specs[k].text + "' and '" + specs[i].text + "' both bound " +
+               specs[i].column + (specs[i].at_least ? " from below" : " from above") +
+               "; keep one (a spec beside a design's tolerance on the same column, or a spec given twice)";
+        return false;
+      }
+    }
   }
   return run.IsValid(why);
 }
@@ -255,7 +332,11 @@ BatchResult RunBatch(const std::vector<io::BatchEntry>& units, const BatchOption
     const std::string hash = io::HashInputs({unit.path}, key);
     if (auto it = previous.find(unit.serial); it != previous.end() && !hash.empty()) {
       auto h = it->second->find("input_hash");
-      if (h != it->second->end() && h->second == hash) return finished(i, *it->second, true);
+      if (h != it->second->end() && h->second == hash) {
+        Cells row = *it->second;
+        ApplySpecs(options.specs, &row);  // judged by today's specs (a design may have changed)
+        return finished(i, std::move(row), true);
+      }
     }
     Cells row;
     try {

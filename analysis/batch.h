@@ -16,6 +16,7 @@
 
 #include "analysis/run.h"
 #include "io/batch_table.h"
+#include "io/design_file.h"
 
 namespace zwidth::analysis {
 
@@ -35,10 +36,22 @@ struct BatchSpec {
 BatchSpec ParseBatchSpec(const std::string& text, const std::vector<int>& delays);
 // The verdict of a row's cells (status ok) against the specs: sets "verdict"
 // (pass: every spec met with P >= 0.95; fail: some spec with P <= 0.05;
-// marginal: else, within noise of a limit), "verdict_reasons" (each spec not
+// marginal: else, within noise of a limit; fail too when the row's
+// fit_quality is poor, whatever P), "verdict_reasons" (each spec not
 // surely met, with value, std and P) and "p_min" (the least P). Nothing
 // without specs.
+// Also "p_<column>_min" (a >= spec) or "p_<column>_max" (<=): each spec's P.
+// Replaces the verdict columns a row had (a resumed row is judged again).
 void ApplySpecs(const std::vector<BatchSpec>& specs, std::map<std::string, std::string>* cells);
+
+// The specs of a design's tolerances (io/design_file.h, `--reference
+// DESIGN.json`): min / max as they are; relative and absolute ones around the
+// design's value, a parameter's from the design's model, a figure's from
+// `design_zwidth` (the design model's Z-width per delay of the run,
+// ReferenceStabilityOf). InputError naming the tolerance (file, line) for a
+// figure at a delay the run does not compute, a mode the design lacks, or a
+// design figure that is not finite.
+std::vector<BatchSpec> DesignSpecs(const io::Design& design, const ReferenceStability& design_zwidth);
 
 struct BatchOptions {
   std::vector<BatchSpec> specs;  // end-of-line specs (ApplySpecs); none: no verdict columns

@@ -19,14 +19,18 @@
 #include <vector>
 
 #include "analysis/batch.h"
+#include "analysis/population.h"
 #include "apps/common.h"
 #include "apps/run_flags.h"
 #include "io/atomic_file.h"
 #include "io/batch_table.h"
+#include "io/design_file.h"
+#include "io/model_json.h"
 #include "io/printable.h"
 #include "io/provenance.h"
 #include "model/error.h"
 #include "model/parallel.h"
+#include "report/fleet_report.h"
 #include "report/run_report.h"
 
 namespace zwidth::app {
@@ -35,7 +39,8 @@ namespace {
 struct BatchFlags {
   RunFlags run;
   std::vector<std::string> logs;
-  std::string manifest, table, unit_folders;
+  std::string manifest, table, unit_folders, population, fleet_report;
+  analysis::PopulationOptions population_options;
   std::vector<std::string> specs;
   int jobs = 0;
   bool restart = false;
@@ -44,7 +49,7 @@ struct BatchFlags {
 // Flags that say where and how fast, not what is computed: left out of the
 // options hashed for resume.
 const std::set<std::string>& NotHashed() {
-  static const std::set<std::string> s = {"logs", "--manifest", "--output", "--unit-folders", "--jobs", "--restart",
+  static const std::set<std::string> s = {"logs", "--manifest", "--output", "--unit-folders", "--jobs", "--restart", "--population", "--fleet-report", "--outlier-quantile",
                                           "--help"};
   return s;
 }
@@ -133,7 +138,22 @@ void Batch(BatchFlags& b, const CLI::App* cmd) {
   }
   analysis::RunInput ref;  // the reference, read once
   analysis::BatchOptions o;
+  // --reference DESIGN.json: the design's model is the reference, its tolerances the specs.
+  std::optional<io::Design> design;
+  if (!f.reference.empty() && io::IsDesignFile(f.reference)) {
+    design = io::ReadDesign(f.reference);
+    f.reference.clear();
+  }
   o.run = ResolveRunOptions(&f, &ref);
+  if (design) {
+    ref.reference = design->model;
+    ref.reference_name = design->model_name;
+    ref.reference_is_table1 = design->model_is_table1;
+    io::ModelFile dm = design->model;
+    std::string note;
+    const double T = io::ResolveModelPeriod(std::nullopt, &dm, &note);
+    o.specs = analysis::DesignSpecs(*design, analysis::ReferenceStabilityOf(dm, T, o.run.delays));
+  }
   for (const std::string& s : b.specs) o.specs.push_back(analysis::ParseBatchSpec(s, o.run.delays));
   const std::vector<io::BatchEntry> units = b.manifest.empty() ? io::EntriesFromArguments(b.logs) : io::ReadManifest(b.manifest);
   std::vector<std::string> inputs;
@@ -145,6 +165,18 @@ void Batch(BatchFlags& b, const CLI::App* cmd) {
   io::CheckOutputPath(b.table, inputs);
   if (!b.unit_folders.empty() && !std::filesystem::is_directory(b.unit_folders)) {
     throw InputError("--unit-folders " + io::Printable(b.unit_folders) + ": not a folder; create it first");
+  }
+  for (const std::string* out : {&b.population, &b.fleet_report}) {
+    if (out->empty()) continue;
+    io::CheckOutputPath(*out, inputs);
+    if (*out == b.table) throw InputError(io::Printable(*out) + " is named by -o and by --population or --fleet-report; give each its own file");
+  }
+  if (!b.population.empty() && b.population == b.fleet_report) {
+    throw InputError("--population and --fleet-report name one file " + io::Printable(b.population) + "; give each its own");
+  }
+  {
+    std::string why;
+    if (!b.population_options.IsValid(&why)) throw InputError(why);
   }
   if (b.jobs < 0) throw InputError("--jobs " + std::to_string(b.jobs) + ": must be >= 1 (0: the cores available)");
   // Units at once: at most the cores (affinity, cgroup quota); each unit's own
@@ -202,7 +234,15 @@ void Batch(BatchFlags& b, const CLI::App* cmd) {
   }
   const auto start = std::chrono::steady_clock::now();
   const analysis::BatchResult r = analysis::RunBatch(units, o, estimate_fit, unit_done, on_progress);
-  io::WriteTextAtomically(b.table, io::FormatBatchCsv(r.table));
+  // The population of this batch's units: outliers into the table, its statistics on request.
+  io::BatchTable table = r.table;
+  const analysis::Population pop = analysis::AnalysePopulation(table, b.population_options);
+  analysis::AddOutlierColumns(pop, &table);
+  io::WriteTextAtomically(b.table, io::FormatBatchCsv(table));
+  if (!b.population.empty()) io::WriteTextAtomically(b.population, io::FormatBatchCsv(analysis::PopulationTable(pop)));
+  if (!b.fleet_report.empty()) {
+    io::WriteTextAtomically(b.fleet_report, report::FleetHtml(table, pop, design ? &*design : nullptr, o, CommandLine()));
+  }
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (terminal) std::fprintf(stderr, "\n");
   std::fprintf(stderr, "batch: %zu units, %zu ok, %zu failed, %zu resumed, %zu computed in %.3f s (%.3g units/s on %d thread%s) -> %s\n",
@@ -227,8 +267,19 @@ void AddBatchCommand(CLI::App& app) {
   cmd->add_option("--spec", b->specs,
                   "end-of-line spec, repeatable: COLUMN>=BOUND or COLUMN<=BOUND (d2_K_cr_max>=1.5, m<=2e-4): "
                   "a verdict per unit (pass, marginal: within noise of a limit, fail) from the value and its std");
+  cmd->add_option("--population", b->population,
+                  "also write the population's table (CSV): per parameter and figure its median and MAD sigma");
+  cmd->add_option("--fleet-report", b->fleet_report,
+                  "also write the fleet report: one self-contained HTML (distributions, every unit's region over "
+                  "the design's, failures and outliers)");
+  cmd->add_option("--outlier-quantile", b->population_options.outlier_quantile,
+                  "a unit is an outlier when its robust Mahalanobis D^2 exceeds chi-square's quantile at this "
+                  "probability (docs/fleet.md)")->capture_default_str();
   cmd->add_flag("--restart", b->restart, "compute every unit, ignoring the rows of an existing table");
   AddRunAnalysisFlags(cmd, &b->run);
+  cmd->get_option("--reference")
+      ->description("compare with table1 or a model JSON, or judge every unit against a design: DESIGN.json "
+                    "({\"format\": \"zwidth-design\", \"model\": ..., \"tolerances\": [...]}, docs/fleet.md)");
   cmd->callback([b, cmd] { Batch(*b, cmd); });
 }
 

@@ -149,6 +149,9 @@ constexpr OptionTopic kOptionTopics[] = {
     {"batch", "jobs", "Batch", ""},
     {"batch", "restart", "Batch", ""},
     {"batch", "spec", "Batch", ""},
+    {"batch", "population", "Batch", ""},
+    {"batch", "fleet-report", "Batch", ""},
+    {"batch", "outlier-quantile", "Batch", ""},
 };
 
 const OptionTopic* TopicOf(std::string_view command, const CLI::Option& opt) {

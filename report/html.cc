@@ -368,6 +368,9 @@ void ProvenanceSection(const analysis::RunAnalysis& a, const std::string& comman
 
 }  // namespace
 
+std::string HtmlEscaped(const std::string& s) { return Html(s); }
+std::string ReportStyle() { return kStyle; }
+
 std::string RunHtml(const analysis::RunAnalysis& a, const std::map<std::string, std::string>& svgs,
                     const std::string& fit_report, const std::string& command_line) {
   std::ostringstream h;

@@ -64,6 +64,11 @@ class GnuplotProcess {
   int to_child_ = -1;  // the pipe's write end
 };
 
+// Text as HTML (<, >, & escaped) and the run report's style sheet, shared by
+// the fleet report (fleet_report.cc).
+std::string HtmlEscaped(const std::string& s);
+std::string ReportStyle();
+
 // report.html, one self-contained file; svgs: the drawn figures' SVG text by
 // name ("bode", "region", ...), empty when none was drawn; command_line: how
 // the run was asked for, shown in its provenance (may be empty).

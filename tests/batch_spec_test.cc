@@ -72,5 +72,77 @@ TEST(BatchSpec, ParserRefusesWhatNoColumnHolds) {
   }
 }
 
+// A design's tolerances become bounds by their formulas: relative r around the design value x is
+// [x (1 - r), x (1 + r)], absolute a is [x - a, x + a], min/max as given; a figure's value is the
+// design's Z-width at that delay. Each side is a spec whose P is Phi of its own z (the p_ columns).
+TEST(DesignSpecs, TolerancesAreBoundsAroundTheDesignsValues) {
+  const std::string text = R"({"format": "zwidth-design",
+ "model": {"m": 2e-3, "b": 0.01, "modes": [{"omega": 400, "c": 80, "v": 300, "d": 60}]},
+ "tolerances": [
+  {"parameter": "m", "relative": 0.1},
+  {"parameter": "mode1_omega", "absolute": 25},
+  {"parameter": "b", "max": 0.02},
+  {"figure": "K_cr_max", "delay": 2, "relative": 0.2}]})";
+  const io::Design d = io::ParseDesign(text, "d.json", ".");
+  ReferenceStability z;
+  z.delays = {2, 4};
+  z.summaries.resize(2);
+  z.summaries[0].K_cr_max = 30.0;
+  const std::vector<BatchSpec> s = DesignSpecs(d, z);
+  ASSERT_EQ(s.size(), 7u);  // two sides each but b (max only)
+  auto bound = [&](const std::string& col, bool at_least) {
+    for (const BatchSpec& x : s) if (x.column == col && x.at_least == at_least) return x.bound;
+    ADD_FAILURE() << col;
+    return 0.0;
+  };
+  EXPECT_DOUBLE_EQ(bound("m", true), 2e-3 * 0.9);
+  EXPECT_DOUBLE_EQ(bound("m", false), 2e-3 * 1.1);
+  EXPECT_DOUBLE_EQ(bound("mode1_omega", true), 375.0);
+  EXPECT_DOUBLE_EQ(bound("mode1_omega", false), 425.0);
+  EXPECT_DOUBLE_EQ(bound("b", false), 0.02);
+  EXPECT_DOUBLE_EQ(bound("d2_K_cr_max", true), 24.0);
+  EXPECT_DOUBLE_EQ(bound("d2_K_cr_max", false), 36.0);
+  // A unit 1 std below the lower K_CR^max bound: P = Phi(-1) on that side, 1 - Phi(-13) on the other.
+  auto row = Row(23.0, 1.0);
+  row["m"] = "0.002", row["b"] = "0.01", row["mode1_omega"] = "400";
+  ApplySpecs(s, &row);
+  EXPECT_NEAR(std::stod(row.at("p_d2_K_cr_max_min")), 0.5 * std::erfc(1.0 / std::sqrt(2.0)), 1e-12);
+  EXPECT_NEAR(std::stod(row.at("p_d2_K_cr_max_max")), 1.0, 1e-12);
+  EXPECT_EQ(row.at("verdict"), "marginal");
+  EXPECT_NE(row.at("verdict_reasons").find("d.json line 7, key 'tolerances[3]'"), std::string::npos) << row.at("verdict_reasons");
+  // Judged again (a resumed row with another design): the old p_ columns go.
+  ApplySpecs({ParseBatchSpec("m<=1", {2})}, &row);
+  EXPECT_EQ(row.count("p_d2_K_cr_max_min"), 0u);
+  EXPECT_EQ(row.at("verdict"), "pass");
+}
+
+TEST(DesignSpecs, ABrokenDesignIsRefusedNamingTheLineAndKey) {
+  auto error = [](const std::string& text) {
+    try {
+      io::ParseDesign(text, "d.json", ".");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(error("{\"format\": \"zwidth-design\", \"model\": \"table1\",\n\"tolerances\": [\n{\"parameter\": \"m\", \"min\": 1},\n"
+                  "{\"parameter\": \"b\",\n \"mx\": 1}]}").find("d.json line 5, key 'tolerances[1].mx'"),
+            std::string::npos);
+  EXPECT_NE(error("{\"format\": \"zwidth-design\", \"model\": \"table1\",\n\"tolerances\": [\n{\"parameter\": \"m\", \"min\": 1},\n"
+                  "  {\"parameter\": \"m\", \"max\": 2}]}").find("line 4, key 'tolerances[1]': a second tolerance on m"),
+            std::string::npos);
+  EXPECT_NE(error("{\"format\": \"zwidth-design\", \"model\": \"table1\", \"tolerances\": "
+                  "[{\"parameter\": \"b\", \"min\": 2, \"max\": 1}]}").find("max is below min"),
+            std::string::npos);
+  EXPECT_NE(error("{\"format\": \"model\", \"model\": \"table1\", \"tolerances\": []}").find("key 'format'"),
+            std::string::npos);
+  const io::Design d = io::ParseDesign(R"({"format": "zwidth-design", "model": "table1",
+    "tolerances": [{"figure": "B_t", "delay": 8, "min": 0.001}, {"parameter": "mode3_c", "relative": 0.1}]})", "d.json", ".");
+  ReferenceStability z;
+  z.delays = {2};
+  z.summaries.resize(1);
+  EXPECT_THROW(DesignSpecs(d, z), InputError);  // delay 8 not run
+}
+
 }  // namespace
 }  // namespace zwidth::analysis

@@ -135,6 +135,42 @@ p = subprocess.run([zw, "export", newer, "--format", "json", "-o", os.path.join(
 report("a newer format_version is refused", p.returncode == 2 and "format_version" in p.stderr and
        not os.path.exists(os.path.join(tmp, "n.json")), p.stderr.strip()[:160])
 
+# The design file (an input of batch --reference): the schema and zwidth agree. A valid design validates
+# and a batch of one unit reads it (a verdict per spec); each broken one is refused by both, zwidth with
+# exit 2 naming the line and the key.
+design = {"format": "zwidth-design", "format_version": 1, "name": "PHANToM", "model": "table1",
+          "tolerances": [{"parameter": "m", "relative": 0.15}, {"parameter": "b", "min": 1e-3, "max": 0.02},
+                         {"figure": "K_cr_max", "delay": 2, "absolute": 8}]}
+s = schemas["design.schema.json"]
+v = jsonschema.Draft202012Validator(s)
+report("design schema takes the example design", v.is_valid(design))
+dpath = os.path.join(tmp, "design.json")
+json.dump(design, open(dpath, "w"), indent=1)
+unit = os.path.join(tmp, "unit.csv")
+zwidth("simulate", "--model", table1, "-o", unit, "--seconds", "4", "--seed", "3")
+table = os.path.join(tmp, "fleet.csv")
+p = subprocess.run([zw, "batch", unit, "-o", table, "--delays", "2", "--window-length", "1024", "--reference", dpath],
+                   capture_output=True, text=True)
+import csv
+rows = list(csv.DictReader(open(table))) if os.path.exists(table) else []
+report("batch reads the example design", p.returncode == 0 and len(rows) == 1 and rows[0]["verdict"] in
+       ("pass", "marginal", "fail") and "p_d2_K_cr_max_min" in rows[0], p.stderr.strip()[-160:])
+broken = [("a misspelt key", dict(design, tolerances=[{"parameter": "m", "relatve": 0.1}]), "relatve"),
+          ("no bound", dict(design, tolerances=[{"parameter": "m"}]), "tolerances[0]"),
+          ("two kinds of bound", dict(design, tolerances=[{"parameter": "m", "min": 0, "relative": 0.1}]), "tolerances[0]"),
+          ("a figure without delay", dict(design, tolerances=[{"figure": "K_cr_max", "min": 1}]), "delay"),
+          ("no such parameter", dict(design, tolerances=[{"parameter": "mass", "min": 1}]), "parameter"),
+          ("a negative relative", dict(design, tolerances=[{"parameter": "m", "relative": -0.1}]), "relative"),
+          ("no model", {k: x for k, x in design.items() if k != "model"}, "model")]
+for label, d, key in broken:
+    path = os.path.join(tmp, "broken.json")
+    json.dump(d, open(path, "w"), indent=1)
+    p = subprocess.run([zw, "batch", unit, "-o", os.path.join(tmp, "broken.csv"), "--delays", "2", "--reference", path],
+                       capture_output=True, text=True)
+    report("design with " + label + ": refused by the schema and by zwidth naming " + key,
+           not v.is_valid(d) and p.returncode == 2 and key in p.stderr and ("line" in p.stderr or key == "model") and
+           not os.path.exists(os.path.join(tmp, "broken.csv")), p.stderr.strip()[:200])
+
 shutil.rmtree(tmp)
 print("FAILED" if failed else "all passed")
 sys.exit(1 if failed else 0)

@@ -1,0 +1,283 @@
+#include "report/fleet_report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <locale>
+#include <map>
+#include <sstream>
+
+#include "io/model_json.h"
+#include "io/provenance.h"
+#include "model/plant.h"
+#include "report/report_internal.h"
+#include "stability/zwidth.h"
+
+namespace zwidth::report {
+namespace {
+
+using Row = std::map<std::string, std::string>;
+const double kNan = std::numeric_limits<double>::quiet_NaN();
+
+double Cell(const Row& r, const std::string& c) {
+  auto it = r.find(c);
+  if (it == r.end() || it->second.empty()) return kNan;
+  char* end = nullptr;
+  const double v = std::strtod(it->second.c_str(), &end);
+  return end && *end == '\0' ? v : kNan;
+}
+std::string Get(const Row& r, const std::string& c) {
+  auto it = r.find(c);
+  return it == r.end() ? "" : it->second;
+}
+std::string Num(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.4g", v);
+  return b;
+}
+
+// The unit's fitted model from its row (nullopt when a value is missing).
+std::optional<model::Plant> PlantOf(const Row& r, double* period_s) {
+  model::Plant p;
+  p.m = Cell(r, "m");
+  p.b = Cell(r, "b");
+  const double modes = Cell(r, "modes"), delay = Cell(r, "delay_samples"), rate = Cell(r, "sample_rate_hz");
+  if (!std::isfinite(modes) || !std::isfinite(delay) || !(rate > 0)) return std::nullopt;
+  p.delay_samples = static_cast<int>(delay);
+  for (int i = 1; i <= static_cast<int>(modes); ++i) {
+    const std::string k = "mode" + std::to_string(i) + "_";
+    p.modes.push_back({Cell(r, k + "omega"), Cell(r, k + "c"), Cell(r, k + "v"), Cell(r, k + "d")});
+  }
+  std::string why;
+  if (!p.IsValid(&why)) return std::nullopt;
+  *period_s = 1.0 / rate;
+  return p;
+}
+
+// K_CR(B) on the paper's loop at `delay` over bs; empty when the plant cannot be analysed.
+std::vector<double> Region(const model::Plant& p, double period_s, int delay, const std::vector<double>& bs) {
+  std::vector<double> k;
+  try {
+    const stability::ZWidth z(p, period_s, delay);
+    for (double b : bs) k.push_back(z.At(b).K_cr);
+  } catch (const std::exception&) {
+    k.clear();
+  }
+  return k;
+}
+
+// A plot's frame: data [x0, x1] x [y0, y1] on a w x h canvas with margins for the labels.
+struct Frame {
+  double x0, x1, y0, y1;
+  double w = 430, h = 260, left = 58, right = 12, top = 12, bottom = 40;
+  double X(double x) const { return left + (x - x0) / (x1 - x0) * (w - left - right); }
+  double Y(double y) const { return h - bottom - (y - y0) / (y1 - y0) * (h - top - bottom); }
+};
+
+void Axes(const Frame& f, const std::string& xlabel, const std::string& ylabel, std::ostringstream& s) {
+  s << "<rect x='" << f.left << "' y='" << f.top << "' width='" << f.w - f.left - f.right << "' height='"
+    << f.h - f.top - f.bottom << "' fill='none' stroke='#444'/>\n";
+  for (int i = 0; i <= 4; ++i) {
+    const double x = f.x0 + (f.x1 - f.x0) * i / 4, y = f.y0 + (f.y1 - f.y0) * i / 4;
+    s << "<text x='" << f.X(x) << "' y='" << f.h - f.bottom + 14 << "' font-size='10' text-anchor='middle'>" << Num(x)
+      << "</text>\n<text x='" << f.left - 4 << "' y='" << f.Y(y) + 3 << "' font-size='10' text-anchor='end'>"
+      << Num(y) << "</text>\n";
+  }
+  s << "<text x='" << (f.left + f.w - f.right) / 2 << "' y='" << f.h - 6 << "' font-size='11' text-anchor='middle'>"
+    << HtmlEscaped(xlabel) << "</text>\n<text x='12' y='" << (f.top + f.h - f.bottom) / 2
+    << "' font-size='11' text-anchor='middle' transform='rotate(-90 12 " << (f.top + f.h - f.bottom) / 2 << ")'>"
+    << HtmlEscaped(ylabel) << "</text>\n";
+}
+
+std::string Polyline(const Frame& f, const std::vector<double>& xs, const std::vector<double>& ys, const char* style) {
+  std::ostringstream s;
+  s.imbue(std::locale::classic());
+  s << "<polyline fill='none' " << style << " points='";
+  for (size_t i = 0; i < xs.size(); ++i) {
+    if (!std::isfinite(ys[i])) continue;
+    s << f.X(xs[i]) << "," << f.Y(std::clamp(ys[i], f.y0, f.y1)) << " ";
+  }
+  s << "'/>\n";
+  return s.str();
+}
+
+// Every ok unit's K_CR(B) at `delay` (grey; outliers orange, failures red) and the design's (black, thick).
+void RegionFigure(const io::BatchTable& t, const analysis::Population& pop, const io::Design* design, int delay,
+                  std::ostringstream& h) {
+  const std::string k = "d" + std::to_string(delay) + "_";
+  std::vector<double> bmax, kmax;
+  for (const Row& r : t.rows) {
+    if (Get(r, "status") != "ok") continue;
+    if (double b = Cell(r, k + "B_max_from_zero"); std::isfinite(b) && b > 0) bmax.push_back(b);
+    if (double x = Cell(r, k + "K_cr_max"); std::isfinite(x) && x > 0) kmax.push_back(x);
+  }
+  std::optional<model::Plant> dp;
+  double dT = 1e-3;
+  if (design) {
+    io::ModelFile m = design->model;
+    std::string note;
+    try {
+      dT = io::ResolveModelPeriod(std::nullopt, &m, &note);
+      dp = m.plant;
+    } catch (const std::exception&) {
+    }
+  }
+  if (bmax.empty() || kmax.empty()) return;
+  std::sort(bmax.begin(), bmax.end());
+  std::sort(kmax.begin(), kmax.end());
+  // The axes: 2 x the units' median (a wild unit does not squash the others; it leaves the frame).
+  Frame f{0, 2.0 * bmax[bmax.size() / 2], 0, 2.0 * kmax[kmax.size() / 2]};
+  std::vector<double> bs;
+  for (int i = 0; i <= 60; ++i) bs.push_back(f.x1 * i / 60);
+  std::ostringstream s;
+  s.imbue(std::locale::classic());
+  s << "<svg xmlns='http://www.w3.org/2000/svg' width='" << f.w << "' height='" << f.h << "' viewBox='0 0 " << f.w
+    << " " << f.h << "'>\n";
+  Axes(f, "B [N m s/rad]", "K_CR [N m/rad], delay " + std::to_string(delay), s);
+  std::string bad;
+  for (size_t i = 0; i < t.rows.size(); ++i) {
+    const Row& r = t.rows[i];
+    if (Get(r, "status") != "ok") continue;
+    double T = 0;
+    const std::optional<model::Plant> p = PlantOf(r, &T);
+    if (!p) continue;
+    const std::vector<double> kc = Region(*p, T, delay, bs);
+    if (kc.empty()) continue;
+    const bool outlier = i < pop.units.size() && pop.units[i].outlier, fail = Get(r, "verdict") == "fail";
+    const std::string line = Polyline(f, bs, kc, fail ? "stroke='#c0282b' stroke-width='1.2'"
+                                                 : outlier ? "stroke='#e08a00' stroke-width='1.2'"
+                                                           : "stroke='#8899aa' stroke-opacity='0.35' stroke-width='1'");
+    if (fail || outlier) bad += line; else s << line;
+  }
+  s << bad;  // drawn over the others
+  if (dp) {
+    const std::vector<double> kc = Region(*dp, dT, delay, bs);
+    if (!kc.empty()) s << Polyline(f, bs, kc, "stroke='#000' stroke-width='2.5'");
+  }
+  s << "</svg>\n";
+  h << "<div class='figure'>" << s.str() << "<br><small>Delay " << delay << ": every unit's K_CR(B) (grey; "
+    << "outliers orange, failures red)" << (dp ? ", the design's (black)" : "") << "; stable below the curve.</small></div>\n";
+}
+
+// A histogram of one column over the ok units, with its median (blue), +-1 MAD sigma (shaded),
+// the design's value (black) and the specs' bounds (red dashes).
+void Histogram(const io::BatchTable& t, const analysis::PopulationColumn& c, const std::vector<analysis::BatchSpec>& specs,
+               std::ostringstream& h) {
+  std::vector<double> v;
+  for (const Row& r : t.rows) {
+    if (Get(r, "status") != "ok") continue;
+    if (double x = Cell(r, c.column); std::isfinite(x)) v.push_back(x);
+  }
+  if (v.size() < 2) return;
+  std::vector<double> marks;
+  for (const analysis::BatchSpec& s : specs) if (s.column == c.column) marks.push_back(s.bound);
+  double lo = c.min, hi = c.max;
+  for (double m : marks) lo = std::min(lo, m), hi = std::max(hi, m);
+  if (!(hi > lo)) hi = lo + 1;
+  const double pad = 0.05 * (hi - lo);
+  lo -= pad, hi += pad;
+  const int bins = 30;
+  std::vector<int> n(bins, 0);
+  for (double x : v) n[std::min(bins - 1, static_cast<int>((x - lo) / (hi - lo) * bins))]++;
+  Frame f{lo, hi, 0, static_cast<double>(*std::max_element(n.begin(), n.end())) * 1.1};
+  f.w = 300, f.h = 180;
+  std::ostringstream s;
+  s.imbue(std::locale::classic());
+  s << "<svg xmlns='http://www.w3.org/2000/svg' width='" << f.w << "' height='" << f.h << "'>\n";
+  s << "<rect x='" << f.X(c.median - c.mad_sigma) << "' y='" << f.top << "' width='"
+    << std::max(0.0, f.X(c.median + c.mad_sigma) - f.X(c.median - c.mad_sigma)) << "' height='" << f.h - f.top - f.bottom
+    << "' fill='#cde' />\n";
+  for (int i = 0; i < bins; ++i) {
+    if (!n[i]) continue;
+    const double x0 = lo + (hi - lo) * i / bins, x1 = lo + (hi - lo) * (i + 1) / bins;
+    s << "<rect x='" << f.X(x0) << "' y='" << f.Y(n[i]) << "' width='" << f.X(x1) - f.X(x0) << "' height='"
+      << f.Y(0) - f.Y(n[i]) << "' fill='#557' />\n";
+  }
+  auto vline = [&](double x, const char* style) {
+    s << "<line x1='" << f.X(x) << "' x2='" << f.X(x) << "' y1='" << f.top << "' y2='" << f.Y(0) << "' " << style << "/>\n";
+  };
+  vline(c.median, "stroke='#06c' stroke-width='2'");
+  for (double m : marks) vline(m, "stroke='#c0282b' stroke-width='1.5' stroke-dasharray='4,3'");
+  Axes(f, c.column, "units", s);
+  s << "</svg>";
+  h << "<div class='hist'>" << s.str() << "</div>\n";
+}
+
+}  // namespace
+
+std::string FleetHtml(const io::BatchTable& t, const analysis::Population& pop, const io::Design* design,
+                      const analysis::BatchOptions& options, const std::string& command_line) {
+  std::ostringstream h;
+  h.imbue(std::locale::classic());
+  std::map<std::string, int> verdicts;
+  size_t errors = 0, outliers = 0;
+  for (size_t i = 0; i < t.rows.size(); ++i) {
+    verdicts[Get(t.rows[i], "verdict")]++;
+    errors += Get(t.rows[i], "status") != "ok";
+    outliers += i < pop.units.size() && pop.units[i].outlier;
+  }
+  const std::string title = design && !design->name.empty() ? "zwidth fleet report: " + design->name : "zwidth fleet report";
+  h << "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>" << HtmlEscaped(title) << "</title><style>"
+    << ReportStyle() << ".hist{display:inline-block;margin:2px}table.zw td.l{text-align:left}</style></head><body>\n<h1>"
+    << HtmlEscaped(title) << "</h1>\n";
+  const bool good = errors == 0 && verdicts["fail"] == 0 && outliers == 0;
+  h << "<div class='verdict " << (good ? "good" : "poor") << "'><b>" << t.rows.size() << " units</b>: "
+    << t.rows.size() - errors << " analysed, " << errors << " failed to analyse";
+  if (!options.specs.empty()) {
+    h << "; verdicts: " << verdicts["pass"] << " pass, " << verdicts["marginal"] << " marginal, " << verdicts["fail"]
+      << " fail";
+  }
+  h << "; " << outliers << " outlier(s) of the population";
+  if (pop.status != analysis::PopulationStatus::kOk) h << " (" << HtmlEscaped(pop.message) << ")";
+  h << ".</div>\n";
+  // Failures and outliers.
+  h << "<h2>Failures and outliers</h2>\n<table class='zw'><tr><th>serial</th><th>status</th><th>verdict</th>"
+    << "<th>outlier D&sup2;</th><th>reasons</th></tr>\n";
+  size_t listed = 0;
+  for (size_t i = 0; i < t.rows.size(); ++i) {
+    const Row& r = t.rows[i];
+    const bool outlier = i < pop.units.size() && pop.units[i].outlier;
+    const std::string v = Get(r, "verdict");
+    if (Get(r, "status") == "ok" && v != "fail" && v != "marginal" && !outlier) continue;
+    ++listed;
+    std::string why = Get(r, "error");
+    for (const std::string& x : {Get(r, "verdict_reasons"), outlier ? "outlier: " + pop.units[i].reasons : std::string()}) {
+      if (!x.empty()) why += (why.empty() ? "" : "<br>") + HtmlEscaped(x);
+    }
+    h << "<tr><td class='l'>" << HtmlEscaped(Get(r, "serial")) << "</td><td>" << HtmlEscaped(Get(r, "status"))
+      << "</td><td>" << HtmlEscaped(v) << "</td><td>"
+      << (i < pop.units.size() && std::isfinite(pop.units[i].distance2) ? Num(pop.units[i].distance2) : "")
+      << "</td><td class='l'>" << (Get(r, "error").empty() ? why : HtmlEscaped(Get(r, "error"))) << "</td></tr>\n";
+  }
+  h << "</table>\n";
+  if (!listed) h << "<p>None: every unit analysed, passed and lies within its population.</p>\n";
+  h << "<p>Outlier: robust Mahalanobis D&sup2; (population median and Gnanadesikan-Kettenring covariance from MADs, "
+    << "plus the unit's own variance) above " << Num(pop.threshold) << ", chi-square's quantile for "
+    << pop.distance_columns.size() << " columns; or another number of modes than the population's (docs/fleet.md).</p>\n";
+  // Regions.
+  h << "<h2>Regions</h2>\n";
+  for (int d : options.run.delays) RegionFigure(t, pop, design, d, h);
+  // Distributions and the population table.
+  h << "<h2>Distributions</h2>\n<p>Over the analysed units: blue line the median, shaded &plusmn;1 MAD sigma, red "
+    << "dashes the specs' bounds.</p>\n";
+  for (const analysis::PopulationColumn& c : pop.columns) Histogram(t, c, options.specs, h);
+  h << "<h2>Population</h2>\n<table class='zw'><tr><th>column</th><th>units</th><th>median</th><th>MAD sigma</th>"
+    << "<th>min</th><th>max</th><th>in D&sup2;</th></tr>\n";
+  for (const analysis::PopulationColumn& c : pop.columns) {
+    h << "<tr><td class='l'>" << HtmlEscaped(c.column) << "</td><td>" << c.units << "</td><td>" << Num(c.median)
+      << "</td><td>" << Num(c.mad_sigma) << "</td><td>" << Num(c.min) << "</td><td>" << Num(c.max) << "</td><td>"
+      << (c.in_distance ? "yes" : "no") << "</td></tr>\n";
+  }
+  h << "</table>\n";
+  const nlohmann::json p = io::ProvenanceJson();
+  h << "<h2>Provenance</h2>\n<p class='provenance'>zwidth " << HtmlEscaped(p["zwidth_version"].get<std::string>())
+    << ", written " << HtmlEscaped(p["utc_date"].get<std::string>())
+    << (command_line.empty() ? "" : "; command: <code>" + HtmlEscaped(command_line) + "</code>")
+    << (design ? "; design model: <code>" + HtmlEscaped(design->model_name) + "</code>" : "") << ".</p>\n";
+  h << "</body></html>\n";
+  return h.str();
+}
+
+}  // namespace zwidth::report
