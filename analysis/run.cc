@@ -231,6 +231,12 @@ RunAnalysis Analyse(RunInput input, const RunOptions& o) {
   a.options = o;
   a.period_s = T;
   a.stages.push_back({"boundary", laps.Lap()});
+  if (a.input.model.friction && a.input.model.friction->MeanCoulomb() > 0.0) {
+    a.friction_amplitudes = FrictionAmplitudes(a.stability.sampled.plant(), T, o.loop, a.stability.rows,
+                                               *a.input.model.friction, a.friction_options);
+    SetFrictionColumns(a.friction_amplitudes, &a.stability.rows);
+    a.stages.push_back({"friction amplitude", laps.Lap()});
+  }
   std::vector<stability::ZWidth> ref_zs;  // the reference on the paper's loop, per delay
   if (a.input.reference) {
     const io::ModelFile& ref = *a.input.reference;

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "analysis/compare.h"
+#include "analysis/friction_amplitude.h"
 #include "analysis/plant_stability.h"
 #include "fit/fit.h"
 #include "ident/joint.h"
@@ -103,6 +104,11 @@ struct RunAnalysis {
   std::optional<ModelComparison> comparison;   // with input.reference
   std::optional<FigureData> figures;           // when options.figures
   std::vector<RunStage> stages;                // stage times, in order ("figure data" last)
+  // When the model has Coulomb friction (input.model.friction): A* along the
+  // boundary (FrictionAmplitudes with default options on the run's loop; no
+  // encoder step is known here), also in stability.rows' friction columns.
+  std::vector<FrictionAmplitudeRow> friction_amplitudes;
+  FrictionAmplitudeOptions friction_options;
 };
 
 // Throws InputError for invalid options (the field named), ComputationError

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "apps/common.h"
+#include "analysis/friction_amplitude.h"
 #include "analysis/scene_check.h"
 #include "apps/friction_flags.h"
 #include "apps/loop_flags.h"
@@ -227,6 +228,8 @@ void AddBoundaryCommand(CLI::App& app) {
     int monte_carlo = 0;
     std::uint64_t seed = 1;
     LoopFlags loop;
+    FrictionFlags friction;
+    analysis::FrictionAmplitudeOptions amplitude;
   };
   auto bf = std::make_shared<BoundaryFlags>();
   CLI::App* b = app.add_subcommand("boundary", "exact Z-width: stable K intervals per B, K_CR(B), summary, per delay");
@@ -243,6 +246,13 @@ void AddBoundaryCommand(CLI::App& app) {
                 "sample std beside the delta method's (0 = off)")->capture_default_str();
   b->add_option("--seed", bf->seed, "seed of --monte-carlo")->capture_default_str();
   AddLoopFlags(b, &bf->loop);
+  AddFrictionFlags(b, &bf->friction);
+  b->add_option("--encoder-step", bf->amplitude.encoder_step,
+                "rad per encoder count, for the friction amplitude's validity and rest point (0: exact)")
+      ->capture_default_str();
+  b->add_option("--amplitude-k-factor", bf->amplitude.k_factor,
+                "with friction: the amplitude A* below which friction holds a wall at this multiple of K_cr(B)")
+      ->capture_default_str();
   b->callback([bf] {
     // The inputs: the model and a velocity filter file (text "b:..;a:.." is no file and matches nothing).
     const std::vector<std::string> inputs = {bf->model, bf->loop.filter_coeffs};
@@ -263,12 +273,30 @@ void AddBoundaryCommand(CLI::App& app) {
     }
     const std::vector<stability::LoopOptions> loops = ResolveLoops(bf->loop, T);
     if (bf->monte_carlo > 0 && loops.size() > 1) throw InputError("--monte-carlo takes at most one --hand");
-    const BoundaryTable t = ComputeBoundaryTable(mf, T, bf->delays, loops, bf->grid);
+    const model::Friction friction = ResolveFriction(bf->friction, mf);
+    if (!bf->amplitude.IsValid(&why)) throw InputError(why);
+    BoundaryTable t = ComputeBoundaryTable(mf, T, bf->delays, loops, bf->grid);
+    // With friction: A* at k x K_cr(B) on every row (the first hand's loop).
+    std::vector<analysis::FrictionAmplitudeRow> amps;
+    if (friction.MeanCoulomb() > 0.0) {
+      amps = analysis::FrictionAmplitudes(mf.plant, T, loops[0], t.rows, friction, bf->amplitude);
+      analysis::SetFrictionColumns(amps, &t.rows);
+    }
     io::WriteBoundaryCsv(bf->out, t.rows);
     nlohmann::json js = BoundarySummaryJson(t, mf, T, bf->delays, loops, bf->monte_carlo, bf->seed);
+    for (size_t i = 0; i < bf->delays.size() && !amps.empty(); ++i) {
+      js["delays"][i]["friction"] = analysis::FrictionSummaryJson(amps, bf->delays[i], friction, bf->amplitude);
+    }
     js["provenance"] = io::ProvenanceJson();
     if (!bf->summary.empty()) io::WriteTextAtomically(bf->summary, js.dump(2) + "\n");
     PrintBoundarySummary(t, mf, bf->delays, loops);
+    for (size_t i = 0; i < bf->delays.size() && !amps.empty(); ++i) {
+      std::printf("%s\n", analysis::FrictionSummaryLine(amps, bf->delays[i], bf->amplitude).c_str());
+    }
+    if (!amps.empty()) {
+      std::printf("friction (Coulomb %g): the CSV's A_star column at %d B values per delay (docs/friction.md)\n",
+                  friction.MeanCoulomb(), bf->amplitude.rows_per_delay);
+    }
   });
 }
 

@@ -120,6 +120,7 @@ constexpr OptionTopic kOptionTopics[] = {
     {"wall", "seconds", "Loop and stability", ""},
     {"wall", "initial-position", "Loop and stability", ""},
     {"relay", "amplitude", "Loop and stability", ""},
+    {"boundary", "amplitude-k-factor", "Loop and stability", ""},
     {"relay", "seconds", "Loop and stability", ""},
     {"filter-sweep", "f-min", "Loop and stability", ""},
     {"filter-sweep", "f-max", "Loop and stability", ""},

@@ -2,6 +2,7 @@
 
 #include "io/io_internal.h"
 
+#include <algorithm>
 #include <limits>
 #include <cmath>
 #include <cstdio>
@@ -22,8 +23,10 @@ nlohmann::json NumberOrNull(double v) {
 void WriteBoundaryCsv(const std::string& path, const std::vector<BoundaryRow>& rows) {
   WriteAtomically(path, [&](const std::string& tmp) {
     internal::CsvFile line(tmp);
+    const bool friction = std::any_of(rows.begin(), rows.end(), [](const BoundaryRow& r) { return r.A_star_valid >= 0; });
     line.Text("delay_samples,B,interval,num_intervals,K_lo,K_hi,f_lo_hz,f_hi_hz,interval_verified,"
-              "K_cr,K_cr_std,f_cr_hz,K_margin,f_margin_hz,unstable_at_zero_k,margin_agrees,verified,K_passive\n");
+              "K_cr,K_cr_std,f_cr_hz,K_margin,f_margin_hz,unstable_at_zero_k,margin_agrees,verified,K_passive");
+    line.Text(friction ? ",friction_K,A_star,A_star_f_hz,A_star_valid\n" : "\n");
     const double nan = std::numeric_limits<double>::quiet_NaN();
     for (const BoundaryRow& r : rows) {
       const auto& p = r.point;
@@ -34,7 +37,9 @@ void WriteBoundaryCsv(const std::string& path, const std::vector<BoundaryRow>& r
         line.G(iv.K_lo, 15).G(iv.K_hi, 15).G(iv.f_lo_hz, 15).G(iv.f_hi_hz, 15).Int(iv.verified ? 1 : 0);
         line.G(p.K_cr, 15).G(r.K_cr_std, 6).G(p.f_cr_hz, 15).G(p.K_margin, 15).G(p.f_margin_hz, 15);
         line.Int(p.unstable_at_zero_k ? 1 : 0).Int(p.AgreesWithMargin() ? 1 : 0).Int(p.verified ? 1 : 0);
-        line.G(r.K_passive, 15).End();
+        line.G(r.K_passive, 15);
+        if (friction) line.G(r.friction_K, 15).G(r.A_star, 15).G(r.A_star_f_hz, 15).Int(r.A_star_valid);
+        line.End();
       }
     }
     line.Close(path);

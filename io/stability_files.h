@@ -21,6 +21,15 @@ struct BoundaryRow {
   double K_cr_std = std::numeric_limits<double>::quiet_NaN();  // N m/rad; nan = no covariance
   // Largest K of the passive set at B (Colgate and Schenkel; stability/haptic_loop.h) [N m/rad]; 0 = none passive.
   double K_passive = std::numeric_limits<double>::quiet_NaN();
+  // With friction (analysis/friction_amplitude.h): the wall K = k x K_cr(B)
+  // outside the linear Z-width and the amplitude A* below which friction stops
+  // its oscillations [rad], at frequency A_star_f_hz; A_star_valid 1/0 = inside
+  // / outside the prediction's validity, -1 = not computed (no friction, or a
+  // row between the rows_per_delay computed).
+  double friction_K = std::numeric_limits<double>::quiet_NaN();
+  double A_star = std::numeric_limits<double>::quiet_NaN();
+  double A_star_f_hz = std::numeric_limits<double>::quiet_NaN();
+  int A_star_valid = -1;
 };
 
 // One line per (delay, B, stable interval); a B with no stable K gets one line
@@ -35,6 +44,8 @@ struct BoundaryRow {
 //   K_margin, f_margin_hz                 the paper's margin() reading of eq. (4)
 //   unstable_at_zero_k, margin_agrees, verified   as in CriticalPoint
 //   K_passive                             largest passive K at B (Colgate and Schenkel), 0 = none
+//   friction_K, A_star, A_star_f_hz, A_star_valid   only when some row has A_star_valid >= 0 (the
+//                                         model has friction): BoundaryRow's friction fields
 // The per-B columns from K_cr on repeat on every interval line of that B.
 // inf and nan are written as such.
 void WriteBoundaryCsv(const std::string& path, const std::vector<BoundaryRow>& rows);

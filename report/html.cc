@@ -191,7 +191,15 @@ void ZWidthSection(const analysis::RunAnalysis& a, std::ostringstream& h) {
     << "interval closes (the paper's B_max); B_max: the largest B at which some K &gt; 0 is stable. "
     << "&plusmn; one std by the delta method from the fit's parameter covariance"
     << (st.has_std ? "" : " (not available: the fit has no covariance)")
-    << ". boundary.csv lists every stable K interval per B.</p>\n";
+    << ". boundary.csv lists every stable K interval per B.</p>\n";  if (!a.friction_amplitudes.empty()) {
+    h << "<p>Friction (Coulomb " << a.input.model.friction->MeanCoulomb() << " at the motor): outside the linear "
+      << "Z-width a wall is still stable for oscillations below the describing-function amplitude A* "
+      << "(docs/friction.md; boundary.csv's A_star column):</p>\n<ul>\n";
+    for (int d : st.delays) {
+      h << "<li>" << Html(analysis::FrictionSummaryLine(a.friction_amplitudes, d, a.friction_options)) << "</li>\n";
+    }
+    h << "</ul>\n";
+  }
 }
 
 // The interactive figures' data: the Bode magnitude and phase (measured in the

@@ -32,6 +32,10 @@ std::string SummaryJson(const analysis::RunAnalysis& a) {
   for (size_t i = 0; i < st.delays.size(); ++i) {
     nlohmann::json e = io::SummaryToJson(st.summaries[i], st.has_std ? &st.stds[i] : nullptr);
     io::AddDelays(&e, st.delays[i], in.model.plant.delay_samples);
+    if (!a.friction_amplitudes.empty()) {
+      e["friction"] = analysis::FrictionSummaryJson(a.friction_amplitudes, st.delays[i], *in.model.friction,
+                                                    a.friction_options);
+    }
     summary["boundary"].push_back(e);
   }
   summary["B_max_meaning"] = "B_max: the largest B at which some K > 0 is stable (reopened bands included); "

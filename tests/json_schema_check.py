@@ -96,6 +96,13 @@ check("validate -o", val, "validation.schema.json", [model, log])
 summ = os.path.join(tmp, "boundary_summary.json")
 zwidth("boundary", model, "--period", "0.001", "-o", os.path.join(tmp, "b.csv"), "--summary", summ)
 check("boundary --summary", summ, "boundary-summary.schema.json", [model])
+# With friction (the model's, here given by flag): each delay's "friction" entry and the CSV's A* columns.
+summ_f = os.path.join(tmp, "boundary_summary_friction.json")
+zwidth("boundary", model, "--period", "0.001", "--delays", "2", "--b-points", "20", "--coulomb", "0.005",
+       "--encoder-step", "0.000153398", "-o", os.path.join(tmp, "bf.csv"), "--summary", summ_f)
+check("boundary --summary with friction", summ_f, "boundary-summary.schema.json", [model])
+report("boundary --summary with friction has a friction entry",
+       all("friction" in d for d in json.load(open(summ_f))["delays"]))
 
 scene = os.path.join(tmp, "scene.json")
 json.dump({"objects": [{"name": "wall", "K": 100, "B": 0.01}]}, open(scene, "w"))

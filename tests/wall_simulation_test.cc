@@ -11,6 +11,8 @@
 
 #include "model/error.h"
 #include "model/state_space.h"
+#include "analysis/friction_amplitude.h"
+#include "io/stability_files.h"
 #include "stability/friction_prediction.h"
 #include "stability/haptic_loop.h"
 #include "stability/relay.h"
@@ -123,7 +125,16 @@ TEST(FrictionPrediction, AmplitudeMatchesTheNonlinearWallOnRandomCases) {
     const double counts[] = {0.0, 4000.0, 40960.0};
     const double n_counts = counts[static_cast<int>(3 * u01(rng)) % 3];
     const double q = n_counts > 0 ? 2.0 * M_PI / n_counts : 0.0;
-    const FrictionPrediction pr = PredictFriction(p, kT, d, {}, K, B, f, q);
+    // A* as boundary's table, its summary and run's report print it (analysis::FrictionAmplitudes on the
+    // boundary row at B, the wall at k_factor x K_cr(B)); check prints PredictFriction's: the same A*.
+    analysis::FrictionAmplitudeOptions ao;
+    ao.k_factor = K / z.At(B).K_cr;
+    ao.encoder_step = q;
+    const std::vector<analysis::FrictionAmplitudeRow> printed =
+        analysis::FrictionAmplitudes(p, kT, {}, {io::BoundaryRow{d, z.At(B), {}}}, f, ao);
+    ASSERT_EQ(printed.size(), 1u);
+    const FrictionPrediction pr = printed[0].prediction;
+    EXPECT_NEAR(printed[0].K, K, 1e-12 * K) << c;
     ++cases;
     ASSERT_EQ(pr.verdict, FrictionVerdict::kStableBelow) << c;
     WallOptions o;
@@ -138,6 +149,7 @@ TEST(FrictionPrediction, AmplitudeMatchesTheNonlinearWallOnRandomCases) {
                 "(%+.1f %%) %s\n", c, p.modes.empty() ? "rigid" : "tableI", d, B, K, K / pr.K_cr_linear, f.coulomb_pos,
                 q, pr.amplitude, pr.frequency_hz, x, 100.0 * (x / pr.amplitude - 1.0),
                 pr.valid ? "valid" : pr.invalid_reason.c_str());
+    EXPECT_NEAR(PredictFriction(p, kT, d, {}, K, B, f, q).amplitude / pr.amplitude, 1.0, 1e-4) << c;
     if (!pr.valid) continue;
     ++valid;
     EXPECT_NEAR(x / pr.amplitude, 1.0, 0.15) << c;

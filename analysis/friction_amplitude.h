@@ -1,0 +1,69 @@
+// The describing-function amplitude A* along a Z-width's boundary (issue 32,
+// stability/friction_prediction.h (b)): at each boundary row (delay, B) with a
+// finite K_cr(B) > 0, the wall K = k_factor x K_cr(B) lies outside the linear
+// Z-width; Coulomb friction still stops its oscillations below A*. One rule
+// for `boundary` (table, CSV, summary JSON) and `run` (summary.json, report):
+// both print what FrictionAmplitudes returns. Prints nothing.
+#pragma once
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "io/stability_files.h"
+#include "model/friction.h"
+#include "model/plant.h"
+#include "stability/friction_prediction.h"
+#include "stability/loop_options.h"
+
+namespace zwidth::analysis {
+
+struct FrictionAmplitudeOptions {
+  double k_factor = 1.25;     // the wall's K as a multiple of K_cr(B) [-], in (1, 100]
+  double encoder_step = 0.0;  // rad (or m) per count, >= 0; 0: exact encoder (that validity rule not checked)
+  // A* on at most this many rows per delay, evenly spaced in the row order and
+  // always the first (B = b_min, usually 0), >= 1; the others stay kNotRun. Each
+  // A* costs ~40 exact Z-widths (b_e's bisection): boundary's 1000 B values at
+  // 3 delays took 5.8 min on every row (shared 2-core machine, under load).
+  int rows_per_delay = 16;
+  stability::FrictionPredictionOptions prediction{1e-6};  // A* to ~1e-6 relative
+  bool IsValid(std::string* why) const;  // names FrictionAmplitudeOptions::field
+};
+
+struct FrictionAmplitudeRow {
+  int delay_samples = 0;
+  double B = 0.0;  // N m s/rad
+  double K = std::numeric_limits<double>::quiet_NaN();  // k_factor x K_cr(B); nan: no finite K_cr(B) > 0 here
+  stability::FrictionPrediction prediction;               // kNotRun where K is nan
+};
+
+// One entry per row of `rows` (same order). The friction must have a Coulomb
+// level > 0 (InputError naming FrictionAmplitudeOptions otherwise is not
+// thrown: with no friction the caller does not call this). Throws InputError
+// for invalid options.
+std::vector<FrictionAmplitudeRow> FrictionAmplitudes(const model::Plant& plant, double period_s,
+                                                     const stability::LoopOptions& loop,
+                                                     const std::vector<io::BoundaryRow>& rows,
+                                                     const model::Friction& friction,
+                                                     const FrictionAmplitudeOptions& options);
+
+// Copies each entry's K, A*, frequency and validity into the BoundaryRow's
+// friction columns (rows and amplitudes in the same order).
+void SetFrictionColumns(const std::vector<FrictionAmplitudeRow>& amplitudes, std::vector<io::BoundaryRow>* rows);
+
+// {"K", "amplitude" (A* [rad], null = none), "frequency_hz", "extra_damping",
+//  "verdict", "valid", "invalid_reason"}
+nlohmann::json FrictionAmplitudeRowJson(const FrictionAmplitudeRow& r);
+// A summary's "friction" entry for one delay: the Coulomb level used, k_factor,
+// encoder_step, K_rest_max (2 F_c / q, null without an encoder step), and
+// "at_zero_B": the B = 0 row's FrictionAmplitudeRowJson (null without one).
+nlohmann::json FrictionSummaryJson(const std::vector<FrictionAmplitudeRow>& rows, int delay_samples,
+                                   const model::Friction& friction, const FrictionAmplitudeOptions& options);
+// One line per delay for a terminal or a report: "d = 2 friction (F_c 0.005):
+// a wall at 1.25 K_cr(0) = 3.12 is stable below A* = 0.109 rad (7.3 Hz)".
+std::string FrictionSummaryLine(const std::vector<FrictionAmplitudeRow>& rows, int delay_samples,
+                                const FrictionAmplitudeOptions& options);
+
+}  // namespace zwidth::analysis
