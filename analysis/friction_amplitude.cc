@@ -11,10 +11,14 @@ namespace zwidth::analysis {
 
 bool FrictionAmplitudeOptions::IsValid(std::string* why) const {
   auto bad = [&](const std::string& m) { if (why) *why = "FrictionAmplitudeOptions::" + m; return false; };
-  if (!(k_factor > 1.0 && k_factor <= 100.0)) return bad("k_factor must be in (1, 100] (a multiple of K_cr(B))");
+  if (!(k_factor > 1.0 && k_factor <= 100.0)) {
+    return bad("k_factor = " + std::to_string(k_factor) + " must be in (1, 100] (a multiple of K_cr(B))");
+  }
   if (!(std::isfinite(encoder_step) && encoder_step >= 0.0)) return bad("encoder_step must be finite and >= 0");
   if (rows_per_delay < 1) return bad("rows_per_delay must be >= 1");
-  return prediction.IsValid(why);
+  std::string w;
+  if (!prediction.IsValid(&w)) return bad("prediction: " + w);
+  return true;
 }
 
 std::vector<FrictionAmplitudeRow> FrictionAmplitudes(const model::Plant& plant, double period_s,

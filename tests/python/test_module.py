@@ -551,11 +551,10 @@ def test_docs_python_example(src, tmp_path, cli):
 def auto_fit(cli, log_h5, tmp_path_factory):
     """`zwidth fit --modes auto` and zwidth.fit(modes="auto") on the shipped log."""
     out = tmp_path_factory.mktemp("auto") / "m.json"
-    stdout = cli("fit", log_h5, "-o", out, "--modes", "auto", "--delay-samples", "0").stdout  # Python's default delay
+    stdout = cli("fit", log_h5, "-o", out, "--modes", "auto").stdout  # both default to --delay-samples auto
     res = zwidth.fit(zwidth.estimate(zwidth.read_log(log_h5)), modes="auto")
     assert res.brief_report() in stdout
     return res, str(out)
-    return zwidth.fit(zwidth.estimate(zwidth.read_log(log_h5)), modes="auto"), str(out)
 
 
 def test_fit_modes_auto_quality_and_covariance_equal_cli(auto_fit):
