@@ -451,8 +451,13 @@ void PrintRelay(const stability::RelayResult& res, const stability::CriticalPoin
                 res.K_cr, res.f_cr_hz, res.refined() ? "" : " (no crossing found: the paper's reading)");
   }
   if (!json) {
-    std::printf("exact (eq. 2, with this loop's filter and hand):        K_cr = %.6g N m/rad at %.5g Hz\n",
-                cp.K_cr, cp.f_cr_hz);
+    if (std::isfinite(cp.f_cr_hz)) {
+      std::printf("exact (eq. 2, with this loop's filter and hand):        K_cr = %.6g N m/rad at %.5g Hz\n",
+                  cp.K_cr, cp.f_cr_hz);
+    } else {  // K_cr = 0 past B_max_from_zero: no crossing, so no frequency
+      std::printf("exact (eq. 2, with this loop's filter and hand):        K_cr = %.6g N m/rad (no crossing)\n",
+                  cp.K_cr);
+    }
   }
 }
 

@@ -87,6 +87,12 @@ printf '%s' '{"objects":[{"K":1,"B":0},{"K":2,"B":0}]}' > "$T/scene_unnamed.json
 "$ZW" check "$T/scene_unnamed.json" --model "$M" --delay 2 --json 2>/dev/null | grep -q '"object1"' \
   && ok "scene objects without a name are called object<i>" || bad "unnamed scene objects"
 
+# ---- relay past B_max_from_zero: K_cr = 0 has no crossing, so no frequency
+# (it printed "K_cr = 0 N m/rad at nan Hz")
+out=$("$ZW" relay "$M" --delay 2 --damping 5 --seconds 2 2>/dev/null)
+echo "$out" | grep -q "K_cr = 0 N m/rad (no crossing)" && ! echo "$out" | grep -qi "nan" \
+  && ok "relay past B_max_from_zero names no frequency" || bad "relay past B_max_from_zero: $out"
+
 no_temps() { [ -z "$(find "$1" -name '*.tmp-*' 2>/dev/null | head -1)" ]; }
 no_temps "$T" && ok "no temporary left" || bad "temporaries left"
 echo "hostile3: $pass passed, $fail failed"
