@@ -12,6 +12,7 @@
 #include "io/model_json.h"
 #include "io/provenance.h"
 #include "model/plant.h"
+#include "model/sample_period.h"
 #include "report/report_internal.h"
 #include "stability/zwidth.h"
 
@@ -52,7 +53,7 @@ std::optional<model::Plant> PlantOf(const Row& r, double* period_s) {
   }
   std::string why;
   if (!p.IsValid(&why)) return std::nullopt;
-  *period_s = 1.0 / rate;
+  *period_s = model::SamplePeriod(rate);
   return p;
 }
 

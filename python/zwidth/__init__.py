@@ -261,7 +261,7 @@ def _control():
 
 def to_frd(frf):
     """python-control FrequencyResponseData of a FrequencyResponse (omega = 2 pi f_hz [rad/s],
-    dt = 1 / sample_rate_hz)."""
+    dt = the response's sample period T [s], its period_s)."""
     import numpy as np
     control = _control()
     return control.frd(frf.H, 2 * np.pi * frf.f_hz, dt=frf.period_s)
