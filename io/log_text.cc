@@ -379,14 +379,10 @@ int FindColumn(const std::string& spec, bool required, const char* flag, const s
   };
   // A header's unit in brackets ("torque [mNm]", "t (s)") is not part of the
   // name a default such as 'torque' or 't' looks for.
-  auto without_unit = [](std::string n) {
-    while (!n.empty() && (n.back() == ' ' || n.back() == '\t')) n.pop_back();
-    if (!n.empty() && (n.back() == ']' || n.back() == ')')) {
-      const size_t open = n.find_last_of(n.back() == ']' ? '[' : '(');
-      if (open != std::string::npos && open > 0) n.erase(open);
-      while (!n.empty() && (n.back() == ' ' || n.back() == '\t')) n.pop_back();
-    }
-    return n;
+  auto without_unit = [](const std::string& n) {
+    std::string base;
+    internal::SplitBracketedUnit(n, &base, nullptr);
+    return base;
   };
   if (const int c = unique([&](const std::string& n) { return n == spec; }, ""); c >= 0) return c;
   const std::string want = Lower(spec);

@@ -95,17 +95,28 @@ ColumnUnit ParseColumnUnit(const std::string& written, ColumnRole role, double c
                    "one's), or " + flag + " si with LogSelect::output_scale (rad or m per count)");
 }
 
+bool SplitBracketedUnit(const std::string& name, std::string* base, std::string* unit) {
+  auto trimmed = [](std::string t) {
+    while (!t.empty() && (t.back() == ' ' || t.back() == '\t')) t.pop_back();
+    return t;
+  };
+  const std::string s = trimmed(name);
+  if (base) *base = s;
+  if (s.empty() || (s.back() != ']' && s.back() != ')')) return false;
+  const size_t open = s.find_last_of(s.back() == ']' ? '[' : '(');
+  if (open == std::string::npos || open == 0) return false;
+  if (unit) *unit = s.substr(open + 1, s.size() - open - 2);
+  if (base) *base = trimmed(s.substr(0, open));
+  return true;
+}
+
 std::optional<ColumnUnit> UnitOfColumnName(const std::string& name, ColumnRole role, double cpr, double cpm,
                                            bool scale_given, const std::string& flag, const std::string& where) {
+  if (std::string unit; SplitBracketedUnit(name, nullptr, &unit)) {
+    return ParseColumnUnit(unit, role, cpr, cpm, scale_given, flag, where + " (unit in its name '" + name.substr(0, 40) + "')");
+  }
   std::string s = name;
   while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.pop_back();
-  if (!s.empty() && (s.back() == ']' || s.back() == ')')) {
-    const size_t open = s.find_last_of(s.back() == ']' ? '[' : '(');
-    if (open != std::string::npos && open > 0) {
-      return ParseColumnUnit(s.substr(open + 1, s.size() - open - 2), role, cpr, cpm, scale_given, flag,
-                             where + " (unit in its name '" + name.substr(0, 40) + "')");
-    }
-  }
   const size_t sep = s.find_last_of("_- ");
   if (sep == std::string::npos || sep == 0 || sep + 1 >= s.size()) return std::nullopt;
   if (Find(s.substr(sep + 1), role) == nullptr) return std::nullopt;

@@ -28,6 +28,12 @@ std::optional<ColumnUnit> UnitOfColumnName(const std::string& name, ColumnRole r
                                            double counts_per_m, bool scale_given, const std::string& flag,
                                            const std::string& where);
 
+// A header name's trailing bracketed unit, "torque [mNm]" or "t (s)": true
+// with *base = "torque" and *unit = "mNm"; false when the name ends in no
+// bracket pair (or the bracket opens the name), *base then the name. *base
+// never ends in blanks.
+bool SplitBracketedUnit(const std::string& name, std::string* base, std::string* unit);
+
 // A unit written alone (a units-row field, or the flag's value). "si" (or "")
 // means the column is already in SI units. Throws InputError for an unknown
 // unit or counts without a counts-per value.
