@@ -52,8 +52,8 @@ void AddFitFlags(CLI::App* cmd, FitFlags* f) {
                   "bins used only where the input PSD is at least this fraction of its 99th percentile")->capture_default_str();
   cmd->add_option("--min-coherence", f->o.band.min_coherence, "bins with lower coherence are not used")->capture_default_str();
   cmd->add_option("--noise-coherence-sigmas", f->o.band.noise_coherence_sigmas,
-                  "leave out regions whose coherence is within this many std of what noise alone gives (e.g. 3, for "
-                  "fast logs whose bins near Nyquist are noise; 0: off, the default)")->capture_default_str();
+                  "leave out the region at the top of the band whose coherence is within this many std of what "
+                  "noise alone gives (bins near Nyquist that are noise; 0: off)")->capture_default_str();
 }
 
 void FitFlags::Resolve(double fmin_hz, double fmax_hz) {

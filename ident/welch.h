@@ -156,8 +156,10 @@ class WelchEstimator {
 // left out when the mean coherence of the kBandSmoothBins bins centred on it is
 // below noise_coherence_sigmas std of that mean above 1/n_d (bins correlated as
 // the window's bin_correlation says): a region where noise sets the coherence,
-// not one bin of low coherence inside a good region. Not applied when that
-// threshold would be 0.5 or more (about 4 averages or fewer).
+// not one bin of low coherence inside a good region, and only the region that
+// reaches the top of the band (below a good region a low coherence is friction
+// or a closed loop, not noise). Not applied when that threshold would be 0.5
+// or more (about 4 averages or fewer).
 // The well-excited band [excited_lo_hz, excited_hi_hz]: the bins whose input
 // PSD, averaged over the kBandSmoothBins bins centred on them, is at least
 // well_excited_ratio of that average's 99th percentile (half power, the
@@ -170,12 +172,9 @@ struct BandOptions {
   double fmax_hz = std::numeric_limits<double>::infinity();  // highest [Hz], > fmin_hz
   double min_input_power_ratio = 1e-2;  // S_uu threshold relative to S_ref (-20 dB), in [0, 1)
   double min_coherence = 0.05;          // bins with lower coherence are left out, in [0, 1)
-  // see above; >= 0 (0: the test is off, the default). Opt-in: on by default
-  // (3) it dropped the low-coherence band of logs whose coherence is lowered
-  // by friction or a closed loop rather than by noise (the friction grid's b
-  // -58 %, H1's closed-loop bias hidden, 2 of 100 random devices fitted to a
-  // 1-2 % worse minimum), so it is for fast logs with noise bins near Nyquist.
-  double noise_coherence_sigmas = 0.0;
+  // see above; >= 0 (0: the test is off). Applied only to the noise region
+  // that reaches the top of the band (ident/welch.cc says why).
+  double noise_coherence_sigmas = 3.0;
   double well_excited_ratio = 0.5;      // see above (-3 dB), in [0, 1]
 
   bool IsValid(std::string* why) const;

@@ -110,31 +110,62 @@ TEST(DefaultWindow, FollowsTheRateAndTheLength) {
   }
 }
 
-// Bins whose coherence is what noise alone gives, Beta(1, n_d - 1), are not
-// used, however many pass min_coherence by chance; a region of real
-// response beside them keeps all its bins.
-TEST(BandEdges, NoiseCoherenceRegionIsLeftOut) {
+// 2000 bins of a flat response (n_d = 20, Hann's bin correlation): the
+// coherence is 0.9 on the bins of is_response and what noise alone gives,
+// Beta(1, n_d - 1), elsewhere. *noise_passes counts the noise bins that pass
+// min_coherence (0.05) by chance.
+template <class IsResponse>
+ident::FrequencyResponse NoiseAndResponseBins(uint64_t seed, IsResponse is_response, int* noise_passes) {
   ident::FrequencyResponse frf{
       .sample_rate_hz = 1000, .window_length = 4096, .num_averages = 13, .effective_averages = 20, .bin_correlation = 1.94};
-  std::mt19937_64 rng(7);
+  std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  int noise_above_threshold = 0;
+  *noise_passes = 0;
   for (int k = 1; k <= 2000; ++k) {
     frf.f_hz.push_back(k * 0.244);
     frf.S_uu.push_back(1.0);
     frf.H.push_back({1.0, 0.0});
     frf.H_std.push_back(0.1);
     const double beta = 1.0 - std::pow(1.0 - uniform(rng), 1.0 / (frf.effective_averages - 1));
-    const double c = k <= 1000 ? 0.9 : beta;
-    noise_above_threshold += k > 1000 && c >= 0.05;
+    const double c = is_response(k) ? 0.9 : beta;
+    *noise_passes += !is_response(k) && c >= 0.05;
     frf.coherence.push_back(c);
   }
+  return frf;
+}
+
+// Bins whose coherence is what noise alone gives, at the top of the band, are
+// not used, however many pass min_coherence by chance; a region of real
+// response beside them keeps all its bins.
+TEST(BandEdges, NoiseCoherenceRegionIsLeftOut) {
+  int noise_above_threshold = 0;
+  ident::FrequencyResponse frf = NoiseAndResponseBins(7, [](int k) { return k <= 1000; }, &noise_above_threshold);
   ASSERT_GT(noise_above_threshold, 200);  // the old rule used them all
-  const ident::ExcitedBand b = ident::SelectExcitedBand(frf, ident::BandOptions{.noise_coherence_sigmas = 3.0});  // opt-in
+  const ident::ExcitedBand b = ident::SelectExcitedBand(frf, ident::BandOptions{});  // the default rule
   int used_good = 0, used_noise = 0;
   for (int k = 0; k < 2000; ++k) (k < 1000 ? used_good : used_noise) += b.used[k];
   EXPECT_GE(used_good, 990) << b.Describe();
   EXPECT_LE(used_noise, 12) << b.Describe();
+  // The same response in closed loop (a joint estimate): the input-output
+  // coherence there is not a noise floor, and every bin above min_coherence
+  // is used.
+  frf.estimator = "welch-joint";
+  const ident::ExcitedBand closed = ident::SelectExcitedBand(frf, ident::BandOptions{});
+  EXPECT_EQ(closed.num_noise_coherence, 0) << closed.Describe();
+  EXPECT_EQ(closed.num_used, 1000 + noise_above_threshold) << closed.Describe();
+}
+
+// A low-coherence region below a good one (friction's stick-slip lowers the
+// coherence of the low band) is not noise at the top of the band: every bin
+// above min_coherence is used, by the default rule as with it off.
+TEST(BandEdges, LowCoherenceBelowAGoodRegionIsKept) {
+  int low_above_threshold = 0;
+  const ident::FrequencyResponse frf = NoiseAndResponseBins(11, [](int k) { return k > 600; }, &low_above_threshold);
+  const ident::ExcitedBand on = ident::SelectExcitedBand(frf, ident::BandOptions{});
+  const ident::ExcitedBand off = ident::SelectExcitedBand(frf, ident::BandOptions{.noise_coherence_sigmas = 0.0});
+  EXPECT_EQ(on.num_noise_coherence, 0) << on.Describe();
+  EXPECT_EQ(on.num_used, 1400 + low_above_threshold) << on.Describe();
+  EXPECT_EQ(on.used, off.used);
 }
 
 // A torque low-passed at 300 Hz (4th order): the well-excited band ends at
@@ -168,15 +199,18 @@ TEST(BandEdges, SectionOutsideTheWellExcitedBandIsSaid) {
   const ident::FrequencyResponse frf = ident::EstimateFrequencyResponse(log.torque, log.position, fs, {});
   FitOptions o;
   o.num_modes = 1;
-  // With the noise-coherence rule (opt-in) the band stops at ~300 Hz and the one section lands past
-  // the well-excited edge; without it the band reaches 372 Hz, the section sits at 307 Hz, inside
-  // 1.05 x the edge, and the fit is poor for its std (spurious_section) instead.
-  o.band.noise_coherence_sigmas = 3.0;
+  // With the noise-coherence rule (the default) the band stops at ~300 Hz and the one section lands
+  // past the well-excited edge; without it the band reaches 372 Hz, the section sits at 307 Hz,
+  // inside 1.05 x the edge, and the fit is poor for its std (spurious_section) instead.
   const FitResult r = FitModel(frf, o);
   ASSERT_EQ(r.status, FitStatus::kConverged);
   ASSERT_EQ(r.plant.modes.size(), 1u);
   bool said = false;
-  for (const auto& q : r.reasons) said |= q.code == "section_outside_excited_band";
+  // Said as outside the well-excited band, or (when the band used stops below it) as outside the band used.
+  for (const auto& q : r.reasons) {
+    said |= q.code == "section_outside_excited_band" ||
+            (q.code == "spurious_section" && q.message.find("outside the used band") != std::string::npos);
+  }
   const double edge = 1.05 * r.band.excited_hi_hz;
   ASSERT_TRUE(r.plant.modes[0].omega / kTwoPi > edge || r.plant.modes[0].v / kTwoPi > edge) << Describe(r);
   EXPECT_TRUE(said) << Describe(r);
@@ -201,7 +235,6 @@ TEST(BandEdges, FiveKilohertzDeviceRightFitsAreGood) {
         log.torque, log.position, fs, ident::WelchOptions{.window_length = ident::DefaultWindowLength(fs, N)});
     FitOptions o;
     o.num_modes = 2;
-    o.band.noise_coherence_sigmas = 3.0;  // the noise-coherence rule, opt-in (ident/welch.h)
     const FitResult r = FitModel(frf, o);
     ASSERT_EQ(r.status, FitStatus::kConverged);
     const bool is_right = std::abs(r.plant.modes[0].omega / p.modes[0].omega - 1) < 0.02 &&
