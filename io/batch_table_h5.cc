@@ -174,7 +174,7 @@ std::string ReadBatchTableHdf5(const std::string& path) {
     const double version = ReadH5ScalarAttribute(file.getId(), "zwidth_batch_table_version", path);
     if (version != kVersion) {
       throw InputError(path + ": batch table version " + std::to_string(version) + ", this zwidth reads version 1; "
-                       "run the batch again with --restart, or with the zwidth that wrote it");
+                       "read it with the zwidth that wrote it, or write the table elsewhere");
     }
     H5::DataSet cols = file.openDataSet("/columns");
     const hsize_t nc = Length(cols, path + ":/columns", kMaxColumns);
