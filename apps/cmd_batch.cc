@@ -10,11 +10,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <optional>
 #include <set>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -103,18 +101,15 @@ void CheckFolderName(const io::BatchEntry& e) {
   }
 }
 
-// The previous table at `path` (to resume), read without noting it as an
-// input (it is this command's output); none when absent.
+// The previous table at `path` (to resume; CSV or HDF5, io::ReadBatchTable),
+// read without noting it as an input (it is this command's output); none when absent.
 io::BatchTable PreviousTable(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) return {};
   if (!std::filesystem::is_regular_file(path, ec)) {
-    throw InputError(io::Printable(path) + " is not a regular file: -o names the table (a .csv file) to write");
+    throw InputError(io::Printable(path) + " is not a regular file: -o names the table (a .csv or .h5 file) to write");
   }
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  io::BatchTable t = io::ParseBatchCsv(ss.str(), io::Printable(path));
+  io::BatchTable t = io::ReadBatchTable(path);
   if (!t.rows.empty() && (std::find(t.columns.begin(), t.columns.end(), "input_hash") == t.columns.end() ||
                           std::find(t.columns.begin(), t.columns.end(), "serial") == t.columns.end())) {
     throw InputError(io::Printable(path) + " exists and is not a table of zwidth batch (no serial and input_hash "
@@ -198,7 +193,7 @@ void Batch(BatchFlags& b, const CLI::App* cmd) {
     }
     // Saved every 2 s: an interrupted batch resumes from there.
     if (std::chrono::steady_clock::now() - last_save > std::chrono::seconds(2) && p.done < p.total) {
-      io::WriteTextAtomically(b.table, io::FormatBatchCsv(analysis::BatchTableOf(rows)));
+      io::WriteBatchTable(b.table, analysis::BatchTableOf(rows));
       last_save = std::chrono::steady_clock::now();
     }
   };
@@ -238,8 +233,8 @@ void Batch(BatchFlags& b, const CLI::App* cmd) {
   io::BatchTable table = r.table;
   const analysis::Population pop = analysis::AnalysePopulation(table, b.population_options);
   analysis::AddOutlierColumns(pop, &table);
-  io::WriteTextAtomically(b.table, io::FormatBatchCsv(table));
-  if (!b.population.empty()) io::WriteTextAtomically(b.population, io::FormatBatchCsv(analysis::PopulationTable(pop)));
+  io::WriteBatchTable(b.table, table);
+  if (!b.population.empty()) io::WriteBatchTable(b.population, analysis::PopulationTable(pop));
   if (!b.fleet_report.empty()) {
     io::WriteTextAtomically(b.fleet_report, report::FleetHtml(table, pop, design ? &*design : nullptr, o, CommandLine()));
   }
@@ -260,7 +255,8 @@ void AddBatchCommand(CLI::App& app) {
   cmd->add_option("logs", b->logs, "one log per unit: paths or quoted globs ('line/*.h5'), the serial is the path");
   cmd->add_option("--manifest", b->manifest,
                   "CSV of units: serial,path[,log flags without dashes: rate, input-column, ...], a row per unit");
-  cmd->add_option("-o,--output", b->table, "the table (CSV) to write; an existing one of an earlier batch is resumed")
+  cmd->add_option("-o,--output", b->table, "the table to write: CSV, or HDF5 when it ends .h5/.hdf5 (docs/fleet.md); an existing one of an "
+                  "earlier batch is resumed")
       ->required();
   cmd->add_option("--unit-folders", b->unit_folders, "also write each unit's run files (no figures) into FOLDER/<serial>");
   cmd->add_option("--jobs", b->jobs, "units at once (default, and at most: the cores available)")->capture_default_str();
@@ -268,7 +264,7 @@ void AddBatchCommand(CLI::App& app) {
                   "end-of-line spec, repeatable: COLUMN>=BOUND or COLUMN<=BOUND (d2_K_cr_max>=1.5, m<=2e-4): "
                   "a verdict per unit (pass, marginal: within noise of a limit, fail) from the value and its std");
   cmd->add_option("--population", b->population,
-                  "also write the population's table (CSV): per parameter and figure its median and MAD sigma");
+                  "also write the population's table (CSV, or HDF5 for .h5): per parameter and figure its median and MAD sigma");
   cmd->add_option("--fleet-report", b->fleet_report,
                   "also write the fleet report: one self-contained HTML (distributions, every unit's region over "
                   "the design's, failures and outliers)");

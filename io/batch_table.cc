@@ -5,9 +5,14 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <set>
 
 #include "io/atomic_file.h"
+#include "io/hdf5_api.h"
+#include "io/isolated.h"
+#include "io/log.h"
+#include "io/log_internal.h"
 #include "io/model_json.h"
 #include "io/printable.h"
 #include "model/error.h"
@@ -245,6 +250,46 @@ BatchTable ParseBatchCsv(const std::string& text, const std::string& source) {
     t.rows.push_back(std::move(row));
   }
   return t;
+}
+
+bool IsHdf5TablePath(const std::string& path) { return internal::HasExtension(path, {".h5", ".hdf5", ".he5"}); }
+
+void WriteBatchTable(const std::string& path, const BatchTable& table) {
+  if (IsHdf5TablePath(path)) {
+    internal::WriteHdf5Atomically(path, [&](const internal::Hdf5Api& h5, const std::string& tmp) {
+      h5.write_batch_table_hdf5(tmp, table);
+    });
+  } else {
+    WriteTextAtomically(path, FormatBatchCsv(table));
+  }
+}
+
+BatchTable ReadBatchTable(const std::string& path) {
+  // Not noted as an input (CheckInputFile): the table is the batch's own output, rewritten at the end.
+  const std::string where = Printable(path);
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw InputError(where + ": not a regular file; name the table (.csv, or .h5 for HDF5) of a batch");
+  }
+  if (std::filesystem::file_size(path, ec) > kMaxTableBytes) {
+    throw InputError(where + ": more than 1 GiB, larger than a batch table; name the table of a batch");
+  }
+  if (DetectLogFormat(path) != LogFormat::kHdf5) {
+    std::ifstream in(path, std::ios::binary);
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (in.bad()) throw InputError(where + ": cannot be read");
+    return ParseBatchCsv(text, where);
+  }
+  const internal::Hdf5Api& h5 = internal::Hdf5();  // loaded before the fork
+  std::string text;
+  RunIsolated(
+      path,
+      [&](const FrameSender& send) {
+        const std::string t = h5.read_batch_table_hdf5(path);
+        send(t.data(), t.size());
+      },
+      [&](std::string_view frame) { text = frame; });
+  return ParseBatchCsv(text, where);
 }
 
 }  // namespace zwidth::io

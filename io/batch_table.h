@@ -2,7 +2,8 @@
 // path and per-unit log flags), the logs named by paths and globs, the
 // fingerprint of a unit's inputs that a re-run compares to resume, and the
 // result table (CSV, one row per unit, cells as text) it writes and reads
-// back. The table's cells come from analysis/batch.h; here they are text.
+// back (CSV or HDF5). The table's cells come from analysis/batch.h; here
+// they are text.
 #pragma once
 
 #include <cstdint>
@@ -54,5 +55,27 @@ std::string FormatBatchCsv(const BatchTable& table);
 // Parses FormatBatchCsv's text (a previous run's table, to resume);
 // InputError naming `source` and the line for a malformed one.
 BatchTable ParseBatchCsv(const std::string& text, const std::string& source);
+
+// Whether a table at `path` is written as HDF5: its name ends .h5, .hdf5 or
+// .he5 (any case), as WriteLog chooses; else CSV.
+bool IsHdf5TablePath(const std::string& path);
+// Writes the table to `path` atomically (a temporary file renamed: nothing
+// half-written): HDF5 by IsHdf5TablePath, else FormatBatchCsv's text. The
+// HDF5 file holds the same columns and cells (io/batch_table_h5.cc):
+//   /columns          the column names in order (variable-length UTF-8 strings)
+//   /batch/<column>   one cell per row: float64 when every non-empty cell is a
+//                     number that %.17g writes back as it is (the numbers of
+//                     BatchRowOf, nan included), else UTF-8 text
+//   /empty/<column>   uint8, 1 where a float64 column's cell is empty
+//   root attribute zwidth_batch_table_version = 1
+// so ReadBatchTable gives back every cell's text. HDF5 needs zwidth::hdf5
+// (io/hdf5_api.h). InputError for a column that cannot name a dataset ('/')
+// or a cell holding a NUL (write .csv then), or a failed write.
+void WriteBatchTable(const std::string& path, const BatchTable& table);
+// Reads a table WriteBatchTable wrote: HDF5 when the file has HDF5's
+// signature (parsed in a child process, io/isolated.h), else CSV
+// (ParseBatchCsv); a file of at most 1 GiB. InputError naming the file for
+// a file that is no such table.
+BatchTable ReadBatchTable(const std::string& path);
 
 }  // namespace zwidth::io

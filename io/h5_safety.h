@@ -17,8 +17,9 @@ H5::FileAccPropList SafeH5Access();
 bool H5LinkExists(hid_t file, const std::string& path, const std::string& name);
 
 // InputError unless the dataset's data are inside the file: no external
-// storage (H5Pget_external_count), not a virtual dataset.
-void CheckH5DatasetLocal(hid_t dataset, const std::string& where);
+// storage (H5Pget_external_count), not a virtual dataset, no filter this
+// library lacks; and, when `numbers`, stored as plain numbers.
+void CheckH5DatasetLocal(hid_t dataset, const std::string& where, bool numbers = true);
 
 // The attribute `name` of `object` as a double; InputError unless it holds
 // exactly one number (its dataspace has one point, its type is numeric).

@@ -23,6 +23,8 @@ const Hdf5Api& LinkedHdf5() {
     a.write_model_mat = WriteModelMat;
     a.read_frf_mat_packed = ReadFrfMatPacked;
     a.has_frf_mat_variables = HasFrfMatVariables;
+    a.write_batch_table_hdf5 = WriteBatchTableHdf5;
+    a.read_batch_table_hdf5 = ReadBatchTableHdf5;
     // Files and what lives in them, not datatypes: the C++ library creates
     // ~125 transient ones (H5::PredType) when it starts, which in the plugin
     // is during the first write.

@@ -25,6 +25,10 @@
 #include "io/log.h"
 #include "io/model_json.h"
 
+namespace zwidth::io {
+struct BatchTable;  // io/batch_table.h
+}  // namespace zwidth::io
+
 namespace zwidth::io::internal {
 
 // The most values a frequency response holds: the bins of a Welch window of
@@ -56,6 +60,10 @@ struct Hdf5Api {
   // holds f and H (or H_re) variables.
   std::string (*read_frf_mat_packed)(const std::string& path) = nullptr;
   bool (*has_frf_mat_variables)(const std::string& path) = nullptr;
+  // The batch table (io/batch_table_h5.cc): written to `tmp`; read back as
+  // FormatBatchCsv's text (a child sends it to the parent).
+  void (*write_batch_table_hdf5)(const std::string& tmp, const BatchTable& table) = nullptr;
+  std::string (*read_batch_table_hdf5)(const std::string& path) = nullptr;
   // HDF5 files, datasets, groups and attributes open now (H5Fget_obj_count).
   long (*open_objects)() = nullptr;
 };
@@ -102,5 +110,7 @@ void WriteModelMat(const std::string& tmp, const ModelFile& model, double period
                    const ident::FrequencyResponse* frf, bool v73);                               // export_mat.cc
 std::string ReadFrfMatPacked(const std::string& path);                                           // frf_mat.cc
 bool HasFrfMatVariables(const std::string& path);                                                // frf_mat.cc
+void WriteBatchTableHdf5(const std::string& tmp, const BatchTable& table);                      // batch_table_h5.cc
+std::string ReadBatchTableHdf5(const std::string& path);                                         // batch_table_h5.cc
 
 }  // namespace zwidth::io::internal

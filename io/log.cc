@@ -88,14 +88,6 @@ LogInfo StreamMat(const std::string& path, const LogSelect& sel, const LogSink& 
 
 using namespace internal;
 
-static bool HasExtension(const std::string& path, std::initializer_list<const char*> exts) {
-  const std::string p = Lower(path);
-  for (const char* s : exts) {
-    const size_t n = std::strlen(s);
-    if (p.size() >= n && p.compare(p.size() - n, n, s) == 0) return true;
-  }
-  return false;
-}
 
 LogFormat DetectLogFormat(const std::string& path) {
   // Only a regular file is opened to sniff (a FIFO or a device would block or

@@ -208,11 +208,11 @@ static std::string MissingFilter(hid_t dcpl) {
   return "";
 }
 
-void CheckH5DatasetLocal(hid_t dataset, const std::string& where) {
+void CheckH5DatasetLocal(hid_t dataset, const std::string& where, bool numbers) {
   const hid_t type = H5Dget_type(dataset);
   const bool plain = type >= 0 && IsPlainNumber(type);
   if (type >= 0) H5Tclose(type);
-  if (!plain) {
+  if (numbers && !plain) {
     throw InputError(where + ": not stored as plain numbers (expected IEEE float32/float64 or 8- to 64-bit "
                      "integers)");
   }

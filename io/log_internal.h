@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstring>
+#include <initializer_list>
 #include <limits>
 #include <optional>
 #include <sstream>
@@ -25,6 +27,16 @@ inline std::string Lower(std::string s) {
   return s;
 }
 
+// Whether `path` ends with one of `exts` (".h5"), in any case: how a writer
+// picks the format of a file it is about to (re)write.
+inline bool HasExtension(const std::string& path, std::initializer_list<const char*> exts) {
+  const std::string p = Lower(path);
+  for (const char* s : exts) {
+    const size_t n = std::strlen(s);
+    if (p.size() >= n && p.compare(p.size() - n, n, s) == 0) return true;
+  }
+  return false;
+}
 
 // Checks the sampling-interval invariants on the stream of time stamps.
 class TimeChecker {

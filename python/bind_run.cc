@@ -9,6 +9,7 @@
 #include "analysis/run_input.h"
 #include "fit/fit.h"
 #include "io/atomic_file.h"
+#include "io/batch_table.h"
 #include "io/option_names.h"
 #include "io/provenance.h"
 #include "io/reference_models.h"
@@ -95,6 +96,25 @@ void BindRun(py::module_& m) {
         py::arg("hand") = py::none(), py::arg("b_step") = py::none(), py::arg("b_points") = d.grid.b_points,
         py::arg("report_filter_hz") = d.report_filter_hz, py::arg("command_line") = "",
         "zwidth.run's core: the options made by _estimate_logs_options and _fit_options.");
+  // zwidth.batch's tables (python/zwidth/_batch.py works on their CSV text): io::ReadBatchTable
+  // and io::WriteBatchTable, so that a table at an .h5 path is the command's HDF5 table.
+  m.def("_read_batch_table",
+        [](const std::string& path) {
+          io::BatchTable t;
+          {
+            py::gil_scoped_release release;
+            t = io::ReadBatchTable(path);
+          }
+          return io::FormatBatchCsv(t);
+        },
+        py::arg("path"), "The batch table at path (CSV or HDF5) as CSV text.");
+  m.def("_write_batch_table",
+        [](const std::string& path, const std::string& csv_text) {
+          py::gil_scoped_release release;
+          io::WriteBatchTable(path, io::ParseBatchCsv(csv_text, "the rows of zwidth.batch"));
+        },
+        py::arg("path"), py::arg("csv_text"),
+        "Writes a batch table's CSV text to path atomically: HDF5 for .h5/.hdf5/.he5, else CSV.");
 }
 
 }  // namespace zwidth::python

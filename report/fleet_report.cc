@@ -13,6 +13,7 @@
 #include "io/provenance.h"
 #include "model/plant.h"
 #include "model/sample_period.h"
+#include "report/histogram.h"
 #include "report/report_internal.h"
 #include "stability/zwidth.h"
 
@@ -162,8 +163,9 @@ void RegionFigure(const io::BatchTable& t, const analysis::Population& pop, cons
     << "outliers orange, failures red)" << (dp ? ", the design's (black)" : "") << "; stable below the curve.</small></div>\n";
 }
 
-// A histogram of one column over the ok units, with its median (blue), +-1 MAD sigma (shaded),
-// the design's value (black) and the specs' bounds (red dashes).
+// A histogram of one column over the ok units, with its median (blue), +-1 MAD sigma (shaded)
+// and the specs' bounds (red dashes), over a robust range (report/histogram.h): a wild unit is
+// a labelled count beyond the edge (orange), not the axis' end.
 void Histogram(const io::BatchTable& t, const analysis::PopulationColumn& c, const std::vector<analysis::BatchSpec>& specs,
                std::ostringstream& h) {
   std::vector<double> v;
@@ -174,36 +176,49 @@ void Histogram(const io::BatchTable& t, const analysis::PopulationColumn& c, con
   if (v.size() < 2) return;
   std::vector<double> marks;
   for (const analysis::BatchSpec& s : specs) if (s.column == c.column) marks.push_back(s.bound);
-  double lo = c.min, hi = c.max;
-  for (double m : marks) lo = std::min(lo, m), hi = std::max(hi, m);
-  if (!(hi > lo)) hi = lo + 1;
-  const double pad = 0.05 * (hi - lo);
-  lo -= pad, hi += pad;
-  const int bins = 30;
-  std::vector<int> n(bins, 0);
-  for (double x : v) n[std::min(bins - 1, static_cast<int>((x - lo) / (hi - lo) * bins))]++;
-  Frame f{lo, hi, 0, static_cast<double>(*std::max_element(n.begin(), n.end())) * 1.1};
+  const HistogramBins hb = RobustHistogram(v, c.median, c.mad_sigma, marks);
+  const double lo = hb.lo, hi = hb.hi;
+  const int bins = static_cast<int>(hb.counts.size());
+  Frame f{lo, hi, 0, static_cast<double>(*std::max_element(hb.counts.begin(), hb.counts.end())) * 1.1};
+  if (!(f.y1 > 0)) f.y1 = 1;
   f.w = 300, f.h = 180;
   std::ostringstream s;
   s.imbue(std::locale::classic());
   s << "<svg xmlns='http://www.w3.org/2000/svg' width='" << f.w << "' height='" << f.h << "'>\n";
-  s << "<rect x='" << f.X(c.median - c.mad_sigma) << "' y='" << f.top << "' width='"
-    << std::max(0.0, f.X(c.median + c.mad_sigma) - f.X(c.median - c.mad_sigma)) << "' height='" << f.h - f.top - f.bottom
-    << "' fill='#cde' />\n";
+  const double band0 = std::clamp(c.median - c.mad_sigma, lo, hi), band1 = std::clamp(c.median + c.mad_sigma, lo, hi);
+  s << "<rect x='" << f.X(band0) << "' y='" << f.top << "' width='" << std::max(0.0, f.X(band1) - f.X(band0))
+    << "' height='" << f.h - f.top - f.bottom << "' fill='#cde' />\n";
   for (int i = 0; i < bins; ++i) {
-    if (!n[i]) continue;
+    if (!hb.counts[i]) continue;
     const double x0 = lo + (hi - lo) * i / bins, x1 = lo + (hi - lo) * (i + 1) / bins;
-    s << "<rect x='" << f.X(x0) << "' y='" << f.Y(n[i]) << "' width='" << f.X(x1) - f.X(x0) << "' height='"
-      << f.Y(0) - f.Y(n[i]) << "' fill='#557' />\n";
+    s << "<rect x='" << f.X(x0) << "' y='" << f.Y(hb.counts[i]) << "' width='" << f.X(x1) - f.X(x0) << "' height='"
+      << f.Y(0) - f.Y(hb.counts[i]) << "' fill='#557' />\n";
   }
   auto vline = [&](double x, const char* style) {
+    if (x < lo || x > hi) return;
     s << "<line x1='" << f.X(x) << "' x2='" << f.X(x) << "' y1='" << f.top << "' y2='" << f.Y(0) << "' " << style << "/>\n";
   };
   vline(c.median, "stroke='#06c' stroke-width='2'");
   for (double m : marks) vline(m, "stroke='#c0282b' stroke-width='1.5' stroke-dasharray='4,3'");
+  // The units beyond the range, at its edges.
+  if (hb.below) {
+    s << "<text x='" << f.left + 3 << "' y='" << f.top + 11 << "' font-size='10' fill='#e08a00'>&#9664; " << hb.below
+      << " below</text>\n";
+  }
+  if (hb.above) {
+    s << "<text x='" << f.w - f.right - 3 << "' y='" << f.top + 11 << "' font-size='10' fill='#e08a00' "
+      << "text-anchor='end'>" << hb.above << " above &#9654;</text>\n";
+  }
   Axes(f, c.column, "units", s);
   s << "</svg>";
-  h << "<div class='hist'>" << s.str() << "</div>\n";
+  std::string note;
+  if (hb.below) note += std::to_string(hb.below) + " below the range (min " + Num(hb.min) + ")";
+  if (hb.above) note += (note.empty() ? "" : ", ") + std::to_string(hb.above) + " above it (max " + Num(hb.max) + ")";
+  for (double m : marks) {
+    if (m < lo || m > hi) note += (note.empty() ? "" : ", ") + std::string("spec bound ") + Num(m) + " off the axis";
+  }
+  h << "<div class='hist'>" << s.str() << (note.empty() ? "" : "<br><small>" + HtmlEscaped(note) + "</small>")
+    << "</div>\n";
 }
 
 }  // namespace
@@ -262,7 +277,9 @@ std::string FleetHtml(const io::BatchTable& t, const analysis::Population& pop, 
   for (int d : options.run.delays) RegionFigure(t, pop, design, d, h);
   // Distributions and the population table.
   h << "<h2>Distributions</h2>\n<p>Over the analysed units: blue line the median, shaded &plusmn;1 MAD sigma, red "
-    << "dashes the specs' bounds.</p>\n";
+    << "dashes the specs' bounds; the axis spans the median &plusmn; "
+    << Num(HistogramOptions{}.mad_multiple) << " MAD sigma (clipped to the values), the "
+    << "units beyond it are counted at its edges (orange).</p>\n";
   for (const analysis::PopulationColumn& c : pop.columns) Histogram(t, c, options.specs, h);
   h << "<h2>Population</h2>\n<table class='zw'><tr><th>column</th><th>units</th><th>median</th><th>MAD sigma</th>"
     << "<th>min</th><th>max</th><th>in D&sup2;</th></tr>\n";

@@ -112,6 +112,49 @@ ZWIDTH_NUM_THREADS=2 "$ZW" batch "$T/u[1-3].csv" "$T/u4.h5" "$T/bad.csv" -o "$T/
 ZWIDTH_NUM_THREADS=2 "$ZW" batch "$T/u[1-3].csv" "$T/u4.h5" "$T/bad.csv" -o "$T/j2.csv" --jobs 2 "${FLAGS[@]}" 2>"$T/err"
 cmp -s "$T/j1.csv" "$T/j2.csv" && grep -q "on 2 threads" "$T/err" && ok "--jobs 1 and --jobs 2: the same table" || { bad "threads"; cat "$T/err"; }
 
+# The table as HDF5 (-o *.h5): the CSV's cells, read with h5py as an independent reader (numbers as float64,
+# text as UTF-8, /empty marking the empty cells of a number column); a re-run resumes from it.
+ZWIDTH_NUM_THREADS=2 "$ZW" batch "$T/u[1-3].csv" "$T/u4.h5" "$T/bad.csv" -o "$T/j1.h5" --jobs 1 "${FLAGS[@]}" 2>/dev/null
+h5cmp() {
+  $PY - "$1" "$2" <<'PY'
+import csv, math, sys
+try:
+    import h5py
+except ImportError:
+    sys.exit(77)
+rows = list(csv.DictReader(open(sys.argv[1], newline="")))
+with h5py.File(sys.argv[2], "r") as f:
+    cols = [c.decode() for c in f["columns"][:]]
+    assert cols == list(rows[0].keys()), (cols, list(rows[0]))
+    numeric = 0
+    for c in cols:
+        d = f["batch"][c]
+        assert d.shape == (len(rows),), (c, d.shape)
+        empty = f["empty"][c][:] if "empty" in f and c in f["empty"] else [0] * len(rows)
+        for i, r in enumerate(rows):
+            if d.dtype.kind == "f":
+                want = r[c]
+                if empty[i]:
+                    assert want == "", (c, i, want)
+                    continue
+                got = float(d[i])
+                assert got == float(want) or (math.isnan(got) and math.isnan(float(want))), (c, i, got, want)
+            else:
+                assert d[i].decode() == r[c], (c, i, d[i], r[c])
+        numeric += d.dtype.kind == "f"
+    assert numeric > 20 and f["batch"]["m"].dtype.kind == "f", numeric
+print(f"{len(rows)} rows x {len(cols)} columns, {numeric} of them float64")
+PY
+}
+msg=$(h5cmp "$T/j1.csv" "$T/j1.h5"); rc=$?
+if [ $rc -eq 77 ]; then echo "skip the HDF5 table's h5py check: no h5py"; elif [ $rc -eq 0 ]; then ok "-o t.h5: the CSV table's cells read by h5py ($msg)"; else bad "HDF5 table: $msg"; fi
+ZWIDTH_NUM_THREADS=2 "$ZW" batch "$T/u[1-3].csv" "$T/u4.h5" "$T/bad.csv" -o "$T/j1.h5" --jobs 1 "${FLAGS[@]}" 2>"$T/err"
+msg=$(h5cmp "$T/j1.csv" "$T/j1.h5"); rc=$?
+grep -q "5 resumed, 0 computed" "$T/err" && [ $rc -ne 1 ] && ok "a re-run resumes every unit from the HDF5 table, the same cells" \
+  || { bad "HDF5 resume: $msg"; cat "$T/err"; }
+cp "$T/u4.h5" "$T/log_as_table.h5"
+expect "-o an HDF5 file that is no batch table" "log_as_table.h5.*not a table zwidth batch wrote" "" -- "$ZW" batch "$T/u1.csv" -o "$T/log_as_table.h5" "${FLAGS[@]}"
+
 # End-of-line specs: from u1's own K_CR^max at delay 2 and its std, a bound 6 std below passes, 6 above
 # fails, at the value is marginal (P = 0.5); the corrupt log's verdict is error; a spec on no column: exit 2.
 read v sd < <($PY -c "import csv,sys; r=next(r for r in csv.DictReader(open(sys.argv[1])) if r['serial']==sys.argv[2]); print(r['d2_K_cr_max'], r['d2_K_cr_max_std'])" "$T/j1.csv" "$T/u1.csv")

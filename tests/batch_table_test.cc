@@ -1,13 +1,19 @@
 // io/batch_table.h: manifests as a spreadsheet writes them, the table's CSV
-// read back cell for cell, globs, and the resume hash's sensitivity.
+// and HDF5 read back cell for cell, globs, and the resume hash's sensitivity.
 #include "io/batch_table.h"
 
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <limits>
 #include <random>
 #include <string>
 
 #include <gtest/gtest.h>
 
+#include "io/log.h"
 #include "model/error.h"
 #include "tests/test_util.h"
 
@@ -40,6 +46,125 @@ TEST(BatchTable, CsvOfAnyCellsReadsBackCellForCell) {
   EXPECT_EQ(back.columns, t.columns);
   ASSERT_EQ(back.rows.size(), t.rows.size());
   for (size_t r = 0; r < t.rows.size(); ++r) EXPECT_EQ(back.rows[r], t.rows[r]) << "row " << r;
+}
+
+// A table as zwidth batch writes it, from a seed: value columns as %.17g of
+// random doubles (nan where no std), an error row with the value cells empty,
+// text with commas, quotes and line breaks, a number typed otherwise ("1e-3").
+BatchTable SeededBatch(unsigned seed, int units) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  auto full = [](double v) {
+    char b[40];
+    std::snprintf(b, sizeof b, "%.17g", v);
+    return std::string(b);
+  };
+  BatchTable t;
+  t.columns = {"serial", "logs", "status", "error", "verdict", "verdict_reasons", "input_hash", "fit_quality",
+               "warnings", "m", "m_std", "b", "b_std", "delay_samples", "modes", "mode1_omega", "mode1_omega_std",
+               "d2_K_cr_at_zero_B", "d2_K_cr_max", "d2_K_cr_max_std", "d2_B_t", "d2_B_max", "d2_B_max_from_zero",
+               "note", "empty"};
+  for (int u = 0; u < units; ++u) {
+    std::map<std::string, std::string> r;
+    r["serial"] = "SN-" + std::to_string(u);
+    r["logs"] = "/line/unit " + std::to_string(u) + ",a.h5";
+    r["input_hash"] = full(static_cast<double>(rng()));  // digits, kept as text elsewhere
+    if (u % 5 == 3) {  // a broken log: its error, no values
+      r["status"] = "input_error";
+      r["error"] = "line 3, column 'torque': \"x\" is not a number\nfix the log";
+      r["verdict"] = "error";
+    } else {
+      r["status"] = "ok";
+      r["verdict"] = u % 2 ? "pass" : "marginal";
+      r["verdict_reasons"] = u % 2 ? "" : "d2_K_cr_max>=30 met within noise (value 30.1, std 0.2, P = 0.69)";
+      r["fit_quality"] = "good";
+      r["m"] = full(1.2e-4 * (1 + 0.05 * normal(rng)));
+      r["m_std"] = full(u % 4 == 0 ? std::nan("") : 1e-6 * std::abs(normal(rng)));
+      r["b"] = full(2.5e-3 * (1 + 0.1 * normal(rng)));
+      r["b_std"] = full(3e-4 * std::abs(normal(rng)));
+      r["delay_samples"] = "1";
+      r["modes"] = "1";
+      r["mode1_omega"] = full(1100 + 30 * normal(rng));
+      r["mode1_omega_std"] = full(2 * std::abs(normal(rng)));
+      r["d2_K_cr_at_zero_B"] = full(20 + normal(rng));
+      r["d2_K_cr_max"] = full(30 + normal(rng));
+      r["d2_K_cr_max_std"] = full(0.3);
+      r["d2_B_t"] = full(u == 1 ? std::numeric_limits<double>::infinity() : 0.01 + 1e-4 * normal(rng));
+      r["d2_B_max"] = full(0.05 + 1e-3 * normal(rng));
+      r["d2_B_max_from_zero"] = full(-0.0);
+    }
+    if (u == 2) r["note"] = "1e-3";  // a number as typed: stays text
+    if (u == 4) r["warnings"] = "few averages | band, from 2 Hz";
+    t.rows.push_back(r);
+  }
+  return t;
+}
+
+TEST(BatchTable, HdfAndCsvTablesReadBackEqualCellForCell) {
+  test::TempDir dir;
+  const BatchTable t = SeededBatch(11, 12);
+  WriteBatchTable(dir / "t.csv", t);
+  WriteBatchTable(dir / "t.h5", t);
+  WriteBatchTable(dir / "t.HDF5", t);
+  const BatchTable csv = ReadBatchTable(dir / "t.csv");
+  // What the CSV gives back: every column of every row (a missing cell is empty).
+  const BatchTable want = ParseBatchCsv(FormatBatchCsv(t), "t");
+  EXPECT_EQ(csv.columns, want.columns);
+  EXPECT_EQ(csv.rows, want.rows);
+  for (const char* name : {"t.h5", "t.HDF5"}) {
+    std::ifstream in(dir / name, std::ios::binary);
+    char sig[8] = {};
+    in.read(sig, 8);
+    EXPECT_EQ(std::string(sig, 8), std::string("\x89HDF\r\n\x1a\n", 8)) << name << " is not HDF5";
+    const BatchTable h5 = ReadBatchTable(dir / name);
+    EXPECT_EQ(h5.columns, csv.columns) << name;
+    ASSERT_EQ(h5.rows.size(), csv.rows.size()) << name;
+    for (size_t r = 0; r < csv.rows.size(); ++r) EXPECT_EQ(h5.rows[r], csv.rows[r]) << name << " row " << r;
+  }
+  // An HDF5 table of no rows keeps its columns.
+  WriteBatchTable(dir / "none.h5", BatchTable{{"serial", "m"}, {}});
+  EXPECT_EQ(ReadBatchTable(dir / "none.h5").columns, (std::vector<std::string>{"serial", "m"}));
+  EXPECT_TRUE(ReadBatchTable(dir / "none.h5").rows.empty());
+}
+
+TEST(BatchTable, HdfTableRefusesWhatItCannotHoldAndWritesNothing) {
+  test::TempDir dir;
+  auto message = [&](const BatchTable& t, const std::string& name) {
+    try {
+      WriteBatchTable(dir / name, t);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(message(BatchTable{{"serial", "a/b"}, {{{"serial", "A"}}}}, "slash.h5").find("'a/b'"), std::string::npos);
+  EXPECT_NE(message(BatchTable{{"serial"}, {{{"serial", std::string("A\0B", 3)}}}}, "nul.h5").find("row 1, column 'serial'"),
+            std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(dir / "slash.h5"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "nul.h5"));
+  for (const auto& e : std::filesystem::directory_iterator(dir.path())) ADD_FAILURE() << "left behind: " << e.path();
+}
+
+TEST(BatchTable, AnHdfFileThatIsNoTableOrIsTruncatedIsAnInputErrorNamingIt) {
+  test::TempDir dir;
+  WriteLog(dir / "log.h5", 1000.0, {1, 2, 3}, {4, 5, 6});  // HDF5, but a log
+  auto message = [&](const std::string& path) {
+    try {
+      ReadBatchTable(path);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  const std::string log = message(dir / "log.h5");
+  EXPECT_NE(log.find("log.h5"), std::string::npos) << log;
+  EXPECT_NE(log.find("not a table zwidth batch wrote"), std::string::npos) << log;
+  WriteBatchTable(dir / "t.h5", SeededBatch(3, 4));
+  std::ifstream in(dir / "t.h5", std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string cut = message(dir.Write("cut.h5", bytes.substr(0, bytes.size() / 2)));
+  EXPECT_NE(cut.find("cut.h5"), std::string::npos) << cut;
+  EXPECT_NE(message(dir / "missing.h5").find("not a regular file"), std::string::npos);
 }
 
 TEST(BatchTable, AMissingCellIsWrittenEmpty) {

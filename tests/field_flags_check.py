@@ -4,7 +4,7 @@ them to flags and the Python module to keywords through one table, OptionNames()
 in io/option_names.cc. This check keeps the table from going stale:
 
 1. every Struct::field named in a string literal of the library (model/, ident/,
-   fit/, stability/, io/, analysis/), or by a validator's bad("field ...") that
+   fit/, stability/, io/, analysis/, report/), or by a validator's bad("field ...") that
    prepends "Struct::", has a row in the table, with a flag and a keyword column
    ("" where there is none; tests/python checks that each keyword is one the
    module accepts);
@@ -25,7 +25,7 @@ import sys
 import tempfile
 
 zwidth, src = sys.argv[1], sys.argv[2]
-LIBRARY = ["model", "ident", "fit", "stability", "io", "analysis"]
+LIBRARY = ["model", "ident", "fit", "stability", "io", "analysis", "report"]
 STRING = re.compile(r'"(?:[^"\\\n]|\\.)*"')
 FIELD = re.compile(r"\b[A-Z][A-Za-z0-9]*::[a-z_][a-z_0-9]*")
 failures = []

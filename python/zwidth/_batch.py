@@ -63,6 +63,19 @@ def _unit_row(exe, unit, args):
             return f.read()
 
 
+def _is_hdf5(path):
+    return os.fspath(path).lower().endswith((".h5", ".hdf5", ".he5"))
+
+
+def _table_text(path):
+    """The table at `path` as CSV text: an HDF5 one (.h5) through the library's reader (io::ReadBatchTable)."""
+    if _is_hdf5(path):
+        from . import _zwidth
+        return _zwidth._read_batch_table(path)
+    with open(path, newline="") as f:
+        return f.read()
+
+
 def _manifest_units(manifest):
     folder = os.path.dirname(os.path.abspath(manifest))
     with open(manifest, newline="") as f:
@@ -74,7 +87,8 @@ def _manifest_units(manifest):
 
 
 def batch(logs=None, *, output, manifest=None, client=None, threads=None, zwidth=None, **flags):
-    """Runs `zwidth batch` over `logs` (paths or globs) or a `manifest` CSV into the table `output`.
+    """Runs `zwidth batch` over `logs` (paths or globs) or a `manifest` CSV into the table `output`
+    (CSV, or HDF5 when it ends .h5/.hdf5, as the command writes it).
 
     flags: run's flags as keywords (delays=[2, 4], window_length=1024, reference="table1", ...).
     client: a dask.distributed.Client; the units then run as its tasks. Else on `threads`
@@ -103,10 +117,10 @@ def batch(logs=None, *, output, manifest=None, client=None, threads=None, zwidth
             units += sorted(_glob.glob(a)) if any(c in a for c in "*?[") else [a]
     # Resume: units in an earlier table are left to zwidth's merge, which takes a row whose
     # inputs hash the same and computes again (on this machine) one whose log or options changed.
-    done = set()
+    done, earlier = set(), None
     if os.path.exists(output):
-        with open(output, newline="") as f:
-            done = {r["serial"] for r in csv.DictReader(f)}
+        earlier = _table_text(output)
+        done = {r["serial"] for r in csv.DictReader(io.StringIO(earlier))}
     todo = [u for u in units if (u["serial"] if isinstance(u, dict) else u) not in done]
     if client is not None:
         texts = client.gather(client.map(_unit_row, [exe] * len(todo), todo, [args] * len(todo), pure=False))
@@ -115,25 +129,31 @@ def batch(logs=None, *, output, manifest=None, client=None, threads=None, zwidth
             texts = list(pool.map(lambda u: _unit_row(exe, u, args), todo))
     # The rows, with those of the earlier table, as the table zwidth resumes from.
     rows, columns = [], []
-    sources = [open(output, newline="").read()] if done else []
+    sources = [earlier] if done else []
     for text in sources + texts:
         for r in csv.DictReader(io.StringIO(text)):
             rows.append(r)
             columns += [c for c in r if c not in columns]
-    tmp = f"{output}.rows-{os.getpid()}"
-    try:
-        with open(tmp, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=columns, restval="", lineterminator="\n")
-            w.writeheader()
-            w.writerows(rows)
-        os.replace(tmp, output)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+    merged = io.StringIO()
+    w = csv.DictWriter(merged, fieldnames=columns, restval="", lineterminator="\n")
+    w.writeheader()
+    w.writerows(rows)
+    if _is_hdf5(output):  # the command's HDF5 table (io::WriteBatchTable, atomic)
+        from . import _zwidth
+        _zwidth._write_batch_table(output, merged.getvalue())
+    else:
+        tmp = f"{output}.rows-{os.getpid()}"
+        try:
+            with open(tmp, "w", newline="") as f:
+                f.write(merged.getvalue())
+            os.replace(tmp, output)
+        finally:
+            if os.path.exists(tmp):
+                os.remove(tmp)
     _run(exe, [*whole, "-o", output, *args])  # every unit resumed: zwidth writes the table
+    text = _table_text(output)
     try:
         import pandas
-        return pandas.read_csv(output, dtype={"serial": str, "input_hash": str, "logs": str})
+        return pandas.read_csv(io.StringIO(text), dtype={"serial": str, "input_hash": str, "logs": str})
     except ImportError:
-        with open(output, newline="") as f:
-            return list(csv.DictReader(f))
+        return list(csv.DictReader(io.StringIO(text)))
