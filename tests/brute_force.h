@@ -58,24 +58,34 @@ struct BruteForce {
     for (int i = 0; i < deg; ++i) C(i, deg - 1) = -p(i) / p(deg);
     return C.eigenvalues().cwiseAbs().maxCoeff();
   }
-  // Smallest K > 0 with a root on the circle, by a geometric scan and bisection.
-  double KCritical(double B, double k_lo = 1e-4, double k_hi = 1e5) const {
-    if (MaxRoot(k_lo, B) >= 1.0) return 0.0;
-    double prev = k_lo;
-    for (double k = k_lo * 1.01; k < k_hi; k *= 1.01) {
-      if (MaxRoot(k, B) >= 1.0) {
-        double a = prev, b = k;
-        for (int i = 0; i < 60; ++i) {
-          const double m = 0.5 * (a + b);
-          (MaxRoot(m, B) >= 1.0 ? b : a) = m;
-        }
-        return 0.5 * (a + b);
-      }
-      prev = k;
-    }
-    return std::numeric_limits<double>::infinity();
-  }
+  // Smallest K > 0 with a root on the circle (KCriticalOf below).
+  double KCritical(double B, double k_lo = 1e-4, double k_hi = 1e5) const;
 };
+
+// Smallest K > 0 at which max_root(K, B) reaches 1, by a geometric scan in
+// steps of 1 % from k_lo to k_hi and 60 bisections; 0 when unstable at k_lo,
+// inf when stable up to k_hi.
+template <class MaxRoot>
+double KCriticalOf(const MaxRoot& max_root, double B, double k_lo = 1e-4, double k_hi = 1e5) {
+  if (max_root(k_lo, B) >= 1.0) return 0.0;
+  double prev = k_lo;
+  for (double k = k_lo * 1.01; k < k_hi; k *= 1.01) {
+    if (max_root(k, B) >= 1.0) {
+      double a = prev, b = k;
+      for (int i = 0; i < 60; ++i) {
+        const double m = 0.5 * (a + b);
+        (max_root(m, B) >= 1.0 ? b : a) = m;
+      }
+      return 0.5 * (a + b);
+    }
+    prev = k;
+  }
+  return std::numeric_limits<double>::infinity();
+}
+
+inline double BruteForce::KCritical(double B, double k_lo, double k_hi) const {
+  return KCriticalOf([this](double K, double b) { return MaxRoot(K, b); }, B, k_lo, k_hi);
+}
 
 }  // namespace zwidth::stability
 

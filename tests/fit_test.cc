@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -141,15 +142,35 @@ TEST(Fit, RigidBodyAlone) {
   EXPECT_GE(FitSeeds(p, 5).ok, 4);  // b scatters by ~1.5%: 2% is 1.4 sigma
 }
 
+// Poles and zeros out of order, each by its own permutation: CanonicalOrder
+// sorts the pole pairs by omega and the zero pairs by v, keeps every pair (c
+// with its omega, d with its v) and the response.
 TEST(Fit, CanonicalOrderKeepsTheResponse) {
   model::Plant p = model::PhantomTable1();
-  std::swap(p.modes[0].omega, p.modes[1].omega);
-  std::swap(p.modes[0].c, p.modes[1].c);
+  p.modes.push_back({2 * std::numbers::pi * 300, 60, 2 * std::numbers::pi * 250, 40});
+  // Pole pairs (omega, c) in the order 2, 0, 1 and zero pairs (v, d) in 1, 2, 0 of the sorted ones.
+  model::Plant zeros_sorted = p;
+  std::sort(zeros_sorted.modes.begin(), zeros_sorted.modes.end(), [](auto& x, auto& y) { return x.v < y.v; });  // (v, d) pairs
+  std::vector<model::Mode> sp = p.modes;
+  std::sort(sp.begin(), sp.end(), [](auto& x, auto& y) { return x.omega < y.omega; });
+  const int pole_at[3] = {2, 0, 1}, zero_at[3] = {1, 2, 0};
+  for (int i = 0; i < 3; ++i) {
+    p.modes[i].omega = sp[pole_at[i]].omega;
+    p.modes[i].c = sp[pole_at[i]].c;
+    p.modes[i].v = zeros_sorted.modes[zero_at[i]].v;
+    p.modes[i].d = zeros_sorted.modes[zero_at[i]].d;
+  }
+  ASSERT_FALSE(p.modes[0].omega < p.modes[1].omega && p.modes[1].omega < p.modes[2].omega);
+  ASSERT_FALSE(p.modes[0].v < p.modes[1].v && p.modes[1].v < p.modes[2].v);
   model::Plant q = p;
   CanonicalOrder(&q, nullptr);
-  EXPECT_LT(q.modes[0].omega, q.modes[1].omega);
-  EXPECT_LT(q.modes[0].v, q.modes[1].v);
-  for (double w : {10.0, 300.0, 800.0, 1500.0}) {
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(q.modes[i].omega, sp[i].omega);
+    EXPECT_EQ(q.modes[i].c, sp[i].c);
+    EXPECT_EQ(q.modes[i].v, zeros_sorted.modes[i].v);
+    EXPECT_EQ(q.modes[i].d, zeros_sorted.modes[i].d);
+  }
+  for (double w : {10.0, 300.0, 800.0, 1500.0, 2500.0}) {
     EXPECT_LT(std::abs(model::ContinuousResponse(p, w) - model::ContinuousResponse(q, w)) / std::abs(model::ContinuousResponse(p, w)), 1e-12);
   }
 }

@@ -1,9 +1,11 @@
 // stability/sampled_plant.h: one sampled plant shared by every delay, the
-// comparison, the rows and the figures gives the numbers of the one-loop
-// constructors of ZWidth.
+// comparison, the rows and the figures, checked against an independent
+// closed-loop brute force.
 #include <cmath>
 #include <complex>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
@@ -13,37 +15,48 @@
 #include "model/state_space.h"
 #include "stability/sampled_plant.h"
 #include "stability/zwidth.h"
+#include "tests/brute_force.h"
 
 namespace zwidth::stability {
 namespace {
 
-// A ZWidth on a shared SampledPlant is the same computation as the one-loop
-// constructor: every number bit-identical, at several delays, with and without
-// a velocity filter and a hand; and G_d of the sampled plant is the ZOH
+// A ZWidth on a shared SampledPlant, at several delays, with and without a
+// velocity filter and a hand, against the independent closed-loop brute force
+// (tests/brute_force.h: its own ZOH and the loop's eigenvalues): K_CR(0) and
+// the upper end of the interval from 0 at two dampings to 1e-7, and the
+// stable intervals on a (K, B) grid; and G_d of the sampled plant is the ZOH
 // response of model/state_space.h.
-TEST(SampledPlant, SharedByDelaysGivesTheOneLoopConstructorsNumbers) {
+TEST(SampledPlant, SharedByDelaysAgreesWithTheClosedLoopsEigenvalues) {
   const model::Plant p = model::PhantomTable1();
   LoopOptions filt;
   filt.filter_b = {0.2};
   filt.filter_a = {1.0, -0.8};
   LoopOptions hand = filt;
   hand.hand = {0.3 * p.m, p.b, 50.0};
-  for (const LoopOptions& l : {LoopOptions{}, filt, hand}) {
+  const LoopOptions loops[] = {LoopOptions{}, filt, hand};
+  for (const LoopOptions& l : loops) {
     const SampledPlant sp(p, 1e-3, l.hand);
     for (int d : {0, 2, 7}) {
-      const ZWidth a(sp, d, l), b(p, 1e-3, d, l);
-      const DelaySummary sa = a.Summarize(), sb = b.Summarize();
-      EXPECT_EQ(sa.K_cr_at_zero_B, sb.K_cr_at_zero_B);
-      EXPECT_EQ(sa.K_cr_max, sb.K_cr_max);
-      EXPECT_EQ(sa.B_max, sb.B_max);
-      for (double B : {0.0, 0.01, 0.05}) {
-        const auto ia = a.StableIntervals(B), ib = b.StableIntervals(B);
-        ASSERT_EQ(ia.size(), ib.size());
-        for (size_t k = 0; k < ia.size(); ++k) {
-          EXPECT_EQ(ia[k].K_lo, ib[k].K_lo);
-          EXPECT_EQ(ia[k].K_hi, ib[k].K_hi);
+      const ZWidth a(sp, d, l);
+      const LoopBruteForce brute = MakeBrute(p, l, d, 1e-3);
+      auto max_root = [&](double K, double B) { return brute.MaxRoot(K, B); };
+      const std::string at = "d = " + std::to_string(d) + (&l == &loops[0] ? "" : &l == &loops[1] ? ", filter" : ", filter and hand");
+      const double k0 = KCriticalOf(max_root, 0.0);
+      EXPECT_NEAR(a.Summarize().K_cr_at_zero_B, k0, 1e-7 * k0) << at;
+      for (double B : {0.01, 0.05}) {
+        const std::vector<KInterval> iv = a.StableIntervals(B);
+        const double kb = KCriticalOf(max_root, B);
+        if (kb == 0.0) {
+          EXPECT_TRUE(iv.empty() || iv[0].K_lo > 0.0) << at << " B = " << B;
+        } else {
+          ASSERT_FALSE(iv.empty()) << at << " B = " << B;
+          EXPECT_EQ(iv[0].K_lo, 0.0) << at << " B = " << B;
+          EXPECT_NEAR(iv[0].K_hi, kb, 1e-7 * kb) << at << " B = " << B;
         }
       }
+      const Tally t = Classify(a, max_root, p, 1e-3, d, ClassifyGrid{.b_top = 0.06, .num_b = 4, .min_points = 120, .points_inside = 3});
+      EXPECT_EQ(t.disagree, 0) << at;
+      EXPECT_GT(t.stable, 0) << at;
     }
   }
   // The response against a dense LU solve of C (zI - A)^-1 B + D on the ZOH

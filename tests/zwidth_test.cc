@@ -163,7 +163,7 @@ TEST(StableIntervals, RowAtIsAtAndStableIntervalsTogether) {
   std::mt19937_64 rng(20261128);
   std::uniform_int_distribution<int> delay(0, 12);
   auto same = [](double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); };
-  long rows = 0, with_two = 0;
+  long with_two = 0;
   for (int k = 0; k < 12; ++k) {
     const model::Plant p = k == 0 ? IssueDeviceOne() : test::RandomPlausibleDevice(rng, k % 4);
     const double T = 1e-3;
@@ -189,11 +189,9 @@ TEST(StableIntervals, RowAtIsAtAndStableIntervalsTogether) {
                     r.intervals[j].verified == iv[j].verified)
             << at << " interval " << j;
       }
-      ++rows;
       if (iv.size() > 1 || (!iv.empty() && iv[0].K_lo > 0)) ++with_two;
     }
   }
-  EXPECT_EQ(rows, 12 * 151);
   EXPECT_GT(with_two, 0);  // rows with an interval starting above 0 were compared too
 }
 
