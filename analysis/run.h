@@ -14,6 +14,7 @@
 #include "analysis/friction_amplitude.h"
 #include "analysis/plant_stability.h"
 #include "fit/fit.h"
+#include "fit/friction_fit.h"
 #include "ident/joint.h"
 #include "io/model_json.h"
 #include "stability/haptic_loop.h"
@@ -52,6 +53,7 @@ struct RunInput {
   std::string source;                        // the logs as one name ("a.h5 + b.h5"), as in model.json
   bool whole_record = false;                 // one segment per run (no Welch averaging)
   fit::FitResult fit;                        // the fit of response.frf (status converged)
+  fit::FrictionFitResult friction_fit;       // the friction fit's (status kNotRun: not run)
   io::ModelFile model;                       // that fit as a model file
   std::optional<io::ModelFile> reference;    // compared with, on the paper's loop; none: no comparison
   std::string reference_name;                // what the reference was read from: "table1" or its path

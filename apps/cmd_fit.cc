@@ -35,7 +35,7 @@ void AddFitCommands(CLI::App& app) {
     if (!f->init.empty()) read.push_back(f->init);
     io::CheckOutputFolder(f->out, read);
     f->fit.Resolve(f->est.welch.fmin_hz, f->est.welch.fmax_hz);
-    const fit::FrictionModel friction_model = ResolveFrictionFlag(f->friction);
+    const fit::FrictionModel friction_model = analysis::FrictionModelNamed(f->friction);
     const bool linear = LinearUnits(f->units);
     const std::string source = JoinPaths(f->inputs);
     if (!f->init.empty()) f->fit.o.init = io::ReadModelJsonFor(f->init, "fit --init").plant;
@@ -49,13 +49,15 @@ void AddFitCommands(CLI::App& app) {
         }
       }
     }
-    std::optional<FrictionInput> fin = FrictionInputFor(f->inputs, frf_file, f->est, friction_model);
+    std::string friction_warning;
+    std::optional<FrictionInput> fin =
+        analysis::FrictionInputFor(f->inputs, frf_file, f->est.select, f->est.Resolve(), friction_model, &friction_warning);
+    if (!friction_warning.empty()) std::fprintf(stderr, "warning: %s\n", WithFlags(friction_warning).c_str());
     std::string frf_note;
     const ident::FrequencyResponse frf = frf_file
         ? io::ReadFrequencyResponse(f->inputs[0], f->est.select.sample_rate_hz, &frf_note)
         : EstimateFromLogs(f->inputs, f->est, true).response.frf;
     if (!frf_note.empty()) std::fprintf(stderr, "note: %s\n", io::PrintableLines(frf_note).c_str());
-    if (fin && fin->options.welch.window_length == 0) fin->options.welch.window_length = frf.window_length;
     fit::FitResult r;
     fit::FrictionFitResult ff;
     const io::ModelFile mf = FitToModelFile(frf, f->fit.o, source, &r, fin ? &*fin : nullptr, &ff);

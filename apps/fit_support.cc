@@ -89,33 +89,6 @@ void AddFrictionFlag(CLI::App* cmd, std::string* flag) {
       ->capture_default_str();
 }
 
-fit::FrictionModel ResolveFrictionFlag(const std::string& flag) {
-  fit::FrictionModel m;
-  if (!fit::FrictionModelFromString(flag, &m)) {
-    throw InputError("--friction '" + flag + "': expected none, auto or coulomb");
-  }
-  return m;
-}
-
-std::optional<FrictionInput> FrictionInputFor(const std::vector<std::string>& inputs, bool frf_file,
-                                              const EstimateFlags& est, fit::FrictionModel model) {
-  if (model == fit::FrictionModel::kNone && (frf_file || inputs.size() != 1)) return std::nullopt;
-  if (frf_file || inputs.size() != 1) {
-    if (model == fit::FrictionModel::kCoulomb) {
-      throw InputError(std::string("--friction coulomb needs one time-domain log, not ") +
-                       (frf_file ? "a saved frequency response" : "several logs") +
-                       ": fit one log with --friction coulomb, or the runs with --friction none");
-    }
-    std::fprintf(stderr, "warning: friction not checked (--friction auto needs one time-domain log); the fit is "
-                         "linear-only\n");
-    return std::nullopt;
-  }
-  FrictionInput in{inputs[0], est.select, {}};
-  in.options.model = model;
-  in.options.welch = est.Resolve();
-  return in;
-}
-
 std::string FrictionLine(const fit::FrictionFitResult& ff) {
   if (ff.status == fit::FrictionFitStatus::kFitted) return "friction: " + ff.message + "\n";
   if (ff.status != fit::FrictionFitStatus::kNotDetected || ff.detected) return "";

@@ -87,7 +87,7 @@ constexpr OptionTopic kOptionTopics[] = {
     {"", "noise-coherence-sigmas", "Fit", ""},
     {"", "init", "Fit", ""},
     {"", "starts", "Fit", ""},
-    {"fit", "friction", "Fit", "none auto coulomb"},
+    {"", "friction", "Fit", "none auto coulomb"},  // fit, run
     {"", "max-iterations", "Fit", ""},
     // the device's nonlinear part: friction, encoder and actuator (simulate, relay, wall, check)
     {"", "coulomb", "Friction and actuator", ""},

@@ -109,7 +109,7 @@ const std::vector<OptionName>& OptionNames() {
       {"RobustOptions::transient_periods", "--transient-periods", "transient_periods"},
       {"RobustOptions::fmin_hz", "--fmin", "fmin"},
       {"RobustOptions::fmax_hz", "--fmax", "fmax"},
-      {"FrictionFitOptions::model", "--friction", ""},
+      {"FrictionFitOptions::model", "--friction", "friction"},
       {"FrictionFitOptions::cutoff_hz", "", ""},
       {"FrictionFitOptions::min_speed_fraction", "", ""},
       {"FrictionFitOptions::iterations", "", ""},
