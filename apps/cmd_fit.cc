@@ -2,11 +2,13 @@
 #include <iostream>
 
 #include "apps/common.h"
+#include "analysis/table2.h"
 #include "apps/fit_support.h"
 #include "io/atomic_file.h"
 #include "io/frf_file.h"
 #include "io/printable.h"
 #include "io/provenance.h"
+#include "io/reference_models.h"
 #include "io/stability_files.h"
 #include "model/error.h"
 
@@ -74,6 +76,8 @@ void AddFitCommands(CLI::App& app) {
     std::vector<int> delays = {2, 4, 8};
     double period = kNotGiven;
     bool json = false;
+    bool table2 = false;
+    analysis::Table2Options t2;
   };
   auto c = std::make_shared<CompareFlags>();
   CLI::App* cc = app.add_subcommand("compare", "compare a fitted model with a reference (--reference table1 or a model JSON)");
@@ -82,17 +86,37 @@ void AddFitCommands(CLI::App& app) {
   cc->add_option("--delays", c->delays, "delays for the stability comparison")->delimiter(',')->capture_default_str();
   cc->add_option("--period", c->period, "sample period [s] (default: the model's, else 0.001)");
   cc->add_flag("--json", c->json, "print JSON on standard output");
+  cc->add_flag("--table2", c->table2,
+               "the paper's measured relay points (Table II) beside the model's linear Z-width and its relay "
+               "simulated with Coulomb friction (--coulomb-levels) and an encoder, and the level that explains them best");
+  cc->add_option("--coulomb-levels", c->t2.coulomb_levels, "with --table2: the Coulomb levels tried [N m]")
+      ->delimiter(',')->capture_default_str();
+  cc->add_option("--encoder-step", c->t2.encoder_step, "with --table2: the relay's encoder step [rad per count]")
+      ->capture_default_str();
+  cc->add_option("--amplitude", c->t2.relay_amplitude, "with --table2: the relay amplitude [N m]")->capture_default_str();
+  cc->add_option("--seconds", c->t2.seconds, "with --table2: each relay run's length [s]")->capture_default_str();
   cc->callback([c] {
     io::ModelFile m = io::ReadModelJsonFor(c->model, "compare");  // not const: --period may convert its delay
-    if (c->reference.empty()) {
-      throw InputError("compare needs a reference: --reference table1 (Table I, the paper's PHANToM) or --reference MODEL.json");
+    if (c->reference.empty() && !c->table2) {
+      throw InputError("compare needs a reference: --reference table1 (Table I, the paper's PHANToM) or --reference "
+                       "MODEL.json, or --table2 (the paper's measured relay points)");
     }
-    io::ModelFile r = ReadReference(c->reference);
     if (const std::string why = io::LoopDelaysProblem(c->delays, "--delays"); !why.empty()) throw InputError(why);
+    std::string why;
+    if (c->table2 && !c->t2.IsValid(&why)) throw InputError(why);
     const double T = ResolvePeriod(c->period, &m);
-    app::ConvertDelayToPeriod(&r, T, "the reference");
     std::string text;
-    nlohmann::json j = CompareModels(m, r, c->delays, T, &text);
+    nlohmann::json j = nlohmann::json::object();
+    if (!c->reference.empty()) {
+      io::ModelFile r = ReadReference(c->reference);
+      app::ConvertDelayToPeriod(&r, T, "the reference");
+      j = CompareModels(m, r, c->delays, T, &text);
+    }
+    if (c->table2) {
+      const analysis::Table2Comparison t2 = analysis::CompareTable2(m.plant, T, io::Table2Points(), c->t2);
+      j["table2"] = analysis::Table2Json(t2);
+      text += (text.empty() ? "" : "\n") + analysis::Table2Text(t2);
+    }
     j["provenance"] = io::ProvenanceJson();
     if (c->json) std::cout << j.dump(2) << std::endl;
     else std::printf("%s", io::PrintableLines(text).c_str());

@@ -101,6 +101,10 @@ constexpr OptionTopic kOptionTopics[] = {
     {"", "encoder-step", "Friction and actuator", ""},
     // a second model to compare with
     {"", "reference", "Comparison", "table1", true},
+    {"compare", "table2", "Comparison", ""},
+    {"compare", "coulomb-levels", "Comparison", ""},
+    {"compare", "amplitude", "Comparison", ""},
+    {"compare", "seconds", "Comparison", ""},
     // the haptic loop and its Z-width
     {"", "delays", "Loop and stability", ""},
     {"", "delay", "Loop and stability", ""},
