@@ -86,15 +86,7 @@ void AddFitCommands(CLI::App& app) {
   cc->add_option("--delays", c->delays, "delays for the stability comparison")->delimiter(',')->capture_default_str();
   cc->add_option("--period", c->period, "sample period [s] (default: the model's, else 0.001)");
   cc->add_flag("--json", c->json, "print JSON on standard output");
-  cc->add_flag("--table2", c->table2,
-               "the paper's measured relay points (Table II) beside the model's linear Z-width and its relay "
-               "simulated with Coulomb friction (--coulomb-levels) and an encoder, and the level that explains them best");
-  cc->add_option("--coulomb-levels", c->t2.coulomb_levels, "with --table2: the Coulomb levels tried [N m]")
-      ->delimiter(',')->capture_default_str();
-  cc->add_option("--encoder-step", c->t2.encoder_step, "with --table2: the relay's encoder step [rad per count]")
-      ->capture_default_str();
-  cc->add_option("--amplitude", c->t2.relay_amplitude, "with --table2: the relay amplitude [N m]")->capture_default_str();
-  cc->add_option("--seconds", c->t2.seconds, "with --table2: each relay run's length [s]")->capture_default_str();
+  AddTable2Flags(cc, &c->table2, &c->t2);
   cc->callback([c] {
     io::ModelFile m = io::ReadModelJsonFor(c->model, "compare");  // not const: --period may convert its delay
     if (c->reference.empty() && !c->table2) {

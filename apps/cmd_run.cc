@@ -54,6 +54,7 @@ analysis::RunOptions ResolveRunOptions(RunFlags* f, analysis::RunInput* in) {
   o.grid = f->grid;
   o.report_filter_hz = f->report_filter_hz;
   o.figures = !f->no_figures;
+  if (f->table2) o.table2 = f->table2_options;
   for (int d : f->delays) if (d < 0) throw InputError("--delays must be >= 0");
   if (!f->reference.empty()) {
     in->reference = ReadReference(f->reference, &in->reference_is_table1);
@@ -143,6 +144,7 @@ void AddRunCommand(CLI::App& app) {
   cmd->add_flag("--png", f->png, "also draw every figure as PNG (the report uses the SVGs)")->excludes("--no-figures");
   AddRunAnalysisFlags(cmd, f.get());
   AddFrictionFlag(cmd, &f->friction);
+  AddTable2Flags(cmd, &f->table2, &f->table2_options);
   cmd->callback([f] { Run(*f); });
 }
 

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "analysis/fit_model_file.h"
+#include "analysis/table2.h"
 #include "apps/common.h"
 #include "fit/fit.h"
 #include "fit/friction_fit.h"
@@ -45,6 +46,10 @@ std::string FitReport(const fit::FitResult& r);
 void AddFrictionFlag(CLI::App* cmd, std::string* flag);
 
 using analysis::FrictionInput;  // analysis/fit_model_file.h
+
+// --table2 and its --coulomb-levels, --encoder-step, --amplitude, --seconds
+// (analysis::Table2Options), for `compare` and `run`.
+void AddTable2Flags(CLI::App* cmd, bool* on, analysis::Table2Options* options);
 
 // "friction: ..." (fitted, or none detected) for `fit` and `run`; "" otherwise (the
 // verdict's `friction` reason speaks for a detection that was not fitted).

@@ -105,6 +105,10 @@ constexpr OptionTopic kOptionTopics[] = {
     {"compare", "coulomb-levels", "Comparison", ""},
     {"compare", "amplitude", "Comparison", ""},
     {"compare", "seconds", "Comparison", ""},
+    {"run", "table2", "Comparison", ""},
+    {"run", "coulomb-levels", "Comparison", ""},
+    {"run", "amplitude", "Comparison", ""},
+    {"run", "seconds", "Comparison", ""},
     // the haptic loop and its Z-width
     {"", "delays", "Loop and stability", ""},
     {"", "delay", "Loop and stability", ""},

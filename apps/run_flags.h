@@ -28,6 +28,8 @@ struct RunFlags {
   bool png = false;
   double report_filter_hz = 50.0;
   LoopFlags loop;
+  bool table2 = false;              // run's --table2 (batch has none)
+  analysis::Table2Options table2_options;
 };
 
 // --reference, --delays, the fit, grid, loop, estimate (log) and --units

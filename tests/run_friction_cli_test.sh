@@ -10,6 +10,7 @@
 # - the friction-free log: the default (auto) run folder equals --friction
 #   none's byte for byte but the provenance (friction only detected, not
 #   fitted), with no friction in model.json and none in summary.json;
+# - run --table2: summary.json's "table2" is `compare --table2`'s on run's model;
 # - refusals: a bad word, coulomb on two logs (exit 2, the flag named,
 #   no folder left).
 # Usage: run_friction_cli_test.sh ZWIDTH SRC
@@ -19,7 +20,8 @@ ZW=$1; SRC=$2
 "$ZW" simulate --model "$M" -o "$T/fr.csv" --seconds 20 --coulomb 0.004 --seed 7 >/dev/null 2>&1
 "$ZW" simulate --model "$M" -o "$T/lin.csv" --seconds 12 --seed 3 >/dev/null 2>&1
 "$ZW" fit "$T/fr.csv" --modes auto -o "$T/fit.json" > "$T/fit.out" 2>&1 || { bad "fit"; cat "$T/fit.out"; }
-"$ZW" run "$T/fr.csv" -o "$T/runf" --no-figures --delays 2,4 --b-points 60 > "$T/run.out" 2>&1 \
+"$ZW" run "$T/fr.csv" -o "$T/runf" --no-figures --delays 2,4 --b-points 60 --table2 --coulomb-levels 0,0.004 \
+  --seconds 2 > "$T/run.out" 2>&1 \
   && ok "run on the friction log" || { bad "run on the friction log"; cat "$T/run.out"; }
 grep -q "^friction: Coulomb friction" "$T/run.out" && ok "run prints the friction line" || bad "run: no friction line"
 "$ZW" boundary "$T/runf/model.json" --delays 2,4 --b-points 60 -o "$T/b.csv" --summary "$T/b.json" >/dev/null 2>&1 \
@@ -44,6 +46,15 @@ for mine, theirs in zip(s["boundary"], b["delays"]):
     assert abs(f["coulomb"] - run["friction"]["coulomb_pos"]) < 1e-15
 PY
 grep -q "A\* = " "$T/runf/report.html" && ok "report.html shows A*" || bad "report.html lacks A*"
+# run --table2: summary.json's "table2" is compare --table2's on run's model (the same library call).
+"$ZW" compare "$T/runf/model.json" --table2 --coulomb-levels 0,0.004 --seconds 2 --json > "$T/t2.json" 2>/dev/null \
+  || bad "compare --table2 on run's model"
+$PY - "$T/runf/summary.json" "$T/t2.json" <<'PY' && ok "run --table2: summary.json's table2 is compare's" || bad "run --table2 vs compare"
+import json, sys
+a, b = json.load(open(sys.argv[1]))["table2"], json.load(open(sys.argv[2]))["table2"]
+assert a == b and len(a["points"]) >= 20
+PY
+grep -q "Table II: the paper's relay points" "$T/runf/report.html" && ok "report.html shows Table II" || bad "report.html lacks Table II"
 # The friction-free log: the default is --friction none's folder (the friction only detected).
 "$ZW" run "$T/lin.csv" -o "$T/auto" --reference table1 --delays 2,5 --b-points 100 >/dev/null 2>&1 || bad "run (auto)"
 "$ZW" run "$T/lin.csv" -o "$T/none" --reference table1 --delays 2,5 --b-points 100 --friction none >/dev/null 2>&1 \
@@ -65,7 +76,7 @@ for f in files(a):
 m = json.load(open(os.path.join(a, "model.json")))
 assert "friction" not in m and m["fit"]["friction"]["status"] == "not detected", m["fit"].get("friction")
 s = json.load(open(os.path.join(a, "summary.json")))
-assert all("friction" not in e for e in s["boundary"])
+assert all("friction" not in e for e in s["boundary"]) and "table2" not in s
 PY
 expect "a bad --friction word" "--friction 'viscous': expected none, auto or coulomb" "$T/bad" -- \
   "$ZW" run "$T/lin.csv" -o "$T/bad" --friction viscous

@@ -219,7 +219,8 @@ folder (summary.json, model.json, frf.csv, boundary.csv, report.html, figures/),
 but for the provenance's command and date; nothing on stdout. Keywords: run's own (force,
 figures (False: --no-figures), png, reference ('table1' or a model JSON's path), delays, units,
 velocity_filter_hz, hand (M, B, K), b_step, b_points, report_filter_hz, friction ('auto': the
-Coulomb friction fitted when one log shows it, 'coulomb', 'none': as `zwidth run --friction`)),
+Coulomb friction fitted when one log shows it, 'coulomb', 'none': as `zwidth run --friction`),
+table2 (True: Table II's relay points beside the model, as `zwidth run --table2`)),
 estimate_logs' (the
 window, the selectors, whole_record, ...; fmin/fmax also bound the fit) and fit's (modes, default
 'auto' as `zwidth run`, delay_samples, allow_short, ...). OUT_DIR must be new or empty (or
