@@ -52,6 +52,7 @@ std::string Cell(const Table2Prediction& p) {
   if (!Positive(p.K)) return std::isinf(p.K) ? "inf" : "none";
   std::string s = Num("%.3g", p.K) + "@" + Num("%.3g", p.f_hz);
   if (std::isfinite(p.K_rel_error)) s += " " + Num("%+.0f%%", 100.0 * p.K_rel_error);
+  if (p.unsettled > 1e-3) s += "~";  // not a steady oscillation (RelayResult::unsettled)
   return s;
 }
 
@@ -60,7 +61,8 @@ nlohmann::json PredictionJson(const Table2Prediction& p) {
   return {{"K", std::isinf(p.K) ? nlohmann::json("inf") : num(p.K)},
           {"f_hz", num(p.f_hz)},
           {"K_rel_error", num(p.K_rel_error)},
-          {"f_rel_error", num(p.f_rel_error)}};
+          {"f_rel_error", num(p.f_rel_error)},
+          {"unsettled", num(p.unsettled)}};
 }
 
 }  // namespace
@@ -112,7 +114,10 @@ Table2Comparison CompareTable2(const model::Plant& plant, double period_s, const
     if (k == keys.size()) keys.emplace_back(p.delay_samples, p.B);
     key_of.push_back(k);
   }
-  std::vector<std::pair<double, double>> readings(keys.size() * L);  // (K, f) per key and level
+  struct Reading {
+    double K, f_hz, unsettled;
+  };
+  std::vector<Reading> readings(keys.size() * L);  // per key and level
   ParallelFor(readings.size(), [&](size_t i) {
     stability::RelayOptions ro;
     ro.period_s = period_s;
@@ -124,13 +129,14 @@ Table2Comparison CompareTable2(const model::Plant& plant, double period_s, const
     ro.encoder_step = o.encoder_step;
     ro.refine = false;  // the paper's reading
     const stability::RelayResult r = stability::SimulateRelay(plant, ro);
-    readings[i] = {r.K_cr_peak, r.f_cr_peak_hz};
+    readings[i] = {r.K_cr_peak, r.f_cr_peak_hz, r.unsettled};
   });
   c.relay_runs = static_cast<int>(readings.size());
   for (size_t j = 0; j < c.rows.size(); ++j) {
     for (size_t l = 0; l < L; ++l) {
-      const auto& [K, f] = readings[key_of[j] * L + l];
-      c.rows[j].relay.push_back(Prediction(K, f, c.rows[j].point));
+      const Reading& r = readings[key_of[j] * L + l];
+      c.rows[j].relay.push_back(Prediction(r.K, r.f_hz, c.rows[j].point));
+      c.rows[j].relay.back().unsettled = r.unsettled;
     }
   }
   std::vector<const Table2Prediction*> pred(c.rows.size());
@@ -178,7 +184,8 @@ std::string Table2Text(const Table2Comparison& c) {
   std::string s = "Table II (the paper's relay on the real PHANToM) beside the model: K_cr@f_cr [N m/rad@Hz], % of K "
                   "from the point\nrelay: simulated with Coulomb F_c at the motor, encoder step " +
                   Num("%.6g", c.encoder_step) + " rad, amplitude " + Num("%g", c.relay_amplitude) + " N m, " +
-                  Num("%g", c.seconds) + " s, read at the spectral peak (as the paper read it)\n";
+                  Num("%g", c.seconds) + " s, read at the spectral peak (as the paper read it); ~: the oscillation was still "
+                  "settling (the two halves' |L| more than 0.1 % apart)\n";
   char line[256];
   std::snprintf(line, sizeof line, "%-2s %-6s %-14s %-18s", "d", "B", "measured", "linear exact");
   s += line;

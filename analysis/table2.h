@@ -49,6 +49,10 @@ struct Table2Prediction {
   // (or f) is not a finite number > 0.
   double K_rel_error = std::numeric_limits<double>::quiet_NaN();
   double f_rel_error = std::numeric_limits<double>::quiet_NaN();
+  // Relay only: RelayResult::unsettled, |L| of the steady part's two halves
+  // apart (relative); over 1e-3 the oscillation was still settling and the
+  // reading is not a steady one (the text marks it "~"). NaN: linear.
+  double unsettled = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct Table2Row {
