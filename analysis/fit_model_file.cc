@@ -92,6 +92,36 @@ nlohmann::json FrictionRecord(const fit::FrictionFitResult& ff) {
 
 }  // namespace
 
+fit::FrictionModel FrictionModelNamed(const std::string& word) {
+  fit::FrictionModel m;
+  if (!fit::FrictionModelFromString(word, &m)) {
+    throw InputError("FrictionFitOptions::model '" + word.substr(0, 40) + "': expected none, auto or coulomb");
+  }
+  return m;
+}
+
+std::optional<FrictionInput> FrictionInputFor(const std::vector<std::string>& logs, bool frf_file,
+                                              const io::LogSelect& select, const ident::WelchOptions& welch,
+                                              fit::FrictionModel model, std::string* warning) {
+  if (frf_file || logs.size() != 1) {
+    if (model == fit::FrictionModel::kCoulomb) {
+      throw InputError(std::string("FrictionFitOptions::model coulomb needs one time-domain log, not ") +
+                       (frf_file ? "a saved frequency response" : std::to_string(logs.size()) + " logs") +
+                       ": fit one log with FrictionFitOptions::model coulomb, or the runs with "
+                       "FrictionFitOptions::model none");
+    }
+    if (model == fit::FrictionModel::kAuto && warning) {
+      *warning = "friction not checked (FrictionFitOptions::model auto needs one time-domain log); the fit is "
+                 "linear-only";
+    }
+    return std::nullopt;
+  }
+  FrictionInput in{logs[0], select, {}};
+  in.options.model = model;
+  in.options.welch = welch;
+  return in;
+}
+
 io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::FitOptions& o,
                              const std::string& source, const FitMessages& messages, fit::FitResult* out,
                              const FrictionInput* friction, fit::FrictionFitResult* friction_out) {
@@ -118,8 +148,10 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
                                              r.reasons.front().code == "columns_swapped");
   if (friction && r.status == fit::FitStatus::kConverged && !broken) {
     const io::Log log = io::ReadLog(friction->path, friction->select);
+    fit::FrictionFitOptions fo = friction->options;
+    if (fo.welch.window_length == 0) fo.welch.window_length = frf.window_length;  // the linear fit's estimate
     try {
-      ff = fit::FitLibrary().fit_friction_quiet(log.input, log.output, log.info.sample_rate_hz, r, o, friction->options);
+      ff = fit::FitLibrary().fit_friction_quiet(log.input, log.output, log.info.sample_rate_hz, r, o, fo);
     } catch (const InputError& e) {  // e.g. too few usable samples: auto goes on linear-only
       if (friction->options.model == fit::FrictionModel::kCoulomb) throw;
       r.warnings.push_back(std::string("friction not checked: ") + e.what());

@@ -6,7 +6,9 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "fit/fit.h"
 #include "fit/friction_fit.h"
@@ -21,8 +23,23 @@ namespace zwidth::analysis {
 struct FrictionInput {
   std::string path;
   io::LogSelect select;
-  fit::FrictionFitOptions options;
+  fit::FrictionFitOptions options;  // welch.window_length 0: the fitted response's window
 };
+
+// The word of FrictionFitOptions::model ("none", "auto", "coulomb"); an
+// InputError naming the field otherwise.
+fit::FrictionModel FrictionModelNamed(const std::string& word);
+
+// The friction fit's input of a fit of `logs` (or of a saved response,
+// `frf_file`): the one rule of `fit`, `run` and Python's zwidth.run. One
+// time-domain log: that log with the estimate's selection and Welch options
+// (window_length 0 is the fitted response's, set by FitToModelFile), also for
+// kNone (the friction is then only detected and recorded). Several logs or a
+// saved response: none; for kAuto *warning says that friction was not checked,
+// and kCoulomb is an InputError naming FrictionFitOptions::model. Reads nothing.
+std::optional<FrictionInput> FrictionInputFor(const std::vector<std::string>& logs, bool frf_file,
+                                              const io::LogSelect& select, const ident::WelchOptions& welch,
+                                              fit::FrictionModel model, std::string* warning);
 
 // How the caller shows the library's texts, which name option fields.
 struct FitMessages {
@@ -37,8 +54,9 @@ struct FitMessages {
 // Fits and packs the model file (std, fit metrics; every text of its "fit"
 // record in messages.words); throws ComputationError when the fit does not
 // converge, InputError for a log too short for the shortest window. With
-// `friction`, the friction fit (fit::FitFriction) follows: its linear part and
-// friction go into the file.
+// `friction`, the friction fit (fit::FitFriction) follows, with the window of
+// `frf` unless friction->options.welch.window_length says otherwise: its linear
+// part and friction go into the file.
 io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::FitOptions& o,
                              const std::string& source, const FitMessages& messages = {},
                              fit::FitResult* result = nullptr, const FrictionInput* friction = nullptr,

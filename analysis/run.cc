@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "analysis/laps.h"
+#include "io/reference_models.h"
 #include "io/stability_files.h"
 #include "stability/uncertainty.h"
 #include "model/error.h"
@@ -208,6 +209,7 @@ bool RunOptions::IsValid(std::string* why) const {
   }
   if (figures && !(std::isfinite(report_filter_hz) && report_filter_hz > 0))
     return fail("RunOptions::report_filter_hz must be > 0 and finite");
+  if (table2 && !table2->IsValid(why)) return false;
   return grid.IsValid(why);
 }
 
@@ -252,6 +254,10 @@ RunAnalysis Analyse(RunInput input, const RunOptions& o) {
         plain ? DelayStability{st.summaries, st.stds, st.has_std} : SummarizeDelays(a.input.model, T, o.delays);
     a.comparison = CompareModels(a.input.model, ref, o.delays, model_st, ref_sums, o.linear);
     a.stages.push_back({computed_here ? "compare (reference Z-width)" : "compare", laps.Lap()});
+  }
+  if (o.table2) {
+    a.table2 = CompareTable2(a.stability.sampled.plant(), T, io::Table2Points(), *o.table2);
+    a.stages.push_back({"Table II (relay runs)", laps.Lap()});
   }
   if (o.figures) {
     a.figures = MakeFigures(a, ref_zs);

@@ -13,7 +13,9 @@
 #include "analysis/compare.h"
 #include "analysis/friction_amplitude.h"
 #include "analysis/plant_stability.h"
+#include "analysis/table2.h"
 #include "fit/fit.h"
+#include "fit/friction_fit.h"
 #include "ident/joint.h"
 #include "io/model_json.h"
 #include "stability/haptic_loop.h"
@@ -28,6 +30,9 @@ struct RunOptions {
   double report_filter_hz = 50.0;       // the loop figure's first-order velocity low-pass [Hz], > 0
   bool figures = true;                  // compute the figure data (Bode, curves, regions)
   bool linear = false;                  // comparison labels in kg and N s/m instead of kg m^2, N m s/rad
+  // With a value: Table II's relay points beside the model (CompareTable2, the
+  // log at 1 kHz), in summary.json's "table2" and the report; none: not computed.
+  std::optional<Table2Options> table2;
   // False with *why naming the field when a field is out of range.
   bool IsValid(std::string* why) const;
 };
@@ -52,6 +57,7 @@ struct RunInput {
   std::string source;                        // the logs as one name ("a.h5 + b.h5"), as in model.json
   bool whole_record = false;                 // one segment per run (no Welch averaging)
   fit::FitResult fit;                        // the fit of response.frf (status converged)
+  fit::FrictionFitResult friction_fit;       // the friction fit's (status kNotRun: not run)
   io::ModelFile model;                       // that fit as a model file
   std::optional<io::ModelFile> reference;    // compared with, on the paper's loop; none: no comparison
   std::string reference_name;                // what the reference was read from: "table1" or its path
@@ -109,6 +115,7 @@ struct RunAnalysis {
   // encoder step is known here), also in stability.rows' friction columns.
   std::vector<FrictionAmplitudeRow> friction_amplitudes;
   FrictionAmplitudeOptions friction_options;
+  std::optional<Table2Comparison> table2;      // with options.table2
 };
 
 // Throws InputError for invalid options (the field named), ComputationError

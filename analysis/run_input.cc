@@ -22,6 +22,12 @@ RunInput EstimateAndFit(RunInput in, const EstimateFitOptions& o, const std::vec
   if (ms) *ms = 0.0;
   LogsEstimateOptions eo = o.estimate;
   eo.for_fit = true;
+  std::optional<FrictionInput> friction;  // refused (coulomb on several logs) before anything is read
+  if (o.friction) {
+    std::string warning;
+    friction = FrictionInputFor(in.logs, false, eo.select, eo.welch, *o.friction, &warning);
+    if (!warning.empty() && m.fit.warning) m.fit.warning(warning);
+  }
   LogsEstimate est = EstimateFromLogs(in.logs, eo, m.estimate);
   in.response = std::move(est.response);
   in.total_samples = est.total_samples;
@@ -49,7 +55,8 @@ RunInput EstimateAndFit(RunInput in, const EstimateFitOptions& o, const std::vec
         // No thread to be had: Analyse computes the reference after the fit.
       }
     }
-    in.model = FitToModelFile(in.response.frf, o.fit, in.source, m.fit, &in.fit);
+    in.model = FitToModelFile(in.response.frf, o.fit, in.source, m.fit, &in.fit, friction ? &*friction : nullptr,
+                              &in.friction_fit);
   }  // joined
   if (ref_error) std::rethrow_exception(ref_error);
   in.reference_stability = std::move(ref);

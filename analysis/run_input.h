@@ -2,10 +2,12 @@
 // a RunInput for analysis::Analyse: the logs' response
 // (analysis::EstimateFromLogs), the reference's delay in the log's period
 // (io::ConvertDelayToPeriod) and its Z-width on a thread of its own while the
-// fit runs (FitToModelFile). The CLI and Python's zwidth.run call it.
+// fit runs (FitToModelFile, with the friction fit of FrictionInputFor). The
+// CLI and Python's zwidth.run call it.
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -20,6 +22,9 @@ struct EstimateFitOptions {
   fit::FitOptions fit;
   // With a reference: its Z-width on a thread of its own while the fit runs.
   bool reference_thread = true;
+  // FrictionFitOptions::model of the friction fit (FrictionInputFor: one log),
+  // as `fit`'s; std::nullopt: friction not looked at.
+  std::optional<fit::FrictionModel> friction = fit::FrictionModel::kAuto;
 };
 
 // What the caller shows as the run goes (each may be empty): the estimate's
@@ -33,8 +38,10 @@ struct RunMessages {
 };
 
 // `in` holds logs, source and the reference (when any); returns it with the
-// response, the fit, the model and the reference's Z-width. *ms: the time of
-// the two stages. Throws as EstimateFromLogs and FitToModelFile.
+// response, the fit (and the friction fit's result), the model and the
+// reference's Z-width. *ms: the time of the two stages. Throws as
+// FrictionInputFor (before reading), EstimateFromLogs and FitToModelFile; a
+// friction not checked (several logs, auto) is a messages.fit.warning.
 RunInput EstimateAndFit(RunInput in, const EstimateFitOptions& options, const std::vector<int>& delays,
                         const RunMessages& messages = {}, double* ms = nullptr);
 

@@ -2,11 +2,13 @@
 #include <iostream>
 
 #include "apps/common.h"
+#include "analysis/table2.h"
 #include "apps/fit_support.h"
 #include "io/atomic_file.h"
 #include "io/frf_file.h"
 #include "io/printable.h"
 #include "io/provenance.h"
+#include "io/reference_models.h"
 #include "io/stability_files.h"
 #include "model/error.h"
 
@@ -35,7 +37,7 @@ void AddFitCommands(CLI::App& app) {
     if (!f->init.empty()) read.push_back(f->init);
     io::CheckOutputFolder(f->out, read);
     f->fit.Resolve(f->est.welch.fmin_hz, f->est.welch.fmax_hz);
-    const fit::FrictionModel friction_model = ResolveFrictionFlag(f->friction);
+    const fit::FrictionModel friction_model = analysis::FrictionModelNamed(f->friction);
     const bool linear = LinearUnits(f->units);
     const std::string source = JoinPaths(f->inputs);
     if (!f->init.empty()) f->fit.o.init = io::ReadModelJsonFor(f->init, "fit --init").plant;
@@ -49,13 +51,15 @@ void AddFitCommands(CLI::App& app) {
         }
       }
     }
-    std::optional<FrictionInput> fin = FrictionInputFor(f->inputs, frf_file, f->est, friction_model);
+    std::string friction_warning;
+    std::optional<FrictionInput> fin =
+        analysis::FrictionInputFor(f->inputs, frf_file, f->est.select, f->est.Resolve(), friction_model, &friction_warning);
+    if (!friction_warning.empty()) std::fprintf(stderr, "warning: %s\n", WithFlags(friction_warning).c_str());
     std::string frf_note;
     const ident::FrequencyResponse frf = frf_file
         ? io::ReadFrequencyResponse(f->inputs[0], f->est.select.sample_rate_hz, &frf_note)
         : EstimateFromLogs(f->inputs, f->est, true).response.frf;
     if (!frf_note.empty()) std::fprintf(stderr, "note: %s\n", io::PrintableLines(frf_note).c_str());
-    if (fin && fin->options.welch.window_length == 0) fin->options.welch.window_length = frf.window_length;
     fit::FitResult r;
     fit::FrictionFitResult ff;
     const io::ModelFile mf = FitToModelFile(frf, f->fit.o, source, &r, fin ? &*fin : nullptr, &ff);
@@ -72,6 +76,8 @@ void AddFitCommands(CLI::App& app) {
     std::vector<int> delays = {2, 4, 8};
     double period = kNotGiven;
     bool json = false;
+    bool table2 = false;
+    analysis::Table2Options t2;
   };
   auto c = std::make_shared<CompareFlags>();
   CLI::App* cc = app.add_subcommand("compare", "compare a fitted model with a reference (--reference table1 or a model JSON)");
@@ -80,17 +86,29 @@ void AddFitCommands(CLI::App& app) {
   cc->add_option("--delays", c->delays, "delays for the stability comparison")->delimiter(',')->capture_default_str();
   cc->add_option("--period", c->period, "sample period [s] (default: the model's, else 0.001)");
   cc->add_flag("--json", c->json, "print JSON on standard output");
+  AddTable2Flags(cc, &c->table2, &c->t2);
   cc->callback([c] {
     io::ModelFile m = io::ReadModelJsonFor(c->model, "compare");  // not const: --period may convert its delay
-    if (c->reference.empty()) {
-      throw InputError("compare needs a reference: --reference table1 (Table I, the paper's PHANToM) or --reference MODEL.json");
+    if (c->reference.empty() && !c->table2) {
+      throw InputError("compare needs a reference: --reference table1 (Table I, the paper's PHANToM) or --reference "
+                       "MODEL.json, or --table2 (the paper's measured relay points)");
     }
-    io::ModelFile r = ReadReference(c->reference);
     if (const std::string why = io::LoopDelaysProblem(c->delays, "--delays"); !why.empty()) throw InputError(why);
+    std::string why;
+    if (c->table2 && !c->t2.IsValid(&why)) throw InputError(why);
     const double T = ResolvePeriod(c->period, &m);
-    app::ConvertDelayToPeriod(&r, T, "the reference");
     std::string text;
-    nlohmann::json j = CompareModels(m, r, c->delays, T, &text);
+    nlohmann::json j = nlohmann::json::object();
+    if (!c->reference.empty()) {
+      io::ModelFile r = ReadReference(c->reference);
+      app::ConvertDelayToPeriod(&r, T, "the reference");
+      j = CompareModels(m, r, c->delays, T, &text);
+    }
+    if (c->table2) {
+      const analysis::Table2Comparison t2 = analysis::CompareTable2(m.plant, T, io::Table2Points(), c->t2);
+      j["table2"] = analysis::Table2Json(t2);
+      text += (text.empty() ? "" : "\n") + analysis::Table2Text(t2);
+    }
     j["provenance"] = io::ProvenanceJson();
     if (c->json) std::cout << j.dump(2) << std::endl;
     else std::printf("%s", io::PrintableLines(text).c_str());

@@ -42,8 +42,8 @@ analysis::RunInput EstimateAndFit(const RunFlags& f, const analysis::RunOptions&
                                   double* t_total_ms, bool reference_thread) {
   analysis::RunMessages m = RunMessagesOfCli();
   m.fit.words = WithFlags;  // the report and model.json show the CLI's flags
-  return analysis::EstimateAndFit(std::move(in), {f.est.Options(true), f.fit.o, reference_thread}, o.delays, m,
-                                  t_total_ms);
+  return analysis::EstimateAndFit(std::move(in), {f.est.Options(true), f.fit.o, reference_thread, std::nullopt},
+                                  o.delays, m, t_total_ms);
 }
 
 analysis::RunOptions ResolveRunOptions(RunFlags* f, analysis::RunInput* in) {
@@ -54,6 +54,7 @@ analysis::RunOptions ResolveRunOptions(RunFlags* f, analysis::RunInput* in) {
   o.grid = f->grid;
   o.report_filter_hz = f->report_filter_hz;
   o.figures = !f->no_figures;
+  if (f->table2) o.table2 = f->table2_options;
   for (int d : f->delays) if (d < 0) throw InputError("--delays must be >= 0");
   if (!f->reference.empty()) {
     in->reference = ReadReference(f->reference, &in->reference_is_table1);
@@ -76,6 +77,8 @@ void Run(RunFlags& f) {
   in.logs = f.logs;
   in.source = JoinPaths(f.logs);
   analysis::RunOptions o = ResolveRunOptions(&f, &in);
+  analysis::EstimateFitOptions eo{f.est.Options(true), f.fit.o};
+  eo.friction = analysis::FrictionModelNamed(f.friction);
   // Everything is built in a temporary sibling folder and moved into place
   // at the end (io::OutputFolder): a failure or a signal leaves nothing, and
   // two runs into one folder cannot mix.
@@ -83,7 +86,7 @@ void Run(RunFlags& f) {
   std::fprintf(stderr, "zwidth run %s -> %s\n", io::Printable(in.source).c_str(), io::Printable(f.outdir).c_str());
   analysis::RunMessages m = RunMessagesOfCli();
   m.fit.words = WithFlags;  // the report and model.json show the CLI's flags
-  report::RunJob job{std::move(in), {f.est.Options(true), f.fit.o}, o,
+  report::RunJob job{std::move(in), eo, o,
                      [&f](double period_s) { return ResolveLoops(f.loop, period_s)[0]; },
                      {.draw_figures = true, .png = f.png, .fit_report = "", .command_line = CommandLine()}};
   const report::RunJobResult r = report::RunToFolder(std::move(job), folder, m);
@@ -103,7 +106,8 @@ void Run(RunFlags& f) {
   folder.Commit();
   const std::string params = analysis::ParameterTable(a.input.model, o.linear);
   const std::string cmp = a.comparison ? a.comparison->text : "";
-  std::printf("fit quality: %s\n%s\n%s", fit::ToString(a.input.fit.quality).c_str(), io::PrintableLines(params).c_str(),
+  std::printf("fit quality: %s\n%s%s\n%s", fit::ToString(a.input.fit.quality).c_str(),
+              io::PrintableLines(params).c_str(), FrictionLine(a.input.friction_fit).c_str(),
               io::PrintableLines(cmp).c_str());
   std::fprintf(stderr, "%s", io::PrintableLines(fit_report).c_str());
   const std::filesystem::path final_out(folder.path());
@@ -139,6 +143,8 @@ void AddRunCommand(CLI::App& app) {
   cmd->add_flag("--no-figures", f->no_figures, "no figures/ folder, no gnuplot: the data files and the report only");
   cmd->add_flag("--png", f->png, "also draw every figure as PNG (the report uses the SVGs)")->excludes("--no-figures");
   AddRunAnalysisFlags(cmd, f.get());
+  AddFrictionFlag(cmd, &f->friction);
+  AddTable2Flags(cmd, &f->table2, &f->table2_options);
   cmd->callback([f] { Run(*f); });
 }
 

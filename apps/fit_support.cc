@@ -89,31 +89,17 @@ void AddFrictionFlag(CLI::App* cmd, std::string* flag) {
       ->capture_default_str();
 }
 
-fit::FrictionModel ResolveFrictionFlag(const std::string& flag) {
-  fit::FrictionModel m;
-  if (!fit::FrictionModelFromString(flag, &m)) {
-    throw InputError("--friction '" + flag + "': expected none, auto or coulomb");
-  }
-  return m;
-}
-
-std::optional<FrictionInput> FrictionInputFor(const std::vector<std::string>& inputs, bool frf_file,
-                                              const EstimateFlags& est, fit::FrictionModel model) {
-  if (model == fit::FrictionModel::kNone && (frf_file || inputs.size() != 1)) return std::nullopt;
-  if (frf_file || inputs.size() != 1) {
-    if (model == fit::FrictionModel::kCoulomb) {
-      throw InputError(std::string("--friction coulomb needs one time-domain log, not ") +
-                       (frf_file ? "a saved frequency response" : "several logs") +
-                       ": fit one log with --friction coulomb, or the runs with --friction none");
-    }
-    std::fprintf(stderr, "warning: friction not checked (--friction auto needs one time-domain log); the fit is "
-                         "linear-only\n");
-    return std::nullopt;
-  }
-  FrictionInput in{inputs[0], est.select, {}};
-  in.options.model = model;
-  in.options.welch = est.Resolve();
-  return in;
+void AddTable2Flags(CLI::App* cmd, bool* on, analysis::Table2Options* t2) {
+  cmd->add_flag("--table2", *on,
+                "the paper's measured relay points (Table II) beside the model's linear Z-width and its relay "
+                "simulated with Coulomb friction (--coulomb-levels) and an encoder, and the level that explains them "
+                "best");
+  cmd->add_option("--coulomb-levels", t2->coulomb_levels, "with --table2: the Coulomb levels tried [N m]")
+      ->delimiter(',')->capture_default_str();
+  cmd->add_option("--encoder-step", t2->encoder_step, "with --table2: the relay's encoder step [rad per count]")
+      ->capture_default_str();
+  cmd->add_option("--amplitude", t2->relay_amplitude, "with --table2: the relay amplitude [N m]")->capture_default_str();
+  cmd->add_option("--seconds", t2->seconds, "with --table2: each relay run's length [s]")->capture_default_str();
 }
 
 std::string FrictionLine(const fit::FrictionFitResult& ff) {

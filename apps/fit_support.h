@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "analysis/fit_model_file.h"
+#include "analysis/table2.h"
 #include "apps/common.h"
 #include "fit/fit.h"
 #include "fit/friction_fit.h"
@@ -39,19 +40,18 @@ void AddFitFlags(CLI::App* cmd, FitFlags* flags);
 // choices, and the stabilisation table, as printed by `fit` and `run`.
 std::string FitReport(const fit::FitResult& r);
 
-// --friction none|auto|coulomb (fit::FrictionModel), for `fit`.
+// --friction none|auto|coulomb (FrictionFitOptions::model), for `fit` and
+// `run`; analysis::FrictionModelNamed parses it, analysis::FrictionInputFor
+// makes the friction fit's input.
 void AddFrictionFlag(CLI::App* cmd, std::string* flag);
-fit::FrictionModel ResolveFrictionFlag(const std::string& flag);  // InputError naming the flag
 
 using analysis::FrictionInput;  // analysis/fit_model_file.h
 
-// The friction fit's input for `fit`: the one time-domain log with the
-// estimate's selection and Welch options; none (with a warning for auto) for
-// several logs or a saved response, which --friction coulomb refuses.
-std::optional<FrictionInput> FrictionInputFor(const std::vector<std::string>& inputs, bool frf_file,
-                                              const EstimateFlags& est, fit::FrictionModel model);
+// --table2 and its --coulomb-levels, --encoder-step, --amplitude, --seconds
+// (analysis::Table2Options), for `compare` and `run`.
+void AddTable2Flags(CLI::App* cmd, bool* on, analysis::Table2Options* options);
 
-// "friction: ..." (fitted, or none detected) for `fit`; "" otherwise (the
+// "friction: ..." (fitted, or none detected) for `fit` and `run`; "" otherwise (the
 // verdict's `friction` reason speaks for a detection that was not fitted).
 std::string FrictionLine(const fit::FrictionFitResult& ff);
 

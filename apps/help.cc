@@ -87,7 +87,7 @@ constexpr OptionTopic kOptionTopics[] = {
     {"", "noise-coherence-sigmas", "Fit", ""},
     {"", "init", "Fit", ""},
     {"", "starts", "Fit", ""},
-    {"fit", "friction", "Fit", "none auto coulomb"},
+    {"", "friction", "Fit", "none auto coulomb"},  // fit, run
     {"", "max-iterations", "Fit", ""},
     // the device's nonlinear part: friction, encoder and actuator (simulate, relay, wall, check)
     {"", "coulomb", "Friction and actuator", ""},
@@ -101,6 +101,14 @@ constexpr OptionTopic kOptionTopics[] = {
     {"", "encoder-step", "Friction and actuator", ""},
     // a second model to compare with
     {"", "reference", "Comparison", "table1", true},
+    {"compare", "table2", "Comparison", ""},
+    {"compare", "coulomb-levels", "Comparison", ""},
+    {"compare", "amplitude", "Comparison", ""},
+    {"compare", "seconds", "Comparison", ""},
+    {"run", "table2", "Comparison", ""},
+    {"run", "coulomb-levels", "Comparison", ""},
+    {"run", "amplitude", "Comparison", ""},
+    {"run", "seconds", "Comparison", ""},
     // the haptic loop and its Z-width
     {"", "delays", "Loop and stability", ""},
     {"", "delay", "Loop and stability", ""},

@@ -9,11 +9,13 @@
 #include <complex>
 #include <limits>
 #include <cstdio>
+#include <mutex>
 #include <numbers>
 
 #include <Eigen/Dense>
 
 #include "model/error.h"
+#include "model/parallel.h"
 
 namespace zwidth::fit {
 namespace {
@@ -34,21 +36,35 @@ struct Motion {
   std::vector<double> v, a;
 };
 
+// The planner under zwidth::FftwPlannerMutex (FFTW's planner is not thread-safe).
 std::vector<cd> Forward(std::vector<double> x) {
   std::vector<cd> X(x.size() / 2 + 1);
-  fftw_plan p = fftw_plan_dft_r2c_1d(static_cast<int>(x.size()), x.data(), reinterpret_cast<fftw_complex*>(X.data()),
-                                     FFTW_ESTIMATE);
+  fftw_plan p;
+  {
+    std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+    p = fftw_plan_dft_r2c_1d(static_cast<int>(x.size()), x.data(), reinterpret_cast<fftw_complex*>(X.data()),
+                             FFTW_ESTIMATE);
+  }
   fftw_execute(p);
-  fftw_destroy_plan(p);
+  {
+    std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+    fftw_destroy_plan(p);
+  }
   return X;
 }
 
 std::vector<double> Inverse(std::vector<cd> X, size_t n) {
   std::vector<double> x(n);
-  fftw_plan p = fftw_plan_dft_c2r_1d(static_cast<int>(n), reinterpret_cast<fftw_complex*>(X.data()), x.data(),
-                                     FFTW_ESTIMATE);
+  fftw_plan p;
+  {
+    std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+    p = fftw_plan_dft_c2r_1d(static_cast<int>(n), reinterpret_cast<fftw_complex*>(X.data()), x.data(), FFTW_ESTIMATE);
+  }
   fftw_execute(p);
-  fftw_destroy_plan(p);
+  {
+    std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+    fftw_destroy_plan(p);
+  }
   for (double& s : x) s /= static_cast<double>(n);
   return x;
 }

@@ -7,13 +7,15 @@
 
 #include <fftw3.h>
 
+#include "model/parallel.h"
+
 namespace zwidth::ident::internal {
 
 // One r2c plan per length, made once and shared (FFTW's planner is not
-// thread-safe, hence the mutex; executing a plan on new arrays is, when they
-// have the alignment fftw_alloc_* gives).
+// thread-safe, hence zwidth::FftwPlannerMutex, which the friction fit's plans
+// hold too; executing a plan on new arrays is, when they have the alignment
+// fftw_alloc_* gives).
 struct PlanCache {
-  std::mutex mu;
   std::map<int, fftw_plan> plans;
   ~PlanCache() {
     for (auto& [n, plan] : plans) fftw_destroy_plan(plan);
@@ -24,7 +26,7 @@ struct PlanCache {
     return cache;
   }
   fftw_plan For(int n, double* in, fftw_complex* out) {
-    std::lock_guard<std::mutex> lock(mu);
+    std::lock_guard<std::mutex> lock(FftwPlannerMutex());
     auto it = plans.find(n);
     if (it != plans.end()) return it->second;
     fftw_plan p = fftw_plan_dft_r2c_1d(n, in, out, FFTW_ESTIMATE);

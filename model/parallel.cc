@@ -14,6 +14,11 @@
 #include "model/error.h"
 
 namespace zwidth {
+
+std::mutex& FftwPlannerMutex() {
+  static std::mutex mu;
+  return mu;
+}
 namespace {
 
 std::atomic<int> g_num_threads{0};  // SetNumThreads; 0 = not set

@@ -42,7 +42,7 @@ void BindRun(py::module_& m) {
            const fit::FitOptions& fit, bool force, bool figures, bool png, const std::optional<std::string>& reference,
            const std::vector<int>& delays, const std::string& units, std::optional<double> velocity_filter_hz,
            std::optional<std::tuple<double, double, double>> hand, std::optional<double> b_step, int b_points,
-           double report_filter_hz, const std::string& command_line) {
+           double report_filter_hz, const std::string& friction, bool table2, const std::string& command_line) {
           report::RunJob job;
           job.input.logs = PathsFrom(logs);
           if (job.input.logs.empty()) throw InputError("logs: no log given: pass a log file's path (or several)");
@@ -56,7 +56,9 @@ void BindRun(py::module_& m) {
           job.options.report_filter_hz = Number(py::float_(report_filter_hz), "report_filter_hz");  // NaN refused, as the CLI
           if (b_step) job.options.grid.b_step = Number(py::float_(*b_step), "b_step");
           job.options.grid.b_points = b_points;
+          if (table2) job.options.table2 = analysis::Table2Options{};  // `run --table2`'s defaults
           job.estimate_fit = {estimate, fit};
+          job.estimate_fit.friction = analysis::FrictionModelNamed(friction);  // before anything is read, as the CLI
           job.loop = [=](double period_s) { return LoopFrom(velocity_filter_hz, hand, period_s); };
           job.report = {.draw_figures = figures, .png = png, .fit_report = "", .command_line = command_line};
           std::string why;  // before anything is read or written, as the CLI
@@ -94,7 +96,8 @@ void BindRun(py::module_& m) {
         py::arg("figures") = d.figures, py::arg("png") = false, py::arg("reference") = py::none(),
         py::arg("delays") = d.delays, py::arg("units") = "rotary", py::arg("velocity_filter_hz") = py::none(),
         py::arg("hand") = py::none(), py::arg("b_step") = py::none(), py::arg("b_points") = d.grid.b_points,
-        py::arg("report_filter_hz") = d.report_filter_hz, py::arg("command_line") = "",
+        py::arg("report_filter_hz") = d.report_filter_hz, py::arg("friction") = "auto", py::arg("table2") = false,
+        py::arg("command_line") = "",
         "zwidth.run's core: the options made by _estimate_logs_options and _fit_options.");
   // zwidth.batch's tables (python/zwidth/_batch.py works on their CSV text): io::ReadBatchTable
   // and io::WriteBatchTable, so that a table at an .h5 path is the command's HDF5 table.

@@ -394,6 +394,11 @@ std::string RunHtml(const analysis::RunAnalysis& a, const std::map<std::string, 
   Figure(svgs, "bode", "", h);
   Figure(svgs, "coherence", "", h);
   ComparisonSection(a, h);
+  if (a.table2) {
+    h << "<h2>Table II: the paper's relay points</h2>\n<p>The relay experiment's measured points beside this "
+      << "model's linear Z-width and its relay simulated with Coulomb friction (docs/friction.md):</p>\n<pre>"
+      << Html(analysis::Table2Text(*a.table2)) << "</pre>\n";
+  }
   Figure(svgs, "kcr", Html(DelayCaption(a)), h);
   Figure(svgs, "loop", Html(LoopCaption(a)), h);
   Figure(svgs, "rigid", "", h);

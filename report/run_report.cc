@@ -42,6 +42,7 @@ std::string SummaryJson(const analysis::RunAnalysis& a) {
                              "B_max_from_zero: the B where the interval from K = 0+ closes (the paper's B_max)";
   summary["margin_disagreements"] = st.margin_disagreements;
   if (a.comparison) summary["comparison"] = a.comparison->json;
+  if (a.table2) summary["table2"] = analysis::Table2Json(*a.table2);
   // File names as valid UTF-8 (a Latin-1 name made the JSON writer throw after all the work).
   summary["log"] = io::Utf8ForJson(in.source);
   summary["logs"] = nlohmann::json::array();

@@ -574,6 +574,10 @@ RelayResult SimulateRelay(const model::Plant& plant, const RelayOptions& o) {
   const size_t steady = r.position.size() - static_cast<size_t>(o.settle_fraction * r.position.size());
   const double theta_min = 2.0 * std::numbers::pi * 20.0 / static_cast<double>(steady);
   r.band_low_hz = theta_min * to_hz;
+  if (!o.refine) {
+    r.status = RelayStatus::kPeakReading;
+    return r;
+  }
   SteeredSearch search(ss, d, o, windows);
   std::vector<Point> scan = search.Scan(theta_min, 0.9 * std::numbers::pi);
   // The lowest run already past -180 deg: a crossing lies below the band, where

@@ -41,6 +41,9 @@ struct RelayOptions {
   model::Friction friction;
   model::Actuator actuator;
   double encoder_step = 0.0;
+  // False: the plain relay run only, the paper's reading (K_cr = K_cr_peak,
+  // status kPeakReading when it oscillates), one run instead of ~30 steered ones.
+  bool refine = true;
   bool Nonlinear() const { return !friction.IsZero() || !actuator.IsZero() || encoder_step > 0.0; }
   bool IsValid(std::string* why) const;  // names the field: "RelayOptions::seconds must be > 0"
 };

@@ -180,12 +180,14 @@ import csv, sys
 r = {r["serial"]: r for r in csv.DictReader(open(sys.argv[1]))}["SN-003"]
 assert r["status"] == "input_error" and "missing.csv" in r["error"], r
 PY
-# Equal to run's but for the provenance (its command and date are batch's; its inputs the same log).
+# Equal to run's but for the provenance (its command and date are batch's; its inputs the same log)
+# and run's friction detection (batch fits no friction: apps/run_flags.h), which found none here.
 same_but_provenance() {
   $PY - "$1" "$2" <<'PY'
 import json, sys
 a, b = (json.load(open(p)) for p in sys.argv[1:3])
 pa, pb = a.pop("provenance"), b.pop("provenance")
+assert b["fit"].pop("friction")["status"] == "not detected" and "friction" not in a["fit"], b["fit"]
 assert a == b, "content differs"
 assert pa["command"].startswith("zwidth batch") and pb["command"].startswith("zwidth run"), (pa["command"], pb["command"])
 assert [i["sha256"] for i in pa["inputs"] if i["path"].endswith("u1.csv")] == \

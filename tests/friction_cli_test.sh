@@ -35,5 +35,20 @@ expect "a bad --friction word" "--friction 'viscous': expected none, auto or cou
 "$ZW" estimate "$T/log.h5" -o "$T/frf.csv" >/dev/null 2>&1
 expect "--friction coulomb on a saved response" "needs one time-domain log" "$T/frf.json" -- \
   "$ZW" fit "$T/frf.csv" --friction coulomb -o "$T/frf.json"
+# compare --table2: Table II's points beside Table I's predictions (the library's numbers are
+# checked in table2_test; here the wiring: JSON, the chosen level one of the grid, the refusals).
+"$ZW" compare "$M" --table2 --coulomb-levels 0,0.01 --seconds 2 --json > "$T/t2.json" 2>"$T/t2.err" \
+  && $PY - "$T/t2.json" <<'PY' && ok "compare --table2 --json: every point, a level of the grid" || { bad "compare --table2"; cat "$T/t2.err"; }
+import json, sys
+t = json.load(open(sys.argv[1]))["table2"]
+assert len(t["points"]) >= 20 and t["coulomb_levels"] == [0, 0.01], t["coulomb_levels"]
+assert t["best_coulomb"] in t["coulomb_levels"] and len(t["relay_error"]) == 2
+assert all(len(p["relay"]) == 2 for p in t["points"])
+PY
+"$ZW" compare "$M" --table2 --coulomb-levels 0.01 --seconds 2 > "$T/t2.txt" 2>&1 && grep -q "^best Coulomb level of the grid: F_c = 0.01 N m" "$T/t2.txt" \
+  && ok "compare --table2 prints the table and the best level" || { bad "compare --table2 text"; cat "$T/t2.txt"; }
+expect "a negative --coulomb-levels" "--coulomb-levels: each level must be finite, >= 0" "" -- \
+  "$ZW" compare "$M" --table2 --coulomb-levels 0,-0.01
+expect "compare without a reference or --table2" "--table2" "" -- "$ZW" compare "$M"
 echo "$pass passed, $fail failed"
 [ $fail -eq 0 ]

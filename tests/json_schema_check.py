@@ -113,6 +113,9 @@ check("check --json", chk, "check.schema.json", [model, scene])
 cmp_json = os.path.join(tmp, "compare.json")
 zwidth("compare", model, "--reference", table1, "--json", stdout=cmp_json)
 check("compare --json", cmp_json, "compare.schema.json", [model, table1])
+t2_json = os.path.join(tmp, "compare_table2.json")  # Table II alone: 1 level, 1 s relay runs
+zwidth("compare", table1, "--table2", "--coulomb-levels", "0.01", "--seconds", "1", "--json", stdout=t2_json)
+check("compare --table2 --json", t2_json, "compare.schema.json", [table1])
 
 relay_json = os.path.join(tmp, "relay.json")
 zwidth("relay", model, "--delay", "2", "--damping", "0", "--seconds", "2", "--json", stdout=relay_json)

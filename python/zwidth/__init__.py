@@ -218,7 +218,10 @@ run.__doc__ = """`zwidth run LOG... -o OUT_DIR` from Python: the same library fu
 folder (summary.json, model.json, frf.csv, boundary.csv, report.html, figures/), byte for byte
 but for the provenance's command and date; nothing on stdout. Keywords: run's own (force,
 figures (False: --no-figures), png, reference ('table1' or a model JSON's path), delays, units,
-velocity_filter_hz, hand (M, B, K), b_step, b_points, report_filter_hz), estimate_logs' (the
+velocity_filter_hz, hand (M, B, K), b_step, b_points, report_filter_hz, friction ('auto': the
+Coulomb friction fitted when one log shows it, 'coulomb', 'none': as `zwidth run --friction`),
+table2 (True: Table II's relay points beside the model, as `zwidth run --table2`)),
+estimate_logs' (the
 window, the selectors, whole_record, ...; fmin/fmax also bound the fit) and fit's (modes, default
 'auto' as `zwidth run`, delay_samples, allow_short, ...). OUT_DIR must be new or empty (or
 force=True); its parent must exist; nothing is left behind on an error or Ctrl-C. Warnings

@@ -76,6 +76,63 @@ def test_python_run_with_a_filter_hand_and_figure_files_matches_the_cli(short_lo
             assert _blank_provenance(name, a[name]) == _blank_provenance(name, b[name]), name
 
 
+def test_python_run_fits_friction_as_the_cli_run_byte_for_byte(cli, table1_json, tmp_path):
+    # Synthetic: Table I simulated by the CLI for 20 s with Coulomb friction 0.004 N m (seed 7). The
+    # friction fit (analysis::FrictionInputFor) is the same rule from both front ends.
+    log = str(tmp_path / "friction.csv")
+    cli("simulate", "--model", table1_json, "--seconds", "20", "--coulomb", "0.004", "--seed", "7", "-o", log)
+    cli("run", log, "-o", tmp_path / "cli", "--delays", "2", "--b-points", "40", "--no-figures")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        zwidth.run(log, tmp_path / "py", delays=[2], b_points=40, figures=False)
+    a, b = _files(tmp_path / "cli"), _files(tmp_path / "py")
+    assert sorted(a) == sorted(b)
+    for name in a:
+        assert _blank_provenance(name, a[name]) == _blank_provenance(name, b[name]), name
+    model = json.loads(b["model.json"])
+    assert model["friction"]["coulomb_pos"] > 0.001 and model["fit"]["friction"]["status"] == "fitted"
+    assert json.loads(b["summary.json"])["boundary"][0]["friction"]["at_zero_B"]["amplitude"] > 0
+    # friction='none': only detected; a bad word is refused by keyword before anything is written.
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        zwidth.run(log, tmp_path / "none", delays=[2], b_points=40, figures=False, friction="none")
+    assert "friction" not in json.loads((tmp_path / "none" / "model.json").read_text())
+    with pytest.raises(zwidth.InputError, match=r"^friction 'viscous': expected none, auto or coulomb"):
+        zwidth.run(log, tmp_path / "bad", friction="viscous")
+    assert not os.path.exists(tmp_path / "bad")
+
+
+def test_python_runs_on_threads_with_friction_write_the_serial_folders(cli, table1_json, tmp_path):
+    # zwidth.run releases the GIL: two friction fits (FFTs planned under zwidth::FftwPlannerMutex)
+    # and a Welch estimate side by side give the bytes of the runs made one after the other.
+    # Synthetic: Table I with Coulomb friction 0.004 N m (seeds 7, 8), 12 s each, made by the CLI.
+    import concurrent.futures
+    logs = []
+    for seed in (7, 8):
+        logs.append(str(tmp_path / f"f{seed}.csv"))
+        cli("simulate", "--model", table1_json, "--seconds", "12", "--coulomb", "0.004", "--seed", seed, "-o", logs[-1])
+    kw = dict(delays=[2], b_points=30, figures=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        for i, log in enumerate(logs):
+            zwidth.run(log, tmp_path / f"serial{i}", **kw)
+        with concurrent.futures.ThreadPoolExecutor(2) as pool:
+            list(pool.map(lambda i: zwidth.run(logs[i], tmp_path / f"threaded{i}", **kw), range(2)))
+    def content(name, data):  # the provenance aside: its inputs are the process's (both logs, on threads)
+        if name.endswith(".json"):
+            j = json.loads(data)
+            j.pop("provenance", None)
+            return j
+        text = data.decode("utf-8")
+        return text[:text.find("<p class='provenance'>")] if name.endswith(".html") else text
+    for i in range(2):
+        a, b = _files(tmp_path / f"serial{i}"), _files(tmp_path / f"threaded{i}")
+        assert sorted(a) == sorted(b)
+        assert json.loads(a["model.json"])["fit"]["friction"]["status"] == "fitted"
+        for name in a:
+            assert content(name, a[name]) == content(name, b[name]), name
+
+
 def test_python_run_prints_nothing_on_stdout(short_log, tmp_path, src):
     code = ("import warnings, zwidth\nwarnings.simplefilter('ignore')\n"
             f"zwidth.run({short_log!r}, {str(tmp_path / 'o')!r}, figures=False, delays=[2], b_points=50)\n")
