@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "model/units.h"
 #include "io/stability_files.h"
 #include "model/c_locale.h"
 
@@ -17,8 +18,8 @@ struct Row { std::string name, unit; double value, std; };
 
 std::vector<Row> Rows(const model::Plant& p, const model::Plant* s, bool linear = false) {
   const double inf = std::numeric_limits<double>::infinity();
-  std::vector<Row> r = {{"m", linear ? "kg" : "kg m^2", p.m, s ? s->m : inf},
-                        {"b", linear ? "N s/m" : "N m s/rad", p.b, s ? s->b : inf}};
+  const model::UnitLabels& u = model::Units(linear);
+  std::vector<Row> r = {{"m", u.m, p.m, s ? s->m : inf}, {"b", u.b, p.b, s ? s->b : inf}};
   for (size_t i = 0; i < p.modes.size(); ++i) {
     const std::string k = std::to_string(i + 1);
     const model::Mode* e = s ? &s->modes[i] : nullptr;
@@ -38,7 +39,7 @@ std::vector<Row> FrictionRows(const io::ModelFile& mf, bool linear) {
   const double inf = std::numeric_limits<double>::infinity();
   const model::Friction& f = *mf.friction;
   const model::Friction* e = mf.friction_std ? &*mf.friction_std : nullptr;
-  const std::string unit = linear ? "N" : "N m";
+  const std::string unit = model::Units(linear).input;
   if (f.coulomb_pos == f.coulomb_neg) {
     r.push_back({"F_c", unit, f.coulomb_pos, e ? e->coulomb_pos : inf});
   } else {
@@ -76,6 +77,7 @@ void CompareFriction(const io::ModelFile& model, const io::ModelFile& ref, bool 
 }  // namespace
 
 std::string ParameterTable(const io::ModelFile& mf, bool linear) {
+  linear = linear || mf.linear;  // the model file's units, or the caller's
   const ScopedCLocale c_locale;  // printf's %g writes '.' whatever the caller's locale
   std::ostringstream os;
   char line[160];
@@ -115,6 +117,7 @@ ModelComparison CompareModels(const io::ModelFile& model, const io::ModelFile& r
   if (ms.summaries.size() != delays.size() || ms.stds.size() != delays.size() || ref_sums.size() != delays.size()) {
     throw std::invalid_argument("CompareModels: one summary per delay expected");
   }
+  linear = linear || model.linear;  // the model file's units, or the caller's
   const ScopedCLocale c_locale;  // printf's %g writes '.' whatever the caller's locale
   std::ostringstream os;
   nlohmann::json j;

@@ -218,6 +218,7 @@ RunAnalysis Analyse(RunInput input, const RunOptions& o) {
   if (!o.IsValid(&why)) throw InputError(why);
   if (input.fit.status != fit::FitStatus::kConverged) throw ComputationError(input.fit.message);
   Laps laps;
+  input.model.linear = o.linear;  // the model file keeps the run's units
   input.response.frf.used_by_fit = input.fit.band.used;
   const double T = input.response.frf.period_s();
   if (o.figures && !(o.report_filter_hz < 0.5 / T)) {  // before the Z-width, not at the figures

@@ -29,7 +29,7 @@ struct RunOptions {
   stability::BGridOptions grid;         // B grid of the boundary rows
   double report_filter_hz = 50.0;       // the loop figure's first-order velocity low-pass [Hz], > 0
   bool figures = true;                  // compute the figure data (Bode, curves, regions)
-  bool linear = false;                  // comparison labels in kg and N s/m instead of kg m^2, N m s/rad
+  bool linear = false;                  // labels in kg and N s/m instead of kg m^2, N m s/rad; kept in model.json
   // With a value: Table II's relay points beside the model (CompareTable2, the
   // log at 1 kHz), in summary.json's "table2" and the report; none: not computed.
   std::optional<Table2Options> table2;

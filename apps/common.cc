@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "io/frf_file.h"
+#include "io/model_json.h"
 #include "io/provenance.h"
 #include "io/option_names.h"
 #include "io/printable.h"
@@ -100,11 +101,7 @@ void AddUnitsFlag(CLI::App* cmd, std::string* units) {
   cmd->add_option("--units", *units, "labels: rotary (kg m^2, N m s/rad) | linear (kg, N s/m)")->capture_default_str();
 }
 
-bool LinearUnits(const std::string& units) {
-  if (units == "rotary") return false;
-  if (units == "linear") return true;
-  throw InputError("--units '" + units.substr(0, 20) + "' is not one of rotary, linear");
-}
+bool LinearUnits(const std::string& units) { return io::ParseUnitsWord(units, "--units"); }
 
 std::string JoinPaths(const std::vector<std::string>& paths) {
   std::string s;

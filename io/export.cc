@@ -5,6 +5,7 @@
 #include <locale>
 #include <sstream>
 
+#include "model/units.h"
 #include "io/atomic_file.h"
 #include "io/hdf5_api.h"
 #include "io/io_internal.h"
@@ -169,13 +170,14 @@ std::string Uncertainty(const ModelFile& mf, bool python) {
 
 std::string Matlab(const ModelFile& mf, double T) {
   const model::Plant& p = mf.plant;
+  const model::UnitLabels& u = model::Units(mf.linear);
   ClassicStream os;
   os << "% zwidth model export for MATLAB or GNU Octave (pkg load control).\n"
      << "% The parameters of eq. (1) as named variables (SI units, rad/s); G(s) built from its\n"
      << "% factored sections as in the paper's appendix. The model's name is in `name`.\n"
      << "name = " << MatlabString(p.name) << ";\n"
-     << "m = " << Num(p.m) << ";  % rigid-body inertia [kg m^2]\n"
-     << "b = " << Num(p.b) << ";  % rigid-body viscous damping [N m s/rad]\n";
+     << "m = " << Num(p.m) << ";  % rigid-body inertia [" << u.m << "]\n"
+     << "b = " << Num(p.b) << ";  % rigid-body viscous damping [" << u.b << "]\n";
   for (size_t i = 0; i < p.modes.size(); ++i) {
     const model::Mode& md = p.modes[i];
     const std::string k = std::to_string(i + 1);
@@ -194,7 +196,7 @@ std::string Matlab(const ModelFile& mf, double T) {
     os << "T = " << Num(T) << ";  % sample period [s]\n"
        << "Gz = c2d(G, T, 'zoh');\n"
        << "if delay_samples > 0\n  Gz = Gz * tf(1, [1 zeros(1, delay_samples)], T);  % z^-delay_samples\nend\n"
-       << "% The loop of the paper's eq. (4) for virtual damping B [N m s/rad] and loop delay d\n"
+       << "% The loop of the paper's eq. (4) for virtual damping B [" << u.B << "] and loop delay d\n"
        << "% [samples]: T / ((T z^d) / Gz + B (z - 1) / z), i.e. Gz / (z^d + B (1 - z^-1)/T Gz)\n"
        << "% (the appendix's parenthesis corrected). [K_cr, ~, w_cr] = margin(zwidth_loop(B, d)) is the\n"
        << "% appendix's call (f_CR = w_cr / (2 pi)). CAVEAT: margin() reports the -180 deg crossover whose\n"
@@ -222,6 +224,7 @@ std::string Matlab(const ModelFile& mf, double T) {
 
 std::string Python(const ModelFile& mf, double T) {
   const model::Plant& p = mf.plant;
+  const model::UnitLabels& u = model::Units(mf.linear);
   const model::StateSpace c = model::ContinuousStateSpace(p);
   ClassicStream os;
   os << "\"\"\"zwidth model export. Needs NumPy and SciPy; python-control objects too when it is installed.\n\n"
@@ -232,7 +235,8 @@ std::string Python(const ModelFile& mf, double T) {
      << " as python-control StateSpace (when `control` is importable), else None.\n"
      << "\"\"\"\nimport numpy as np\nfrom scipy import signal\n\n"
      << "name = " << PythonString(p.name) << "\n"
-     << "m = " << Num(p.m) << "  # kg m^2\nb = " << Num(p.b) << "  # N m s/rad\nmodes = [  # (omega, c, v, d) rad/s\n";
+     << "m = " << Num(p.m) << "  # " << u.m << "\nb = " << Num(p.b) << "  # " << u.b
+     << "\nmodes = [  # (omega, c, v, d) rad/s\n";
   for (const model::Mode& md : p.modes) os << "    (" << Num(md.omega) << ", " << Num(md.c) << ", " << Num(md.v) << ", " << Num(md.d) << "),\n";
   os << "]\ndelay_samples = " << p.delay_samples << "\n" << FrictionVariables(mf, "#", "") << Uncertainty(mf, true) << "\n"
      << "G = signal.StateSpace(np.array(" << Matrix(c.A, true) << "),\n    np.array(" << Matrix(c.B, true)

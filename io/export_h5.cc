@@ -6,6 +6,7 @@
 
 #include <H5Cpp.h>
 
+#include "model/units.h"
 #include "io/hdf5_api.h"
 #include "io/io_internal.h"
 #include "model/error.h"
@@ -41,8 +42,8 @@ void WriteModelHdf5(const std::string& tmp, const ModelFile& mf, double T) {
     auto params = [&](const std::string& gname, const model::Plant& p, const std::optional<model::Friction>& fr) {
       H5::Group g = f.createGroup(gname);
       if (fr) for (const auto& [name, v] : FrictionFields(*fr)) vec(g, "friction_" + name, {v}, "input units");
-      vec(g, "m", {p.m}, "kg m^2");
-      vec(g, "b", {p.b}, "N m s/rad");
+      vec(g, "m", {p.m}, model::Units(mf.linear).m);
+      vec(g, "b", {p.b}, model::Units(mf.linear).b);
       std::vector<double> w, c, v, d;
       for (const model::Mode& md : p.modes) { w.push_back(md.omega); c.push_back(md.c); v.push_back(md.v); d.push_back(md.d); }
       vec(g, "omega", w, "rad/s"); vec(g, "c", c, "rad/s"); vec(g, "v", v, "rad/s"); vec(g, "d", d, "rad/s");

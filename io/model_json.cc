@@ -16,6 +16,7 @@
 #include "io/atomic_file.h"
 #include "io/provenance.h"
 #include "model/error.h"
+#include "model/units.h"
 #include "stability/uncertainty.h"
 
 namespace zwidth::io {
@@ -311,7 +312,7 @@ ModelFile ParseModelJson(const std::string& text, const std::string& source) {
   CheckDuplicateKeys(text, source);  // valid JSON: nlohmann kept the last of a repeated key
   if (!j.is_object()) Fail(source, "top level must be a JSON object");
   CheckKeys(j, {"m", "b", "modes", "delay_samples", "sample_period_s", "name", "std", "fit", "covariance",
-                "friction", "format_version", "provenance"},
+                "friction", "format_version", "provenance", "units"},
             source, "");
   if (auto it = j.find("format_version"); it != j.end()) {
     if (!it->is_number_integer() || it->get<std::int64_t>() < 1) {
@@ -339,6 +340,12 @@ ModelFile ParseModelJson(const std::string& text, const std::string& source) {
   if (auto it = j.find("name"); it != j.end()) {
     if (!it->is_string()) Fail(source, "key 'name' must be a string");
     mf.plant.name = it->get<std::string>();
+  }
+  if (auto it = j.find("units"); it != j.end()) {
+    if (!it->is_string() || (*it != "rotary" && *it != "linear")) {
+      Fail(source, "key 'units' must be \"rotary\" or \"linear\", got " + it->dump().substr(0, 40));
+    }
+    mf.linear = *it == "linear";
   }
   if (j.contains("sample_period_s")) {
     const double t = Number(j, "sample_period_s", source, "");
@@ -440,6 +447,12 @@ double ResolveModelPeriod(std::optional<double> period_s, ModelFile* mf, std::st
   return *period_s;
 }
 
+bool ParseUnitsWord(const std::string& word, const std::string& name) {
+  if (word == model::kRotaryUnits.word) return false;
+  if (word == model::kLinearUnits.word) return true;
+  throw InputError(name + " '" + word.substr(0, 20) + "' is not one of rotary (kg m^2, N m s/rad), linear (kg, N s/m)");
+}
+
 json ModelToJson(const ModelFile& mf) {
   json j;
   j["format_version"] = kModelFormatVersion;
@@ -449,6 +462,7 @@ json ModelToJson(const ModelFile& mf) {
   j["b"] = p["b"];
   j["modes"] = p["modes"];
   j["delay_samples"] = mf.plant.delay_samples;
+  if (mf.linear) j["units"] = model::kLinearUnits.word;  // absent: rotary (files of rotary models unchanged)
   if (mf.sample_period_s) j["sample_period_s"] = *mf.sample_period_s;
   if (mf.std_errors) j["std"] = PlantToJson(*mf.std_errors);
   if (mf.friction) {

@@ -44,7 +44,15 @@ struct ModelFile {
   // (2 + 4 N)^2 row-major covariance of the log parameters; empty = none.
   std::vector<double> log_covariance;
   nlohmann::json fit;  // null when absent
+  // The axis's units (model/units.h): "units": "linear" in the file (kg,
+  // N s/m, m); absent or "rotary": kg m^2, N m s/rad, rad. Every label that
+  // reads the model follows it.
+  bool linear = false;
 };
+
+// "rotary" -> false, "linear" -> true; another word: InputError naming `name`
+// (the flag or keyword the caller read it from: "--units", "units").
+bool ParseUnitsWord(const std::string& word, const std::string& name);
 
 // The version of the model file's format that this zwidth writes and reads.
 inline constexpr int kModelFormatVersion = 1;

@@ -10,6 +10,7 @@
 #include "io/provenance.h"
 #include "io/reference_models.h"
 #include "model/error.h"
+#include "model/units.h"
 #include "model/state_space.h"
 #include "io/atomic_file.h"
 #include "python/bind_common.h"
@@ -197,6 +198,10 @@ void DefModelParameters(py::class_<io::ModelFile>& cls) {
                     "input delay of the sampled model [samples]")
       .def_property("name", [](const io::ModelFile& mf) { return mf.plant.name; },
                     [](io::ModelFile& mf, const std::string& v) { mf.plant.name = v; }, "free text")
+      .def_property("units", [](const io::ModelFile& mf) { return std::string(model::Units(mf.linear).word); },
+                    [](io::ModelFile& mf, const std::string& v) { mf.linear = io::ParseUnitsWord(v, "units"); },
+                    "the axis: 'rotary' (kg m^2, N m s/rad, rad) or 'linear' (kg, N s/m, m); kept in the "
+                    "model file, and every label that reads the model follows it")
       .def_property("sample_period_s", [](const io::ModelFile& mf) { return mf.sample_period_s; },
                     [](io::ModelFile& mf, std::optional<double> v) { mf.sample_period_s = CheckedPeriod(v); },
                     "sample period the model was fitted at [s], or None")

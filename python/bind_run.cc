@@ -10,6 +10,7 @@
 #include "fit/fit.h"
 #include "io/atomic_file.h"
 #include "io/batch_table.h"
+#include "io/model_json.h"
 #include "io/option_names.h"
 #include "io/provenance.h"
 #include "io/reference_models.h"
@@ -47,10 +48,7 @@ void BindRun(py::module_& m) {
           job.input.logs = PathsFrom(logs);
           if (job.input.logs.empty()) throw InputError("logs: no log given: pass a log file's path (or several)");
           for (const std::string& p : job.input.logs) job.input.source += (job.input.source.empty() ? "" : " + ") + p;
-          if (units != "rotary" && units != "linear") {
-            throw InputError("units '" + units.substr(0, 20) + "' is not one of rotary, linear");
-          }
-          job.options.linear = units == "linear";
+          job.options.linear = io::ParseUnitsWord(units, "units");
           job.options.delays = delays;
           job.options.figures = figures;
           job.options.report_filter_hz = Number(py::float_(report_filter_hz), "report_filter_hz");  // NaN refused, as the CLI

@@ -44,5 +44,20 @@ check "boundary: loop 2 + model 3 = 5 samples (text and summary)" 'grep -q "loop
 echo '{"objects": [{"name": "wall", "K": 0.5, "B": 0.01}]}' > "$T/scene.json"
 "$ZW" check "$T/scene.json" --model "$T/late.json" --delay 2 > "$T/out" 2>&1
 check "check: loop 2 + model 3 = 5 samples" 'grep -q "delay: loop 2 + model 3 = 5 samples" "$T/out"'
+# --units linear is kept by the model file (issue 24 item 3): a 2 kg linear
+# axis (one section at 40 Hz) fitted with --units linear; compare and the
+# exports read the model's units without the flag.
+printf '{"name": "2 kg linear axis", "m": 2.0, "b": 10.0, "modes": [{"omega": 251.3, "c": 10, "v": 226.2, "d": 9}], "delay_samples": 0}' > "$T/axis.json"
+"$ZW" simulate --model "$T/axis.json" --torque-rms 20 --bandwidth-hz 200 --encoder-step 1e-6 --seed 8 -o "$T/axis.h5" >/dev/null 2>&1
+"$ZW" fit "$T/axis.h5" --units linear --modes 1 -o "$T/axis_fit.json" > "$T/out" 2>&1
+check "fit --units linear: model.json says linear, the table kg and N s/m" 'grep -q "\"units\": \"linear\"" "$T/axis_fit.json" && grep -qE "^m .* kg$" "$T/out" && grep -qE "^b .* N s/m$" "$T/out"'
+"$ZW" compare "$T/axis_fit.json" --reference "$T/axis_fit.json" > "$T/out" 2>&1
+check "compare: the linear model in kg and N s/m without --units" 'grep -q " kg" "$T/out" && grep -q "N s/m" "$T/out" && ! grep -q "kg m^2" "$T/out" && ! grep -q "N m s/rad" "$T/out"'
+"$ZW" export "$T/axis_fit.json" --format matlab --period 0.001 -o "$T/axis.m" > /dev/null 2>&1
+check "export .m: inertia [kg], damping [N s/m]" 'grep -q "inertia \[kg\]" "$T/axis.m" && grep -q "damping \[N s/m\]" "$T/axis.m" && ! grep -q "kg m^2" "$T/axis.m"'
+"$ZW" run "$T/axis.h5" --units linear --modes 1 --no-figures -o "$T/axis_run" > /dev/null 2>&1
+check "run --units linear: model.json says linear" 'grep -q "\"units\": \"linear\"" "$T/axis_run/model.json"'
+"$ZW" run "$T/log.h5" --no-figures -o "$T/rot_run" > /dev/null 2>&1
+check "a rotary run's model.json has no units key" '[ -f "$T/rot_run/model.json" ] && ! grep -q "\"units\"" "$T/rot_run/model.json"'
 echo "$pass passed, $fail failed"
 [ $fail = 0 ]

@@ -1,12 +1,15 @@
 // io/model_json.h: the model file's nesting bound, ranges and file kind
 // (written by the tests in a temporary folder). Moved from io_safety_test.cc.
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 #include <sys/stat.h>
 
 #include <gtest/gtest.h>
 
+#include "io/export.h"
 #include "io/model_json.h"
 #include "model/error.h"
 #include "tests/test_util.h"
@@ -102,6 +105,50 @@ TEST(ModelJson, FrictionRoundTripsAndIsChecked) {
   EXPECT_THROW(ParseModelJson(head + R"("std": {"m": 1e-5, "b": 1e-5, "modes": [], "friction": {"offset": 1}}})",
                               "f.json"),
                InputError);
+}
+
+// "units": "linear" is kept by the file and by every export's labels (the
+// MATLAB and Python comments, the HDF5 units attributes); a rotary model's
+// file has no "units" key (files written before it are unchanged), and a word
+// other than rotary or linear is refused naming the key.
+TEST(ModelJson, UnitsRoundTripAndEveryExportFollowsThem) {
+  const std::string head = R"({"m": 1.2, "b": 3.4, "modes": [])";
+  const ModelFile linear = ParseModelJson(head + R"(, "units": "linear"})", "l.json");
+  EXPECT_TRUE(linear.linear);
+  EXPECT_FALSE(ParseModelJson(head + R"(, "units": "rotary"})", "r.json").linear);
+  EXPECT_FALSE(ParseModelJson(head + "}", "r.json").linear);
+  EXPECT_EQ(ModelToJson(linear).at("units"), "linear");
+  EXPECT_TRUE(ParseModelJson(ModelToJson(linear).dump(), "back.json").linear);
+  EXPECT_FALSE(ModelToJson(ParseModelJson(head + "}", "r.json")).contains("units"));
+  for (const char* bad : {R"("metric")", "1", "null", R"(["linear"])"}) {
+    try {
+      ParseModelJson(head + R"(, "units": )" + bad + "}", "u.json");
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("'units'"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("u.json"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_THROW(ParseUnitsWord("Linear", "--units"), InputError);
+  EXPECT_TRUE(ParseUnitsWord("linear", "--units"));
+  const TempDir dir;
+  auto read = [](const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  for (const bool lin : {false, true}) {
+    ModelFile mf = linear;
+    mf.linear = lin;
+    const std::string tag = lin ? "lin" : "rot";
+    ExportModel(mf, ExportFormat::kMatlab, 1e-3, dir / (tag + ".m"));
+    ExportModel(mf, ExportFormat::kPython, 1e-3, dir / (tag + ".py"));
+    const std::string m = read(dir / (tag + ".m")), py = read(dir / (tag + ".py"));
+    EXPECT_EQ(m.find("kg m^2") == std::string::npos, lin) << m.substr(0, 400);
+    EXPECT_EQ(m.find("N m s/rad") == std::string::npos, lin) << m.substr(0, 800);
+    EXPECT_EQ(py.find("# kg m^2") == std::string::npos, lin) << py.substr(0, 400);
+    EXPECT_EQ(m.find("inertia [kg]") != std::string::npos, lin) << m.substr(0, 400);
+    EXPECT_EQ(py.find("# N s/m") != std::string::npos, lin) << py.substr(0, 600);
+  }
 }
 
 TEST(ModelJson, AModelFileMustBeARegularFile) {
