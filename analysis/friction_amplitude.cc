@@ -64,16 +64,23 @@ void SetFrictionColumns(const std::vector<FrictionAmplitudeRow>& amplitudes, std
   }
 }
 
-nlohmann::json FrictionAmplitudeRowJson(const FrictionAmplitudeRow& r) {
-  const stability::FrictionPrediction& p = r.prediction;
-  return {{"B", r.B},
-          {"K", io::NumberOrNull(r.K)},
+nlohmann::json FrictionPredictionJson(const stability::FrictionPrediction& p) {
+  return {{"verdict", stability::ToString(p.verdict)},
           {"amplitude", io::NumberOrNull(p.amplitude)},
           {"frequency_hz", io::NumberOrNull(p.frequency_hz)},
           {"extra_damping", io::NumberOrNull(p.extra_damping)},
-          {"verdict", stability::ToString(p.verdict)},
+          {"K_cr_linear", io::NumberOrNull(p.K_cr_linear)},
           {"valid", p.valid},
-          {"invalid_reason", p.invalid_reason}};
+          {"invalid_reason", p.invalid_reason},
+          {"rest_point_ok", p.rest_point_ok},
+          {"K_rest_max", io::NumberOrNull(p.K_rest_max)}};
+}
+
+nlohmann::json FrictionAmplitudeRowJson(const FrictionAmplitudeRow& r) {
+  nlohmann::json j = FrictionPredictionJson(r.prediction);
+  j["B"] = r.B;
+  j["K"] = io::NumberOrNull(r.K);
+  return j;
 }
 
 namespace {

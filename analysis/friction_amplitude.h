@@ -53,8 +53,12 @@ std::vector<FrictionAmplitudeRow> FrictionAmplitudes(const model::Plant& plant, 
 // friction columns (rows and amplitudes in the same order).
 void SetFrictionColumns(const std::vector<FrictionAmplitudeRow>& amplitudes, std::vector<io::BoundaryRow>* rows);
 
-// {"K", "amplitude" (A* [rad], null = none), "frequency_hz", "extra_damping",
-//  "verdict", "valid", "invalid_reason"}
+// One friction prediction (stability::PredictFriction) as JSON, the keys every
+// writer uses (boundary's rows and summary, check, wall): "verdict",
+// "amplitude" (A* [rad], null = none), "frequency_hz", "extra_damping",
+// "K_cr_linear", "valid", "invalid_reason", "rest_point_ok", "K_rest_max".
+nlohmann::json FrictionPredictionJson(const stability::FrictionPrediction& p);
+// {"B", "K"} and FrictionPredictionJson(r.prediction).
 nlohmann::json FrictionAmplitudeRowJson(const FrictionAmplitudeRow& r);
 // A summary's "friction" entry for one delay: the Coulomb level used, k_factor,
 // encoder_step, K_rest_max (2 F_c / q, null without an encoder step), and

@@ -543,9 +543,7 @@ std::string FrictionNote(const model::Plant& plant, double T, int delay, const s
   if (!(friction.MeanCoulomb() > 0.0)) return "";
   const stability::FrictionPrediction p =
       stability::PredictFriction(plant, T, delay, loop, o.K, o.B, friction, encoder_step);
-  (*j)["friction"] = {{"verdict", stability::ToString(p.verdict)},
-                      {"stable_below_amplitude", io::NumberOrNull(p.amplitude)},
-                      {"valid", p.valid}, {"invalid_reason", p.invalid_reason}, {"rest_point_ok", p.rest_point_ok}};
+  (*j)["friction"] = analysis::FrictionPredictionJson(p);
   if (p.verdict != stability::FrictionVerdict::kStableBelow) return "";
   return "  friction holds it below " + Num(p.amplitude) + " rad" +
          (p.valid ? "" : " (outside validity: " + p.invalid_reason + ")");

@@ -8,6 +8,7 @@
 #include "apps/common.h"
 #include "apps/friction_flags.h"
 #include "apps/loop_flags.h"
+#include "analysis/friction_amplitude.h"
 #include "io/atomic_file.h"
 #include "io/model_json.h"
 #include "io/provenance.h"
@@ -41,14 +42,7 @@ nlohmann::json WallJson(const stability::WallResult& r, const stability::Frictio
           {"rest_position", io::NumberOrNull(r.rest_position)},
           {"samples", r.samples},
           {"K", o.stiffness}, {"B", o.damping}, {"delay_samples", o.delay_samples}, {"period_s", o.period_s},
-          {"prediction",
-           {{"verdict", stability::ToString(p.verdict)},
-            {"K_cr_linear", io::NumberOrNull(p.K_cr_linear)},
-            {"stable_below_amplitude", io::NumberOrNull(p.amplitude)},
-            {"extra_damping", io::NumberOrNull(p.extra_damping)},
-            {"frequency_hz", io::NumberOrNull(p.frequency_hz)},
-            {"valid", p.valid}, {"invalid_reason", p.invalid_reason},
-            {"rest_point_ok", p.rest_point_ok}, {"K_rest_max", io::NumberOrNull(p.K_rest_max)}}}};
+          {"prediction", analysis::FrictionPredictionJson(p)}};
 }
 
 void PrintWall(const stability::WallResult& r, const stability::FrictionPrediction& p) {
