@@ -37,11 +37,12 @@ py::dict RunResult(const report::RunJobResult& r, const std::string& folder) {
 void BindRun(py::module_& m) {
   const analysis::RunOptions d;
   m.def("_run",
-        [](const py::object& logs, const std::string& out_dir, const analysis::LogsEstimateOptions& estimate,
+        [](const py::object& logs, const py::object& out_path, const analysis::LogsEstimateOptions& estimate,
            const fit::FitOptions& fit, bool force, bool figures, bool png, const std::optional<std::string>& reference,
            const std::vector<int>& delays, const std::string& units, std::optional<double> velocity_filter_hz,
            std::optional<std::tuple<double, double, double>> hand, std::optional<double> b_step, int b_points,
            double report_filter_hz, const std::string& command_line) {
+          const std::string out_dir = PathFrom(out_path, "out_dir");
           report::RunJob job;
           job.input.logs = PathsFrom(logs);
           if (job.input.logs.empty()) throw InputError("logs: no log given: pass a log file's path (or several)");
@@ -63,7 +64,8 @@ void BindRun(py::module_& m) {
           io::ForgetNotedInputs();  // each call is its own command (the provenance's inputs)
           io::SetInvocation(command_line);
           if (reference) {
-            job.input.reference = io::ReadReferenceModel(*reference, "reference", &job.input.reference_is_table1);
+            job.input.reference = io::ReadReferenceModel(CheckedPath(*reference, "reference"), "reference",
+                                                         &job.input.reference_is_table1);
             job.input.reference_name = *reference;
           }
           // The run's files are `zwidth run`'s, byte for byte (advice in the CLI's
@@ -94,7 +96,7 @@ void BindRun(py::module_& m) {
         py::arg("delays") = d.delays, py::arg("units") = "rotary", py::arg("velocity_filter_hz") = py::none(),
         py::arg("hand") = py::none(), py::arg("b_step") = py::none(), py::arg("b_points") = d.grid.b_points,
         py::arg("report_filter_hz") = d.report_filter_hz, py::arg("command_line") = "",
-        "zwidth.run's core: the options made by _estimate_logs_options and _fit_options.");
+        "zwidth.run's core: the options made by _estimate_logs_options and _fit_options.", kCLocale);
 }
 
 }  // namespace zwidth::python
