@@ -353,7 +353,8 @@ void CheckFiniteResponse(const ident::FrequencyResponse& r, const std::string& s
                                 std::to_string(k) + ", f = " + Num(r.f_hz[k]) + " Hz)";
       if (!std::isfinite(suu) || !std::isfinite(syy)) {  // the spectra themselves overflowed
         throw InputError(where + ": input scaled out of range (the spectra overflow: values near 1e154 or more "
-                         "square past 1e308); rescale the log's columns to SI units");
+                         "square past 1e308); rescale the log's columns to SI units (LogSelect::input_scale, "
+                         "LogSelect::output_scale)");
       }
       if (std::string(name) == "H_std") {
         throw InputError(where + ": the per-bin std cannot be estimated (a single segment has no scatter); "

@@ -84,6 +84,7 @@ def _estimate_signature():
 
 
 def estimate(data, y=None, sample_rate_hz=None, **options):
+    _signatures.check_numbers(_ESTIMATE_NUMBERS, (), dict(options, sample_rate_hz=sample_rate_hz))
     path = _path(data)
     if isinstance(data, Log) or path is not None:
         if y is not None or sample_rate_hz is not None:
@@ -99,6 +100,7 @@ def estimate(data, y=None, sample_rate_hz=None, **options):
 
 
 estimate.__signature__ = _estimate_signature()
+_ESTIMATE_NUMBERS = (None, _signatures.number_names(_zwidth.estimate)[1])
 estimate.__doc__ = """The Welch frequency response y/u, as `zwidth estimate` computes it.
 
 estimate(u, y, sample_rate_hz, ...): from two 1-D arrays (u [N m], y [rad]) sampled at
@@ -120,6 +122,7 @@ def fit(data, *args, **kwargs):
     if not isinstance(data, FrequencyResponse):
         raise TypeError(f"fit(data): data must be a FrequencyResponse, a Log or a log file's path, "
                         f"not {type(data).__name__}")
+    _signatures.check_numbers(_FIT_NUMBERS, (data,) + args, kwargs)
     res = _fit(data, *args, **kwargs)
     if res.quality != "good":
         warnings.warn(FitQualityWarning(res), stacklevel=2)
@@ -136,6 +139,7 @@ def _fit_with_estimate_signature():
 
 
 _fit_plain = _signatures.wrap(_fit)
+_FIT_NUMBERS = _signatures.number_names(_fit)
 _fit_signature = _fit_with_estimate_signature()
 fit.__signature__ = _fit_signature
 fit.__doc__ = _fit_plain.__doc__ + """
@@ -163,6 +167,7 @@ def _names(f):
 
 
 def estimate_logs(paths, **options):
+    _signatures.check_numbers((None, _signatures.number_names(_zwidth._estimate_logs_options)[1]), (), options)
     return _zwidth._estimate_logs(paths, _zwidth._estimate_logs_options(**options))
 
 
@@ -183,6 +188,8 @@ def run(logs, out_dir, **options):
     own = _names(_zwidth._run) - {"logs", "out_dir", "estimate", "fit", "command_line"}
     est_names = _names(_zwidth._estimate_logs_options)
     fit_names = _names(_zwidth._fit_options)
+    _signatures.check_numbers((None, set().union(*(_signatures.number_names(f)[1] for f in (
+        _zwidth._run, _zwidth._estimate_logs_options, _zwidth._fit_options)))), (), options)
     unknown = sorted(set(options) - own - est_names - fit_names)
     if unknown:
         raise TypeError(f"run() got unexpected keyword arguments {unknown}")

@@ -281,3 +281,34 @@ def test_response_messages_name_f_hz(frf):
         zwidth.FrequencyResponse(frf.f_hz - 10, frf.H, 1000.0)
     with pytest.raises(ValueError, match="paths: no log given"):
         zwidth.estimate_logs([])
+
+
+# --- A bool is not a number (pybind11 took True as 1 where Number() refuses it) ------------------
+
+BOOL_CALLS = {
+    "seconds": lambda m, log, frf: zwidth.simulate(m, seconds=True),
+    "damping": lambda m, log, frf: zwidth.relay(m, 2, True, seconds=1.0),
+    "theta_tolerance": lambda m, log, frf: zwidth.ZWidth(m, theta_tolerance=True),
+    "min_grid_points": lambda m, log, frf: zwidth.ZWidth(m, min_grid_points=True),
+    "marginal_sigmas": lambda m, log, frf: zwidth.check([("a", 1.0, 0.0)], m, 2, marginal_sigmas=True),
+    "overlap": lambda m, log, frf: zwidth.estimate(log, overlap=False),
+    "sample_rate_hz": lambda m, log, frf: zwidth.estimate(log.u, log.y, True),
+    "max_starts": lambda m, log, frf: zwidth.fit(frf, modes=1, max_starts=np.True_),
+    "max_lag": lambda m, log, frf: zwidth.validate(m, log, max_lag=True),
+    "input_scale": lambda m, log, frf: zwidth.read_log("x.h5", input_scale=True),
+    "period_s": lambda m, log, frf: m.response([1.0], period_s=True),
+    "b_points": lambda m, log, frf: zwidth.run("x.h5", "out", b_points=True),
+}
+
+
+@pytest.mark.parametrize("kw", sorted(BOOL_CALLS))
+def test_a_bool_for_a_number_is_a_type_error_naming_the_keyword(kw, log, frf):
+    with pytest.raises(TypeError, match=f"{kw} must be a number, not bool"):
+        BOOL_CALLS[kw](zwidth.Model.table1(), log, frf)
+
+
+def test_numbers_of_every_numeric_type_are_still_taken(log):
+    m = zwidth.Model.table1()
+    a = zwidth.simulate(m, seconds=np.float32(2.0), sample_rate_hz=1000, seed=np.int64(3))
+    b = zwidth.simulate(m, seconds=2.0, sample_rate_hz=1000.0, seed=3)
+    assert a == b
