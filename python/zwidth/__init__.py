@@ -49,6 +49,54 @@ class FitQualityWarning(UserWarning):
 
 for _cls in (Model, Log, FrequencyResponse, FitResult, CriticalPoint, ZWidth, RelayResult):
     _signatures.wrap_class(_cls)
+
+
+_ORIGINAL_NEW = {}
+
+
+def _restore(cls, state):
+    """An object of cls from its pickled state: allocated, then built by __setstate__ (which
+    checks the state as the constructor checks its arguments)."""
+    obj = _ORIGINAL_NEW[cls](cls)
+    obj.__setstate__(state)
+    return obj
+
+
+def _guard_new(cls, constructible):
+    """cls.__new__(cls) without __init__ made an object whose C++ value was never constructed
+    (pybind11): repr() or any attribute read uninitialised memory and crashed the interpreter.
+    So __new__ constructs (the bound __init__ on the new object, which checks the arguments) and
+    __init__ is left with nothing to do; pickle, copy and multiprocessing build through _restore.
+    A class the module alone makes (FitResult, CriticalPoint, RelayResult) has no __new__."""
+    original = cls.__new__
+    _ORIGINAL_NEW[cls] = original
+    init = cls.__init__
+
+    def __new__(c, *args, **kwargs):
+        if not constructible:
+            raise TypeError(f"zwidth.{cls.__name__} is made by the module (zwidth.fit, ZWidth.point, "
+                            "zwidth.relay), not by hand")
+        obj = original(c)
+        init(obj, *args, **kwargs)
+        return obj
+
+    def __init__(self, *args, **kwargs):
+        pass  # built by __new__
+
+    if constructible:  # inspect.signature(cls) reads __new__ first: the constructor's
+        import inspect
+        __new__.__signature__ = inspect.signature(init)
+        __init__.__signature__ = inspect.signature(init)
+        __init__.__doc__ = init.__doc__
+        cls.__init__ = __init__
+    cls.__new__ = staticmethod(__new__)
+    cls.__reduce_ex__ = lambda self, protocol: (_restore, (type(self), self.__getstate__()))
+
+
+for _cls in (Model, Log, FrequencyResponse, ZWidth):
+    _guard_new(_cls, True)
+for _cls in (FitResult, CriticalPoint, RelayResult):
+    _guard_new(_cls, False)
 for _e in (InputError, ComputationError):
     _e.__module__ = "zwidth"
 

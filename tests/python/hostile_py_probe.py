@@ -312,26 +312,28 @@ def special_cases():
                          "Log short y": "('', 1000.0, LOG.u.tobytes(), LOG.y[:-5].tobytes())",
                          "Log rate 5": "('', 5.0, LOG.u.tobytes(), LOG.y.tobytes())"}.items():
         add(f"pickled {label} then save/estimate",
-            f"l = zw.Log.__new__(zw.Log); "
-            f"refused_at_some_step([lambda: l.__setstate__({state}), lambda: zw.estimate(l)], None) and "
-            "expect_save_refused_or_readable(lambda p: l.save(p), 'log')")
+            f"box = []; "
+            f"refused_at_some_step([lambda: box.append(RESTORE(zw.Log, {state})), lambda: zw.estimate(box[0])], None) and "
+            "expect_save_refused_or_readable(lambda p: box[0].save(p), 'log')")
     add("pickled FrequencyResponse nan rate then fit/save",
-        "s = list(FRF.__getstate__()); s[0] = float('nan'); r = zw.FrequencyResponse.__new__(zw.FrequencyResponse); "
-        "refused_at_some_step([lambda: r.__setstate__(tuple(s)), lambda: zw.fit(r, modes=1, max_starts=1, delay_samples=0)], None) and "
-        "expect_save_refused_or_readable(lambda p: r.save(p), 'frf')")
+        "s = list(FRF.__getstate__()); s[0] = float('nan'); box = []; "
+        "refused_at_some_step([lambda: box.append(RESTORE(zw.FrequencyResponse, tuple(s))), "
+        "lambda: zw.fit(box[0], modes=1, max_starts=1, delay_samples=0)], None) and "
+        "expect_save_refused_or_readable(lambda p: box[0].save(p), 'frf')")
     add("pickled FrequencyResponse bytes of other lengths then fit",
-        "s = list(FRF.__getstate__()); s[6] = s[6][:16]; r = zw.FrequencyResponse.__new__(zw.FrequencyResponse); "
-        "refused_at_some_step([lambda: r.__setstate__(tuple(s)), lambda: zw.fit(r, modes=1, max_starts=1, delay_samples=0)], None) and "
-        "expect_save_refused_or_readable(lambda p: r.save(p), 'frf')")
+        "s = list(FRF.__getstate__()); s[6] = s[6][:16]; box = []; "
+        "refused_at_some_step([lambda: box.append(RESTORE(zw.FrequencyResponse, tuple(s))), "
+        "lambda: zw.fit(box[0], modes=1, max_starts=1, delay_samples=0)], None) and "
+        "expect_save_refused_or_readable(lambda p: box[0].save(p), 'frf')")
     add("pickled ZWidth negative delay",
-        "s = list(zw.ZWidth(M).__getstate__()); s[2] = -5; z = zw.ZWidth.__new__(zw.ZWidth); "
-        "refused_at_some_step([lambda: z.__setstate__(tuple(s)), lambda: z.summary()], 'delay_samples')")
+        "s = list(zw.ZWidth(M).__getstate__()); s[2] = -5; box = []; "
+        "refused_at_some_step([lambda: box.append(RESTORE(zw.ZWidth, tuple(s))), lambda: box[0].summary()], 'delay_samples')")
     add("pickled ZWidth nan tolerance",
-        "s = list(zw.ZWidth(M).__getstate__()); s[3] = (2048, 64, float('nan'), True); z = zw.ZWidth.__new__(zw.ZWidth); "
-        "refused_at_some_step([lambda: z.__setstate__(tuple(s)), lambda: z.summary()], 'theta_tolerance')")
+        "s = list(zw.ZWidth(M).__getstate__()); s[3] = (2048, 64, float('nan'), True); box = []; "
+        "refused_at_some_step([lambda: box.append(RESTORE(zw.ZWidth, tuple(s))), lambda: box[0].summary()], 'theta_tolerance')")
     add("pickled ZWidth nan period",
-        "s = list(zw.ZWidth(M).__getstate__()); s[1] = float('nan'); z = zw.ZWidth.__new__(zw.ZWidth); "
-        "refused_at_some_step([lambda: z.__setstate__(tuple(s)), lambda: z.summary()], 'period_s')")
+        "s = list(zw.ZWidth(M).__getstate__()); s[1] = float('nan'); box = []; "
+        "refused_at_some_step([lambda: box.append(RESTORE(zw.ZWidth, tuple(s))), lambda: box[0].summary()], 'period_s')")
     # Paths: folders, missing, empty, NUL, the input itself, PathLike, devices
     readers = {"read_log": "zw.read_log(P)", "estimate(path)": "zw.estimate(P)", "Model.load": "zw.Model.load(P)",
                "FrequencyResponse.load": "zw.FrequencyResponse.load(P)", "estimate_logs": "zw.estimate_logs(P)",
@@ -414,9 +416,10 @@ def save_cases():
 
 
 def other_cases():
-    return [(f"{c}.__new__ without __init__, then repr", f"o = zw.{c}.__new__(zw.{c}); "
-             "expect_refused(lambda: repr(o) and o.__getstate__(), None, errors=(ValueError, TypeError, RuntimeError))")
-            for c in ("Log", "Model", "FrequencyResponse", "FitResult", "CriticalPoint", "ZWidth", "RelayResult")] + [("threads: estimate, fit, ZWidth, h5 reads and saves at once", "threads()"),
+    return [(f"{c}.__new__({c}{extra}) without __init__, then repr",
+             f"expect_refused(lambda: repr(zw.{c}.__new__(zw.{c}{extra})), None, errors=(ValueError, TypeError))")
+            for c in ("Log", "Model", "FrequencyResponse", "FitResult", "CriticalPoint", "ZWidth", "RelayResult")
+            for extra in ("", ", 1")] + [("threads: estimate, fit, ZWidth, h5 reads and saves at once", "threads()"),
             ("threads: mat reads and exports at once", "threads_mat()"),
             ("signals: handlers untouched by saves, Ctrl-C raises KeyboardInterrupt", "signals()")]
 
@@ -432,6 +435,7 @@ import zwidth as zw
 D = json.loads(os.environ["PROBE_FILES"])
 EXE = os.environ["ZWIDTH_EXE"]
 OUT = D["out"]; MODEL = D["model"]; LOGH5 = D["log_h5"]; LOGCSV = D["log_csv"]; FRFCSV = D["frf_csv"]
+RESTORE = zw.Model.table1().__reduce_ex__(2)[0]  # what pickle.loads calls
 M = zw.Model.table1(); MC = zw.Model.table1(); MFIT = zw.Model.load(D["model_fit"])
 LOG = zw.read_log(LOGH5); FRF = zw.FrequencyResponse.load(FRFCSV); SCENE = D["scene"]
 MARGS = dict(m=0.001168, b=0.00584, modes=[(479.166, 83.0, 417.612, 80.0)])

@@ -180,8 +180,9 @@ def test_a_constant_log_is_refused_as_the_readers_refuse_it(u, y, what, tmp_path
 def test_a_pickled_log_is_checked_as_the_constructor_checks(log, tmp_path):
     for rate, u in [(5.0, log.u), (float("nan"), log.u), (1000.0, np.r_[np.nan, log.u[1:]])]:
         state = ("", rate, u.tobytes(), log.y.tobytes())
+        restore, _ = log.__reduce_ex__(2)  # what pickle.loads calls
         with pytest.raises(ValueError):
-            zwidth.Log.__new__(zwidth.Log).__setstate__(state)
+            restore(zwidth.Log, state)
     assert pickle.loads(pickle.dumps(log)) == log  # a real one still round-trips
 
 
@@ -226,17 +227,18 @@ def test_a_pickled_response_of_inconsistent_arrays_is_refused(frf):
     s = list(frf.__getstate__())
     s[6] = s[6][:16]  # H of one bin
     with pytest.raises(ValueError, match="f_hz has"):
-        zwidth.FrequencyResponse.__new__(zwidth.FrequencyResponse).__setstate__(tuple(s))
+        frf.__reduce_ex__(2)[0](zwidth.FrequencyResponse, tuple(s))
     assert pickle.loads(pickle.dumps(frf)) == frf
 
 
 def test_a_pickled_zwidth_is_checked_as_the_constructor_checks():
-    s = list(zwidth.ZWidth(zwidth.Model.table1()).__getstate__())
+    z = zwidth.ZWidth(zwidth.Model.table1())
+    s = list(z.__getstate__())
     for i, v, kw in [(2, -5, "delay_samples"), (2, 5000, "delay_samples"), (1, float("nan"), "period_s")]:
         t = list(s)
         t[i] = v
         with pytest.raises(ValueError, match=kw):
-            zwidth.ZWidth.__new__(zwidth.ZWidth).__setstate__(tuple(t))
+            z.__reduce_ex__(2)[0](zwidth.ZWidth, tuple(t))
 
 
 def test_a_loop_delay_has_the_clis_bound(cli, table1_json, tmp_path):
@@ -312,3 +314,26 @@ def test_numbers_of_every_numeric_type_are_still_taken(log):
     a = zwidth.simulate(m, seconds=np.float32(2.0), sample_rate_hz=1000, seed=np.int64(3))
     b = zwidth.simulate(m, seconds=2.0, sample_rate_hz=1000.0, seed=3)
     assert a == b
+
+
+# --- An object never constructed: Class.__new__(Class) read uninitialised memory -----------------
+
+def test_new_without_init_is_refused_and_pickling_still_round_trips(log, frf):
+    m = zwidth.Model.table1()
+    z = zwidth.ZWidth(m)
+    objects = [m, log, frf, zwidth.fit(frf, modes=1, max_starts=1, delay_samples=0), z, z.point(0.01),
+               zwidth.relay(m, 2, 0.001, seconds=1.0)]
+    import copy
+    for o in objects:
+        cls = type(o)
+        for args in ((), (1,)):  # before: repr() of either crashed the interpreter (SIGSEGV)
+            with pytest.raises((TypeError, ValueError)):
+                cls.__new__(cls, *args)
+        assert pickle.loads(pickle.dumps(o)) == o
+        assert copy.copy(o) == o and copy.deepcopy(o) == o
+    made = zwidth.Model.__new__(zwidth.Model, 0.001, 0.005)  # with its arguments: a whole model
+    assert made == zwidth.Model(0.001, 0.005)
+
+    class Mine(zwidth.Model):  # a subclass is still made with its arguments
+        pass
+    assert Mine(0.001, 0.005).m == 0.001
