@@ -337,3 +337,39 @@ def test_new_without_init_is_refused_and_pickling_still_round_trips(log, frf):
     class Mine(zwidth.Model):  # a subclass is still made with its arguments
         pass
     assert Mine(0.001, 0.005).m == 0.001
+
+
+# --- Threads: the per-call C locale is per thread; HDF5 reads and saves at once do not deadlock ---
+
+def test_threads_estimate_fit_zwidth_and_hdf5_at_once_under_a_german_locale(log, frf, tmp_path, german):
+    import threading
+    log.save(tmp_path / "in.h5")
+    errors, texts = [], {}
+
+    def job(k):
+        try:
+            for i in range(4):
+                zwidth.read_log(tmp_path / "in.h5")
+                log.save(tmp_path / f"o{k}_{i}.h5")
+                log.save(tmp_path / f"o{k}_{i}.csv")
+                zwidth.ZWidth(zwidth.Model.table1(), delay_samples=2 + k).summary()
+            zwidth.fit(zwidth.estimate(tmp_path / "in.h5"), modes=1, max_starts=1, delay_samples=0)
+            try:
+                zwidth.estimate(log, overlap=1.5)
+            except ValueError as e:
+                texts[k] = str(e)
+        except Exception as e:  # noqa: BLE001 (reported below)
+            errors.append(f"{type(e).__name__}: {e}")
+
+    threads = [threading.Thread(target=job, args=(k,), daemon=True) for k in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(120)
+    assert not any(t.is_alive() for t in threads), "deadlock"
+    assert not errors
+    assert set(texts.values()) == {"overlap = 1.500000: must be in [0, 1)"}  # the C locale's in every thread
+    csv = [(tmp_path / f"o{k}_0.csv").read_bytes() for k in range(4)]
+    assert len(set(csv)) == 1 and csv[0].split(b"\n")[2].startswith(b"0.001,")  # '.' decimals, 3 columns
+    assert np.array_equal(zwidth.read_log(tmp_path / "o0_0.csv").u, log.u)
+    assert locale.localeconv()["decimal_point"] == ","  # the main thread's locale untouched
