@@ -76,8 +76,13 @@ def _guard_new(cls, constructible):
         if not constructible:
             raise TypeError(f"zwidth.{cls.__name__} is made by the module (zwidth.fit, ZWidth.point, "
                             "zwidth.relay), not by hand")
+        _signatures.check_numbers(init._numbers, (None,) + args, kwargs)
         obj = original(c)
-        init(obj, *args, **kwargs)
+        try:
+            init._builtin(obj, *args, **kwargs)  # C++: no Python frame holds obj if it raises
+        except BaseException:
+            del obj  # never constructed: not left in the traceback's locals (a verbose traceback reprs them)
+            raise
         return obj
 
     def __init__(self, *args, **kwargs):

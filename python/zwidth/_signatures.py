@@ -178,6 +178,7 @@ def wrap(f, module="zwidth", qualname=None):
     if qualname:
         wrapper.__qualname__ = qualname
     del wrapper.__wrapped__  # inspect would follow it to the builtin
+    wrapper._builtin, wrapper._numbers = f, numbers  # for a caller that must not leave a Python frame
     return wrapper
 
 

@@ -373,3 +373,19 @@ def test_threads_estimate_fit_zwidth_and_hdf5_at_once_under_a_german_locale(log,
     assert len(set(csv)) == 1 and csv[0].split(b"\n")[2].startswith(b"0.001,")  # '.' decimals, 3 columns
     assert np.array_equal(zwidth.read_log(tmp_path / "o0_0.csv").u, log.u)
     assert locale.localeconv()["decimal_point"] == ","  # the main thread's locale untouched
+
+
+def test_a_refused_constructor_leaves_no_unconstructed_object_in_the_traceback():
+    # A verbose traceback (IPython %xmode Verbose, pytest's) reprs every frame's locals: the half-made
+    # object of a refused ZWidth(...) used to be one of them, and its repr crashed the interpreter.
+    for make in (lambda: zwidth.ZWidth(zwidth.Model.table1(), period_s=0.5), lambda: zwidth.Log([1.0], [2.0], 1e3),
+                 lambda: zwidth.Model(1e300, 1.0), lambda: zwidth.FrequencyResponse([1.0], [1.0], 1e3, num_averages=0)):
+        with pytest.raises(ValueError) as e:
+            make()
+        tb, seen = e.value.__traceback__, 0
+        while tb is not None:
+            for v in list(tb.tb_frame.f_locals.values()):
+                repr(v)
+                seen += 1
+            tb = tb.tb_next
+        assert seen > 0
