@@ -1,5 +1,6 @@
 #include "model/simulate.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -110,6 +111,13 @@ SimulatedLog SimulateLog(const Plant& plant_in, const SimulateOptions& o) {
   const StateSpace d = DiscretizeZoh(plant, o.period_s());
   log.position = SimulateDiscrete(d, log.torque);
   ApplySensor(o, &log.position);
+  // A position that never leaves one encoder count is a log the readers refuse (a constant
+  // output): said here, in the options' words, rather than by the writer.
+  if (std::all_of(log.position.begin(), log.position.end(), [&](double y) { return y == log.position[0]; })) {
+    throw InputError("the simulated position is constant: every sample rounds to one encoder count "
+                     "(SimulateOptions::encoder_step_rad = " + FormatG(o.encoder_step_rad) + " rad): give a finer "
+                     "SimulateOptions::encoder_step_rad or a larger SimulateOptions::torque_rms");
+  }
   return log;
 }
 

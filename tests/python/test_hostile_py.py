@@ -196,6 +196,14 @@ def test_simulate_refuses_what_zwidth_simulate_refuses(cli, table1_json, tmp_pat
     assert not (tmp_path / "s.csv").exists()
 
 
+def test_a_simulated_position_that_never_moves_is_refused_naming_the_encoder_step(cli, table1_json, tmp_path):
+    r = cli("simulate", "--model", table1_json, "--encoder-step", "1e300", "-o", tmp_path / "s.csv", check=False)
+    assert r.returncode == 2 and "--encoder-step" in r.stderr and not (tmp_path / "s.csv").exists()
+    with pytest.raises(ValueError, match="encoder_step_rad = 1e[+]300"):
+        zwidth.simulate(zwidth.Model.table1(), seconds=2.0, encoder_step_rad=1e300)
+    assert len(set(zwidth.simulate(zwidth.Model.table1(), seconds=2.0).y)) > 100  # the default moves
+
+
 def test_a_rate_given_to_the_reader_has_the_files_range(log_h5, cli, tmp_path):
     with pytest.raises(ValueError, match="rate = 1e[+]300"):
         zwidth.read_log(log_h5, rate=1e300)
