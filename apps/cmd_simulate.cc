@@ -39,29 +39,9 @@ void AddSimulateCommand(CLI::App& app) {
   AddFrictionFlags(cmd, &f->friction);
   cmd->callback([f] {
     io::CheckOutputFolder(f->out, {f->model});
-    // At most kMaxSimulateSamples (1e8, 28 h at 1 kHz: 1.6 GB of samples in memory).
-    constexpr double kMaxSimulateSamples = 1e8;
-    // The readers refuse a log under 10 Hz (io/log.h); a band at or past Nyquist aliases.
-    if (!(f->o.sample_rate_hz > 10.0)) {
-      throw InputError("--rate " + Num(f->o.sample_rate_hz) + " Hz: a device log's rate must be above 10 Hz (the "
-                       "log readers refuse slower logs); --rate is in Hz, e.g. 1000");
-    }
-    // Exactly Nyquist is the documented "white" (model/simulate.h); past it is a slip.
-    if (f->o.bandwidth_hz > 0.5 * f->o.sample_rate_hz * (1.0 + 1e-12)) {
-      throw InputError("--bandwidth-hz " + Num(f->o.bandwidth_hz) + " is above Nyquist (" +
-                       Num(0.5 * f->o.sample_rate_hz) + " Hz at --rate " + Num(f->o.sample_rate_hz) +
-                       "): no sampled torque has a band there; give a band up to Nyquist (--bandwidth-hz " +
-                       Num(0.5 * f->o.sample_rate_hz) + " is white noise) or raise --rate");
-    }
-    const double samples = f->o.seconds * f->o.sample_rate_hz;
-    if (!(samples <= kMaxSimulateSamples)) {
-      throw InputError("--seconds x --rate = " + std::to_string(samples) + " samples, more than " +
-                       "simulate writes (1e8); shorten --seconds or lower --rate");
-    }
-    if (f->o.delay_samples > io::kMaxDelaySamples) {  // the model's own plus this one may not wrap
-      throw InputError("--delay-samples " + std::to_string(f->o.delay_samples) + " is more than " +
-                       std::to_string(io::kMaxDelaySamples));
-    }
+    // The rules of the options (rate, band, length, delay) are SimulateOptions::IsValid's.
+    std::string why;
+    if (!f->o.IsValid(&why)) throw InputError(WithFlags(why));
     const io::ModelFile mf = io::ReadModelJsonFor(f->model, "simulate --model");
     const model::Friction friction = ResolveFriction(f->friction, mf);
     const model::Actuator actuator = ResolveActuator(f->friction);

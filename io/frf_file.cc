@@ -191,8 +191,8 @@ void CheckBelowNyquist(const ident::FrequencyResponse& r, const std::string& sou
   const double nyquist = 0.5 * r.sample_rate_hz;
   if (r.f_hz.back() > nyquist * (1.0 + 1e-12)) {
     char msg[200];
-    std::snprintf(msg, sizeof msg, ": frequencies reach %g Hz, above the Nyquist frequency of %g Hz; wrong %s?",
-                  r.f_hz.back(), nyquist, rate_name);
+    std::snprintf(msg, sizeof msg, ": the frequencies f_hz reach %s Hz, above the Nyquist frequency of %s Hz; wrong %s?",
+                  Num(r.f_hz.back()).c_str(), Num(nyquist).c_str(), rate_name);
     throw InputError(source + msg);
   }
 }
@@ -210,7 +210,7 @@ void CheckBinValues(const ident::FrequencyResponse& r, const std::string& path) 
     if (!(r.coherence[k] >= 0.0 && r.coherence[k] <= 1.0)) {
       throw InputError(where + "coherence = " + Num(r.coherence[k]) + " is outside [0, 1]");
     }
-    if (!(r.f_hz[k] >= 0.0)) throw InputError(where + "a frequency must be >= 0");
+    if (!(r.f_hz[k] >= 0.0)) throw InputError(where + "f_hz = " + Num(r.f_hz[k]) + ": a frequency must be >= 0");
     const double suu = k < r.S_uu.size() ? r.S_uu[k] : 0.0, syy = k < r.S_yy.size() ? r.S_yy[k] : 0.0;
     if (!(suu >= 0.0 && syy >= 0.0)) {
       throw InputError(where + "S_uu = " + Num(suu) + ", S_yy = " + Num(syy) + ": a power spectral density is >= 0");
@@ -353,7 +353,8 @@ void CheckFiniteResponse(const ident::FrequencyResponse& r, const std::string& s
                                 std::to_string(k) + ", f = " + Num(r.f_hz[k]) + " Hz)";
       if (!std::isfinite(suu) || !std::isfinite(syy)) {  // the spectra themselves overflowed
         throw InputError(where + ": input scaled out of range (the spectra overflow: values near 1e154 or more "
-                         "square past 1e308); rescale the log's columns to SI units");
+                         "square past 1e308); rescale the log's columns to SI units (LogSelect::input_scale, "
+                         "LogSelect::output_scale)");
       }
       if (std::string(name) == "H_std") {
         throw InputError(where + ": the per-bin std cannot be estimated (a single segment has no scatter); "

@@ -1,7 +1,6 @@
 #include "io/log.h"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -19,6 +18,7 @@
 #include "io/io_internal.h"
 #include "io/log_internal.h"
 #include "io/isolated.h"
+#include "model/c_locale.h"
 #include "model/error.h"
 
 
@@ -148,6 +148,11 @@ LogInfo StreamLog(const std::string& path, const LogSelect& select, const LogSin
   if (select.sample_rate_hz < 0.0 || !std::isfinite(select.sample_rate_hz)) {
     throw InputError("LogSelect::sample_rate_hz must be finite and > 0");
   }
+  if (select.sample_rate_hz > 0.0 && !IsDeviceLogRate(select.sample_rate_hz)) {  // as a rate read from the file
+    throw InputError("LogSelect::sample_rate_hz = " + FormatG(select.sample_rate_hz) +
+                     " Hz: outside 10 Hz..1 MHz (10 excluded), the rates of a device log; is it the period? then "
+                     "give 1 / period");
+  }
   for (const auto& [v, flag] : {std::pair{select.input_scale, "LogSelect::input_scale"}, std::pair{select.output_scale, "LogSelect::output_scale"}}) {
     if (!std::isfinite(v) || v == 0.0) {
       throw InputError(std::string(flag) + " = " + std::to_string(v) + ": must be finite and non-zero");
@@ -216,7 +221,7 @@ LogInfo StreamLog(const std::string& path, const LogSelect& select, const LogSin
                              " log's time is read in s: if it is in ms, LogSelect::sample_rate_hz " +
                              [&] { std::ostringstream h; h.precision(4); h << r * 1e3; return h.str(); }() +
                              " gives the rate";
-    if (r <= 10.0 * (1.0 + 1e-9) || r > 1e6) {
+    if (!IsDeviceLogRate(r)) {
       throw InputError(path + ": " + os.str() + ", implausible for a device log (10 Hz..1 MHz)" + hint);
     }
     if (r < 100.0) info.warnings.push_back(os.str() + ", low for a haptic device log" + hint);
@@ -243,9 +248,35 @@ Log ReadLog(const std::string& path, const LogSelect& select) {
   return log;
 }
 
+void CheckLogSamples(double rate, const std::vector<double>& u, const std::vector<double>& y,
+                     const std::string& source) {
+  if (u.size() != y.size()) {
+    throw InputError(source + ": the input (u) has " + std::to_string(u.size()) + " samples and the output (y) " +
+                     std::to_string(y.size()) + ": they must have the same length");
+  }
+  if (!(std::isfinite(rate) && IsDeviceLogRate(rate))) {
+    throw InputError(source + ": sample_rate_hz = " + FormatG(rate) + " Hz: the readers take 10 Hz..1 MHz (10 "
+                     "excluded), the rates of a device log; is it the period? then give 1 / period");
+  }
+  for (const auto& [v, name] : {std::pair{&u, "input (u)"}, std::pair{&y, "output (y)"}}) {
+    for (size_t k = 0; k < v->size(); ++k) {
+      if (!std::isfinite((*v)[k])) {
+        throw InputError(source + ": " + name + "[" + std::to_string(k) + "] = " + FormatG((*v)[k]) +
+                         ": every sample must be finite");
+      }
+    }
+    internal::ConstantCheck c;
+    c.Add(v->data(), v->size());
+    if (!c.varies) {
+      throw InputError(source + ": the " + name + " is constant (" + std::to_string(v->size()) +
+                       " samples): the readers refuse such a log, it has nothing to identify from");
+    }
+  }
+}
+
 void WriteLog(const std::string& path, double rate, const std::vector<double>& u,
               const std::vector<double>& y) {
-  if (!(rate > 0.0)) throw InputError("sample rate must be > 0");
+  CheckLogSamples(rate, u, y, path);
   // By extension: the file is about to be (re)written.
   const bool h5 = HasExtension(path, {".h5", ".hdf5", ".he5"});
   if (h5) {

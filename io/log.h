@@ -116,7 +116,18 @@ namespace internal {
 LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& select, const LogSink& sink);
 }  // namespace internal
 
-// Writers (atomic). time may be empty: then t = k / sample_rate_hz.
+using model::IsDeviceLogRate;  // the readers' range of a rate (model/sample_period.h)
+
+// What the readers refuse in the samples they read, for a log made in memory
+// (Python's zwidth.Log, a simulated one): input and output of one length, every
+// sample finite, a rate in (10 Hz, 1 MHz] (the readers' range of a device log),
+// an input and an output that vary (a constant one, or a single sample, has
+// nothing to identify from). InputError naming `source` and the first problem.
+void CheckLogSamples(double sample_rate_hz, const std::vector<double>& input, const std::vector<double>& output,
+                     const std::string& source);
+
+// Writers (atomic), after CheckLogSamples: never a file the readers refuse.
+// time may be empty: then t = k / sample_rate_hz.
 void WriteLog(const std::string& path, double sample_rate_hz,
               const std::vector<double>& input, const std::vector<double>& output);
 

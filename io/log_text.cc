@@ -453,7 +453,7 @@ void ResolveRate(const std::string& path, const LogSelect& sel, const TimeChecke
       throw InputError(path + ": cannot tell the sample rate (fewer than 2 rows?); pass LogSelect::sample_rate_hz");
     }
     // 10 Hz itself is refused: a 10 kHz loop logged in ms reads as exactly that.
-    if (sel.time_unit.empty() && (info.sample_rate_hz <= 10.0 * (1.0 + 1e-9) || info.sample_rate_hz > 1e6)) {
+    if (sel.time_unit.empty() && !IsDeviceLogRate(info.sample_rate_hz)) {
       std::ostringstream os;
       os.precision(4);
       os << path << ": the time " << time_col_name << " implies a sample rate of " << info.sample_rate_hz

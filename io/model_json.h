@@ -59,7 +59,7 @@ inline constexpr int kModelFormatVersion = 1;
 
 // Limits of a model file, refused with an InputError naming the key:
 inline constexpr size_t kMaxModes = 64;            // entries of "modes"
-inline constexpr int kMaxDelaySamples = 1000;      // "delay_samples" in [0, this]
+inline constexpr int kMaxDelaySamples = model::kMaxDelaySamples;  // "delay_samples" in [0, this]
 inline constexpr double kPlausibleMin = 1e-12;     // m, b, omega, c, v, d in
 inline constexpr double kPlausibleMax = 1e12;      //   [min, max] (SI, rad/s)
 inline constexpr int kMaxJsonDepth = 64;           // nesting of [ and { (anywhere, "fit" too)

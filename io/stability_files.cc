@@ -130,7 +130,10 @@ std::string LoopDelaysProblem(const std::vector<int>& delays, const std::string&
 }
 
 std::vector<SceneObject> ReadScene(const std::string& path) {
-  const std::string text = ReadSmallFile(path, "scene file", kMaxSceneBytes);  // a regular file, bounded size
+  return ParseScene(ReadSmallFile(path, "scene file", kMaxSceneBytes), path);  // a regular file, bounded size
+}
+
+std::vector<SceneObject> ParseScene(const std::string& text, const std::string& path) {
   CheckNotJsonOfAnotherKind(text, path, "scene", "check");
   CheckJsonDepth(text, path);
   if (CountJsonObjects(text) > kMaxSceneObjects + 1) {

@@ -107,6 +107,10 @@ std::string DelayText(int loop_samples, int model_samples);
 void AddDelays(nlohmann::json* record, int loop_samples, int model_samples);
 inline constexpr size_t kMaxSceneBytes = 16u << 20;
 std::vector<SceneObject> ReadScene(const std::string& path);
+// The scene JSON text's objects, by ReadScene's rules (what `source` names in the
+// messages): at least one and at most kMaxSceneObjects, unique non-empty names,
+// K and B finite numbers >= 0.
+std::vector<SceneObject> ParseScene(const std::string& text, const std::string& source);
 
 // The largest B >= 0 with a passive K >= 0 (Colgate-Schenkel; bisection on
 // "the passive set is empty", which grows with B), for physical damping b.

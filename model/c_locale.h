@@ -6,7 +6,9 @@
 // print and imbue their streams with the classic locale.
 #pragma once
 
+#include <charconv>
 #include <clocale>
+#include <string>
 #include <locale.h>
 
 namespace zwidth {
@@ -29,5 +31,13 @@ class ScopedCLocale {
   locale_t c_;
   locale_t old_;
 };
+
+// v in %g (six significant digits) whatever the locale, for messages: printf's
+// %g and std::to_string follow the C locale a program (or Python) chose.
+inline std::string FormatG(double v) {
+  char b[32];
+  const auto r = std::to_chars(b, b + sizeof b, v, std::chars_format::general, 6);
+  return std::string(b, r.ptr);
+}
 
 }  // namespace zwidth

@@ -13,6 +13,10 @@
 
 namespace zwidth::model {
 
+// The largest input delay [samples] zwidth takes, a model's or a loop's (a delay
+// of 10^6 samples makes the sampled loop a polynomial of that degree).
+inline constexpr int kMaxDelaySamples = 1000;
+
 // One resonance/antiresonance section of eq. (1). SI units, rad/s.
 struct Mode {
   double omega = 0.0;  // pole-pair natural frequency w_i [rad/s], > 0
@@ -25,7 +29,7 @@ struct Plant {
   double m = 0.0;            // rigid-body inertia [kg m^2], > 0
   double b = 0.0;            // rigid-body viscous damping [N m s/rad], > 0
   std::vector<Mode> modes;   // 0..any resonance/antiresonance sections
-  int delay_samples = 0;     // input delay of the sampled model [samples], >= 0
+  int delay_samples = 0;     // input delay of the sampled model [samples], in [0, kMaxDelaySamples]
   std::string name;          // free text, optional
 
   int num_states() const { return 2 + 2 * static_cast<int>(modes.size()); }

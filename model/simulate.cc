@@ -1,10 +1,14 @@
 #include "model/simulate.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
 
+#include "model/c_locale.h"
 #include "model/error.h"
+#include "model/plant.h"
+#include "model/sample_period.h"
 #include "model/state_space.h"
 
 namespace zwidth::model {
@@ -18,8 +22,31 @@ bool SimulateOptions::IsValid(std::string* why) const {
   if (!(std::isfinite(encoder_step_rad) && encoder_step_rad >= 0)) return bad("SimulateOptions::encoder_step_rad must be >= 0");
   if (!(std::isfinite(noise_std_rad) && noise_std_rad >= 0)) return bad("SimulateOptions::noise_std_rad must be >= 0");
   if (delay_samples < 0) return bad("SimulateOptions::delay_samples must be >= 0");
+  if (delay_samples > kMaxDelaySamples) {  // the model's own plus this one may not wrap
+    return bad("SimulateOptions::delay_samples " + std::to_string(delay_samples) + " is more than " +
+               std::to_string(kMaxDelaySamples));
+  }
+  // The readers refuse a log outside their range (model/sample_period.h); a band past Nyquist aliases.
+  if (!IsDeviceLogRate(sample_rate_hz)) {
+    return bad("SimulateOptions::sample_rate_hz " + FormatG(sample_rate_hz) + " Hz: a device log's rate must be "
+               "above 10 Hz and at most 1 MHz (the log readers refuse others); it is in Hz, e.g. 1000");
+  }
+  // Exactly Nyquist is the documented "white"; past it is a slip.
+  if (bandwidth_hz > 0.5 * sample_rate_hz * (1.0 + 1e-12)) {
+    const std::string nyquist = FormatG(0.5 * sample_rate_hz);
+    return bad("SimulateOptions::bandwidth_hz " + FormatG(bandwidth_hz) + " is above Nyquist (" + nyquist +
+               " Hz at SimulateOptions::sample_rate_hz " + FormatG(sample_rate_hz) + "): no sampled torque has a "
+               "band there; give a band up to Nyquist (SimulateOptions::bandwidth_hz " + nyquist +
+               " is white noise) or raise SimulateOptions::sample_rate_hz");
+  }
+  // At most kMaxSimulateSamples (1e8, 28 h at 1 kHz: 1.6 GB of samples in memory).
+  constexpr double kMaxSimulateSamples = 1e8;
   if (seconds * sample_rate_hz < 2) return bad("SimulateOptions::seconds * SimulateOptions::sample_rate_hz must give at least 2 samples");
-  if (seconds * sample_rate_hz > 1e9) return bad("SimulateOptions::seconds * SimulateOptions::sample_rate_hz is over 1e9 samples");
+  if (!(seconds * sample_rate_hz <= kMaxSimulateSamples)) {
+    return bad("SimulateOptions::seconds x SimulateOptions::sample_rate_hz = " + FormatG(seconds * sample_rate_hz) +
+               " samples, more than simulate writes (1e8); shorten SimulateOptions::seconds or lower "
+               "SimulateOptions::sample_rate_hz");
+  }
   return true;
 }
 
@@ -84,6 +111,13 @@ SimulatedLog SimulateLog(const Plant& plant_in, const SimulateOptions& o) {
   const StateSpace d = DiscretizeZoh(plant, o.period_s());
   log.position = SimulateDiscrete(d, log.torque);
   ApplySensor(o, &log.position);
+  // A position that never leaves one encoder count is a log the readers refuse (a constant
+  // output): said here, in the options' words, rather than by the writer.
+  if (std::all_of(log.position.begin(), log.position.end(), [&](double y) { return y == log.position[0]; })) {
+    throw InputError("the simulated position is constant: every sample rounds to one encoder count "
+                     "(SimulateOptions::encoder_step_rad = " + FormatG(o.encoder_step_rad) + " rad): give a finer "
+                     "SimulateOptions::encoder_step_rad or a larger SimulateOptions::torque_rms");
+  }
   return log;
 }
 

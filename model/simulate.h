@@ -13,14 +13,14 @@
 namespace zwidth::model {
 
 struct SimulateOptions {
-  double seconds = 30.0;             // log length [s], > 0
-  double sample_rate_hz = 1000.0;    // [Hz], > 0
+  double seconds = 30.0;             // log length [s], > 0; seconds x sample_rate_hz in [2, 1e8] samples
+  double sample_rate_hz = 1000.0;    // [Hz], in (10, 1e6]: the log readers' range (IsDeviceLogRate)
   double period_s() const { return SamplePeriod(sample_rate_hz); }  // the sample period T [s]
   double torque_rms = 0.03;          // RMS of the torque [N m], > 0
-  double bandwidth_hz = 300.0;       // torque band limit [Hz], > 0; >= Nyquist = white
+  double bandwidth_hz = 300.0;       // torque band limit [Hz], in (0, Nyquist]; Nyquist = white
   double encoder_step_rad = 2.0 * 3.14159265358979323846 / 40960.0;  // rad per count; 0 = none
   double noise_std_rad = 0.0;        // additive Gaussian sensor noise [rad], >= 0
-  int delay_samples = 0;             // extra input delay [samples], >= 0 (adds to the model's)
+  int delay_samples = 0;             // extra input delay [samples], in [0, kMaxDelaySamples] (adds to the model's)
   uint64_t seed = 1;
 
   bool IsValid(std::string* why) const;

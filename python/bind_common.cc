@@ -7,7 +7,7 @@
 
 namespace zwidth::python {
 
-py::array CheckedArray(const py::handle& a, const char* name, bool complex) {
+py::array CheckedArray(const py::handle& a, const char* name, bool complex, int ndim) {
   py::module_ np = py::module_::import("numpy");
   py::array arr;
   try {
@@ -21,16 +21,17 @@ py::array CheckedArray(const py::handle& a, const char* name, bool complex) {
     throw py::type_error(std::string(name) + " must be an array of " + (complex ? "numbers" : "real numbers") +
                          " (float or int), not of dtype " + py::str(arr.dtype()).cast<std::string>());
   }
-  if (arr.ndim() != 1) {
+  if (arr.ndim() != ndim) {
     std::string shape = py::str(arr.attr("shape")).cast<std::string>();
     throw InputError(std::string(name) + " has shape " + shape +
-                     ": pass a 1-D array (one signal; a column of a 2-D array is a[:, j])");
+                     (ndim == 1 ? ": pass a 1-D array (one signal; a column of a 2-D array is a[:, j])"
+                                : ": pass a " + std::to_string(ndim) + "-D array"));
   }
   py::array finite = np.attr("isfinite")(arr);
   if (!finite.attr("all")().cast<bool>()) {
     const py::ssize_t i = np.attr("argmin")(finite).cast<py::ssize_t>();
     throw InputError(std::string(name) + "[" + std::to_string(i) + "] = " +
-                     py::str(arr[py::int_(i)]).cast<std::string>() +
+                     py::str(arr.attr("ravel")()[py::int_(i)]).cast<std::string>() +
                      ": every value must be finite (remove or interpolate the gaps first)");
   }
   return arr;
@@ -75,6 +76,23 @@ int Integer(const py::handle& v, const char* name) {
     throw InputError(std::string(name) + " = " + std::to_string(x) + ": out of range");
   }
   return static_cast<int>(x);
+}
+
+std::string PathFrom(const py::handle& p, const char* name) {
+  if (!py::isinstance<py::str>(p) && !py::isinstance<py::bytes>(p) && !py::hasattr(p, "__fspath__")) {
+    throw py::type_error(std::string(name) + " must be a path (str, bytes or os.PathLike), not " + TypeName(p));
+  }
+  // Python's own encoding of a file name (a Latin-1 name read by os.listdir comes back as it was).
+  const std::string path = py::module_::import("os").attr("fsencode")(p).cast<std::string>();
+  return CheckedPath(path, name);
+}
+
+const std::string& CheckedPath(const std::string& path, const char* name) {
+  if (path.find('\0') != std::string::npos) {  // the C library would stop at it: another file
+    throw InputError(std::string(name) + ": the path contains a NUL byte (at " + std::to_string(path.find('\0')) +
+                     "); no file name holds one");
+  }
+  return path;
 }
 
 bool SameState(const py::handle& a, const py::handle& b) {

@@ -35,6 +35,26 @@ namespace zwidth::python {
 
 namespace py = pybind11;
 
+// The C locale on the calling thread for the whole of a call (uselocale; other
+// threads and Python's own locale-aware functions keep theirs): the messages
+// the library formats with printf's %g or std::to_string (an InputError's
+// "overlap = -1.000000") are the CLI's under a German locale too. One per
+// binding, as the extra `kCLocale` of every def.
+struct CLocaleGuard {
+  CLocaleGuard() : old_(uselocale(CLocale())) {}
+  ~CLocaleGuard() { uselocale(old_); }
+  CLocaleGuard(const CLocaleGuard&) = delete;
+  CLocaleGuard& operator=(const CLocaleGuard&) = delete;
+
+ private:
+  static locale_t CLocale() {
+    static const locale_t c = newlocale(LC_ALL_MASK, "C", nullptr);  // kept for the process's life
+    return c;
+  }
+  locale_t old_;
+};
+inline constexpr py::call_guard<CLocaleGuard> kCLocale{};
+
 // A C-contiguous double array view of any array-like (lists, scalars, ints).
 using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
 
@@ -78,17 +98,13 @@ py::object JsonToPython(const nlohmann::json& j);
 
 // v in %g (six significant digits) whatever the locale: how reprs show numbers
 // (std::to_string's %f shows 1e-7 as 0.000000).
-inline std::string G(double v) {
-  char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, 6);
-  return std::string(buf, r.ptr);
-}
+inline std::string G(double v) { return zwidth::FormatG(v); }
 
-// The samples of a 1-D array of numbers (ints or floats; complex with `complex`),
-// every one finite: the argument `name`'s rule, with a message saying what to
-// pass. A non-numeric dtype is a TypeError (as NumPy's own), a wrong shape or a
-// NaN/inf sample an InputError.
-py::array CheckedArray(const py::handle& a, const char* name, bool complex = false);
+// The samples of an `ndim`-D array of numbers (ints or floats; complex with
+// `complex`), every one finite: the argument `name`'s rule, with a message saying
+// what to pass. A non-numeric dtype is a TypeError (as NumPy's own), a wrong
+// shape or a NaN/inf sample an InputError (the flat index of the first).
+py::array CheckedArray(const py::handle& a, const char* name, bool complex = false, int ndim = 1);
 std::vector<double> Samples(const py::handle& a, const char* name);
 std::vector<std::complex<double>> ComplexSamples(const py::handle& a, const char* name);
 // A finite number (a float, int or NumPy scalar; not a bool or a string).
@@ -117,7 +133,7 @@ bool SameState(const py::handle& a, const py::handle& b);
 // multiprocessing) and ==, which compares the states (NaN equal to NaN).
 template <class T, class Get, class Set, class... Options>
 void DefValue(py::class_<T, Options...>& cls, Get get, Set set) {
-  cls.def(py::pickle(get, set));
+  cls.def(py::pickle(get, set), kCLocale);
   cls.def("__eq__", [get](const T& a, const py::object& b) -> py::object {
     if (!py::isinstance<T>(b)) return py::reinterpret_borrow<py::object>(Py_NotImplemented);
     return py::bool_(SameState(get(a), get(b.template cast<const T&>())));
@@ -149,6 +165,11 @@ double ResolvePeriod(const std::optional<double>& period_s, io::ModelFile* model
 // A path or a sequence of paths (str or os.PathLike), as estimate_logs and
 // run take them; TypeError for another item.
 std::vector<std::string> PathsFrom(const py::object& paths);
+// One path argument `name` (str, bytes or os.PathLike, encoded as os.fsencode
+// does): TypeError for another type, InputError for a NUL byte, which the C
+// library would take as the end of the name (another file).
+std::string PathFrom(const py::handle& p, const char* name);
+const std::string& CheckedPath(const std::string& path, const char* name);
 
 // m.def(name, f, args..., extra...) with the keyword arguments given as a tuple.
 template <class F, class Args, class... Extra>

@@ -183,7 +183,7 @@ std::string FitRepr(const PyFitResult& p) {
 void BindFitResult(py::module_& m) {
   py::class_<PyFitResult> cls(m, "FitResult", "The outcome of zwidth.fit.");
   DefValue(cls, &FitState, &FitFrom);
-  cls.def("__repr__", &FitRepr)
+  cls.def("__repr__", &FitRepr, kCLocale)
       .def_property_readonly("used", [](const PyFitResult& r) {
              py::array_t<bool> a(static_cast<py::ssize_t>(r.result.band.used.size()));
              std::transform(r.result.band.used.begin(), r.result.band.used.end(), a.mutable_data(),
@@ -233,7 +233,7 @@ void BindFitResult(py::module_& m) {
                              "modes='auto': one dict per order tried (modes, chi2_per_dof, bic, pole_hz, ...)")
       .def_property_readonly("delay_choice", [](const PyFitResult& r) { return r.result.delay_choice; })
       .def("brief_report", [](const PyFitResult& r) { return r.result.BriefReport(); },
-           "One line, as `zwidth fit` prints it (the verdict is quality; repr() shows both).")
+           "One line, as `zwidth fit` prints it (the verdict is quality; repr() shows both).", kCLocale)
 ;
 }
 
@@ -286,14 +286,14 @@ fmax] Hz where the input has power (min_input_power_ratio) and the coherence
 InputError unless allow_short=True (then judged 'poor'). init: a Model tried
 first. A fit that does not converge is returned with its status (check
 .converged); check .quality ('good'/'poor') and .quality_reasons before
-using the numbers; bad options raise InputError.)doc");
+using the numbers; bad options raise InputError.)doc", kCLocale);
 }
 
 }  // namespace
 
 void BindFit(py::module_& m) {
   py::class_<fit::FitOptions>(m, "_FitOptions", "fit options (zwidth.run's, from _fit_options)");
-  DefWith(m, "_fit_options", &OptionsFrom, FitArgs(), "fit()'s options from its keywords (for zwidth.run).");
+  DefWith(m, "_fit_options", &OptionsFrom, FitArgs(), "fit()'s options from its keywords (for zwidth.run).", kCLocale);
   BindFitResult(m);
   BindFitFunction(m);
 }

@@ -44,13 +44,6 @@ ident::WelchOptions WelchFrom(int window_length, double overlap, const std::stri
 
 ident::FrequencyResponse Estimate(const std::vector<double>& u, const std::vector<double>& y,
                                   double sample_rate_hz, const ident::WelchOptions& o) {
-  if (u.size() != y.size()) {
-    throw InputError("u has " + std::to_string(u.size()) + " samples and y " + std::to_string(y.size()) +
-                     ": they must have the same length");
-  }
-  if (!(sample_rate_hz > 0.0 && std::isfinite(sample_rate_hz))) {
-    throw InputError("sample_rate_hz = " + std::to_string(sample_rate_hz) + ": must be finite and > 0");
-  }
   ident::WelchOptions w = o;  // window_length 0: the CLI's rule of the rate and length
   if (w.window_length == 0) w.window_length = ident::DefaultWindowLength(sample_rate_hz, u.size());
   py::gil_scoped_release release;
@@ -58,7 +51,9 @@ ident::FrequencyResponse Estimate(const std::vector<double>& u, const std::vecto
   // samples are chunked, so this equals the CLI's streaming pass.
   ident::WelchEstimator est(w);
   est.Push(u.data(), y.data(), u.size());
-  return est.Finish(sample_rate_hz);
+  ident::FrequencyResponse r = est.Finish(sample_rate_hz);
+  io::CheckFiniteResponse(r, "the estimate");  // as the CLI's estimate of a file (analysis::EstimateFromLogs)
+  return r;
 }
 
 // The local options of `--estimator lpm|lrm` (and --local-*), or nothing for
@@ -112,13 +107,12 @@ ident::FrequencyResponse EstimateLogsWarned(const std::vector<std::string>& file
 ident::FrequencyResponse EstimateEither(const std::vector<double>& u, const std::vector<double>& y,
                                         double sample_rate_hz, const ident::WelchOptions& o,
                                         const std::optional<ident::LocalModelOptions>& local) {
+  io::CheckLogSamples(sample_rate_hz, u, y, "estimate");  // what the readers refuse in a log file
   if (!local) return Estimate(u, y, sample_rate_hz, o);
-  if (u.size() != y.size()) {
-    throw InputError("u has " + std::to_string(u.size()) + " samples and y " + std::to_string(y.size()) +
-                     ": they must have the same length");
-  }
   py::gil_scoped_release release;
-  return ident::EstimateLocal({{u, y, {}}}, sample_rate_hz, *local).frf;
+  ident::FrequencyResponse r = ident::EstimateLocal({{u, y, {}}}, sample_rate_hz, *local).frf;
+  io::CheckFiniteResponse(r, "the estimate");
+  return r;
 }
 
 constexpr const char* kWelchDoc = R"doc(
@@ -173,21 +167,11 @@ auto WelchArgs() {
                          py::arg("local_differences") = LocalArgs{}.differences);
 }
 
-// The checks of a log made in memory: what the CLI's readers refuse in a file.
+// The checks of a log made in memory: what the CLI's readers refuse in a file
+// (io::CheckLogSamples), so that a Log is never one that save() cannot write.
 void CheckLog(const PyLog& l) {
-  if (l.u.size() != l.y.size()) {
-    throw InputError("u has " + std::to_string(l.u.size()) + " samples and y " + std::to_string(l.y.size()) +
-                     ": pass arrays of the same length");
-  }
-  if (l.u.empty()) throw InputError("u and y are empty: a log needs samples");
-  if (!(l.sample_rate_hz > 0.0 && std::isfinite(l.sample_rate_hz))) {
-    throw InputError("sample_rate_hz = " + G(l.sample_rate_hz) + ": must be finite and > 0 [Hz]");
-  }
-  // The readers' range (io/log.cc, log_text.cc): a log saved at 5 Hz would be one zwidth refuses.
-  if (l.sample_rate_hz <= 10.0 * (1.0 + 1e-9) || l.sample_rate_hz > 1e6) {
-    throw InputError("sample_rate_hz = " + G(l.sample_rate_hz) + " Hz: the readers take 10 Hz..1 MHz (10 excluded), "
-                     "the rates of a device log; is it the period? then pass 1 / period");
-  }
+  if (l.u.empty() && l.y.empty()) throw InputError("u and y are empty: a log needs samples");
+  io::CheckLogSamples(l.sample_rate_hz, l.u, l.y, l.source.empty() ? "Log" : l.source);
 }
 
 std::string LogRepr(const PyLog& l) {
@@ -208,7 +192,7 @@ void BindLog(py::module_& m) {
              return l;
            }),
            py::arg("u"), py::arg("y"), py::arg("sample_rate_hz"),
-           "u [N m] and y [rad]: 1-D arrays of finite numbers of the same length; sample_rate_hz [Hz] > 0.")
+           "u [N m] and y [rad]: 1-D arrays of finite numbers of the same length; sample_rate_hz [Hz] > 0.", kCLocale)
       .def_readonly("source", &PyLog::source, "the file it was read from ('' when made in memory)")
       .def_readonly("sample_rate_hz", &PyLog::sample_rate_hz, "[Hz]")
       .def_property_readonly("period_s", &PyLog::period_s, "the sample period T [s]")
@@ -220,7 +204,8 @@ void BindLog(py::module_& m) {
       }, "sample times k / sample_rate_hz [s] (the readers check that the file's are uniform)")
       .def_property_readonly("u", [](const PyLog& l) { return ToArray(l.u); }, "input (torque) [N m]")
       .def_property_readonly("y", [](const PyLog& l) { return ToArray(l.y); }, "output (position) [rad]")
-      .def("save", [](const PyLog& l, const std::string& path) {
+      .def("save", [](const PyLog& l, const py::object& p) {
+             const std::string path = PathFrom(p, "path");
              CheckLog(l);
              ScopedCLocale c;
              io::ForgetNotedInputs();
@@ -228,9 +213,9 @@ void BindLog(py::module_& m) {
            },
            py::arg("path"),
            "Writes the log as CSV (t,torque,position; '.' decimals whatever the locale) or HDF5 by the "
-           "extension (atomically).")
-      .def("__len__", [](const PyLog& l) { return l.u.size(); })
-      .def("__repr__", &LogRepr);
+           "extension (atomically).", kCLocale)
+      .def("__len__", [](const PyLog& l) { return l.u.size(); }, kCLocale)
+      .def("__repr__", &LogRepr, kCLocale);
   DefValue(cls, [](const PyLog& l) { return py::make_tuple(l.source, l.sample_rate_hz, Bytes(l.u), Bytes(l.y)); },
            [](const py::tuple& t) {
              PyLog l;
@@ -238,6 +223,7 @@ void BindLog(py::module_& m) {
              l.sample_rate_hz = t[1].cast<double>();
              l.u = FromBytes<double>(t[2]);
              l.y = FromBytes<double>(t[3]);
+             CheckLog(l);  // a state made by hand is checked as the constructor checks
              return l;
            });
 }
@@ -245,10 +231,11 @@ void BindLog(py::module_& m) {
 // zwidth.read_log: a log file read with the CLI's selectors.
 void BindReadLog(py::module_& m) {
   DefWith(m, "read_log",
-        [](const std::string& path, const std::string& input_column, const std::string& output_column,
+        [](const py::object& p, const std::string& input_column, const std::string& output_column,
            const std::string& time_column, const std::string& input_dataset, const std::string& output_dataset,
            const std::string& time_dataset, double rate, double input_scale, double output_scale,
            const std::string& time_unit, const std::string& delimiter, double max_interval_deviation) {
+          const std::string path = PathFrom(p, "path");
           io::LogSelect s = SelectFrom(input_column, output_column, time_column, input_dataset, output_dataset,
                                        time_dataset, rate, input_scale, output_scale, time_unit, delimiter);
           s.max_interval_deviation = max_interval_deviation;
@@ -274,7 +261,7 @@ rate [Hz] > 0 overrides the file's (--rate); input_scale, output_scale
 multiply the signals (counts to rad, volts to N m: --input-scale,
 --output-scale); time_unit "s" | "ms" | "us" ("" = s, a unit in the column's
 name refused: --time-unit); delimiter "" (detected), ";", "\t", "," or " "
-(--delimiter). Raises InputError naming the file, row or dataset.)doc");
+(--delimiter). Raises InputError naming the file, row or dataset.)doc", kCLocale);
 }
 
 // zwidth.FrequencyResponse: made, loaded, saved, read.
@@ -309,21 +296,23 @@ void BindFrequencyResponse(py::module_& m) {
            py::arg("H_std") = py::none(), py::arg("num_averages") = 1,
            "A response measured elsewhere: f_hz [Hz] increasing, below Nyquist (sample_rate_hz / 2); "
            "complex H; missing coherence is 1 and H_std |H| 1e-3 (equal relative weights), "
-           "as for a response file without those columns.")
-      .def_static("load", [](const std::string& path, double sample_rate_hz) {
+           "as for a response file without those columns.", kCLocale)
+      .def_static("load", [](const py::object& p, double sample_rate_hz) {
+                    const std::string path = PathFrom(p, "path");
                     py::gil_scoped_release release;
                     ScopedCLocale c;
                     return io::ReadFrequencyResponse(path, sample_rate_hz);
                   },
                   py::arg("path"), py::arg("sample_rate_hz") = 0.0,
-                  "Reads a response file of `zwidth estimate` (CSV or HDF5).")
-      .def("save", [](const ident::FrequencyResponse& r, const std::string& path) {
+                  "Reads a response file of `zwidth estimate` (CSV or HDF5).", kCLocale)
+      .def("save", [](const ident::FrequencyResponse& r, const py::object& p) {
+             const std::string path = PathFrom(p, "path");
              io::CheckResponseValues(r, "FrequencyResponse");  // never a file the reader refuses
              ScopedCLocale c;
              io::ForgetNotedInputs();  // each call is its own command
              io::WriteFrequencyResponse(path, r);
            },
-           py::arg("path"), "Writes it as `zwidth estimate -o` does (CSV or HDF5 by extension).");
+           py::arg("path"), "Writes it as `zwidth estimate -o` does (CSV or HDF5 by extension).", kCLocale);
   cls.def_readonly("sample_rate_hz", &ident::FrequencyResponse::sample_rate_hz, "[Hz]")
       .def_property_readonly("period_s", &ident::FrequencyResponse::period_s,
                              "the sample period T [s] of the log it was estimated from")
@@ -350,14 +339,14 @@ void BindFrequencyResponse(py::module_& m) {
                              [](const ident::FrequencyResponse& r) { return ToArray(r.distortion_var); },
                              "estimator='robust' with several realisations: per bin, the variance from the "
                              "nonlinear distortions (else empty)")
-      .def("__len__", [](const ident::FrequencyResponse& r) { return r.f_hz.size(); })
+      .def("__len__", [](const ident::FrequencyResponse& r) { return r.f_hz.size(); }, kCLocale)
       .def("__repr__", [](const ident::FrequencyResponse& r) {
         std::string s = "<zwidth.FrequencyResponse " + std::to_string(r.f_hz.size()) + " bins";
         if (!r.f_hz.empty()) s += " " + G(r.f_hz.front()) + "-" + G(r.f_hz.back()) + " Hz";
         s += ", " + std::to_string(r.num_averages) + " averages";
         if (r.num_averages < 3) s += " (fewer than 3: fit() refuses it without allow_short=True)";
         return s + ", sample_rate_hz=" + G(r.sample_rate_hz) + ">";
-      });
+      }, kCLocale);
   DefValue(cls,
            [](const ident::FrequencyResponse& r) {
              return py::make_tuple(r.sample_rate_hz, r.window_length, r.num_averages, r.effective_averages,
@@ -379,6 +368,14 @@ void BindFrequencyResponse(py::module_& m) {
              r.S_yy = FromBytes<double>(t[10]);
              r.S_uy = FromBytes<std::complex<double>>(t[11]);
              r.used_by_fit = FromBytes<char>(t[12]);
+             // A state made by hand: the reader's rules (never a response save() cannot write).
+             io::CheckResponseValues(r, "FrequencyResponse state");
+             const size_t n = r.f_hz.size();
+             if (r.S_uu.size() != n || r.S_yy.size() != n || r.S_uy.size() != n ||
+                 !(r.used_by_fit.empty() || r.used_by_fit.size() == n)) {
+               throw InputError("FrequencyResponse state: the spectra or the used mask have another length than "
+                                "f_hz (" + std::to_string(n) + ")");
+             }
              return r;
            });
 }
@@ -403,13 +400,13 @@ void BindEstimate(py::module_& m) {
           lo.select = s;
           lo.welch = o;
           lo.local = local;
-          return EstimateLogsWarned({path}, lo);
+          return EstimateLogsWarned({CheckedPath(path, "path")}, lo);
         },
         std::tuple_cat(std::make_tuple(py::arg("path")), WelchArgs(), SelectorArgs()),
         "estimate(path, ...): streamed from a log file as `zwidth estimate` does (a few windows in memory, "
-        "whatever the log's length), with read_log's selectors.");
+        "whatever the log's length), with read_log's selectors.", kCLocale);
   DefWith(m, "estimate",
-        [](const py::array& u, const py::array& y, double sample_rate_hz, int window_length, double overlap,
+        [](const py::object& u, const py::object& y, double sample_rate_hz, int window_length, double overlap,
            const std::string& window, const std::string& detrend, const std::string& estimator, double fmin,
            double fmax, int local_half_width, int local_order, int local_denominator_order, int local_differences) {
           const ident::WelchOptions o = WelchFrom(window_length, overlap, window, detrend, estimator, fmin, fmax);
@@ -419,7 +416,7 @@ void BindEstimate(py::module_& m) {
           return EstimateEither(uv, Samples(y, "y"), sample_rate_hz, o, local);
         },
         std::tuple_cat(std::make_tuple(py::arg("u"), py::arg("y"), py::arg("sample_rate_hz")), WelchArgs()),
-        kWelchDoc);
+        kWelchDoc, kCLocale);
   DefWith(m, "estimate",
         [](const PyLog& log, int window_length, double overlap, const std::string& window,
            const std::string& detrend, const std::string& estimator, double fmin, double fmax, int local_half_width,
@@ -434,7 +431,7 @@ void BindEstimate(py::module_& m) {
             throw InputError(log.source + ": " + e.what());
           }
         },
-        std::tuple_cat(std::make_tuple(py::arg("log")), WelchArgs()), "estimate(log, ...): the same from a Log.");
+        std::tuple_cat(std::make_tuple(py::arg("log")), WelchArgs()), "estimate(log, ...): the same from a Log.", kCLocale);
 }
 
 // estimate_logs()'s options from its keywords (the CLI's EstimateFlags::Options).
@@ -504,12 +501,13 @@ reference_dataset (HDF5) gives H = S_ry / S_ru; estimator 'h1' | 'h2'
 random-phase realisation, transient_periods dropped first: noise_var and
 distortion_var per line, and the fit's verdict reads them).
 Warnings (samples left out, ...) are raised as UserWarning; errors as
-InputError naming the file.)doc");
+InputError naming the file.)doc", kCLocale);
   m.def("_estimate_logs", [](const py::object& paths, const analysis::LogsEstimateOptions& o) {
           const std::vector<std::string> files = PathsFrom(paths);
+          if (files.empty()) throw InputError("paths: no log given: pass a log file's path (or several)");
           return EstimateLogsWarned(files, o);
         },
-        py::arg("paths"), py::arg("options"), "estimate_logs(paths, **keywords) with the options made.");
+        py::arg("paths"), py::arg("options"), "estimate_logs(paths, **keywords) with the options made.", kCLocale);
 }
 
 // zwidth.simulate: a simulated log.
@@ -534,6 +532,7 @@ void BindSimulate(py::module_& m) {
             l.u = std::move(s.torque);
             l.y = std::move(s.position);
           }
+          CheckLog(l);  // as `zwidth simulate -o` refuses to write it (io::WriteLog)
           return l;
         },
         py::arg("model"), py::arg("seconds") = 30.0, py::arg("sample_rate_hz") = 1000.0,
@@ -543,23 +542,21 @@ void BindSimulate(py::module_& m) {
         R"doc(A simulated log as `zwidth simulate` makes it: band-limited white-noise
 torque through the exact sampled plant, encoder quantisation (rad per count,
 0 = none) and Gaussian sensor noise. Seeded: the same arguments give the
-same samples.)doc");
+same samples.)doc", kCLocale);
 }
 
 }  // namespace
 
 std::vector<std::string> PathsFrom(const py::object& paths) {
   std::vector<std::string> files;
-  if (py::isinstance<py::str>(paths)) {
-    files.push_back(paths.cast<std::string>());
+  if (py::isinstance<py::str>(paths) || py::isinstance<py::bytes>(paths) || py::hasattr(paths, "__fspath__")) {
+    files.push_back(PathFrom(paths, "paths"));
   } else {
-    for (const py::handle& p : paths) {
-      if (!py::isinstance<py::str>(p) && !py::hasattr(p, "__fspath__")) {
-        throw py::type_error("paths: expected a path or a sequence of paths, got an item of type " +
-                             py::str(py::type::of(p).attr("__name__")).cast<std::string>());
-      }
-      files.push_back(py::str(py::module_::import("os").attr("fspath")(p)).cast<std::string>());
+    if (!py::hasattr(paths, "__iter__")) {
+      throw py::type_error("paths: expected a path or a sequence of paths, not " +
+                           py::str(py::type::of(paths).attr("__name__")).cast<std::string>());
     }
+    for (const py::handle& p : paths) files.push_back(PathFrom(p, "paths"));
   }
   return files;
 }
@@ -574,8 +571,8 @@ void BindValidate(py::module_& m) {
           o.max_lag = max_lag;
           o.relative_std_floor = relative_std_floor;
           io::Log l;
-          if (py::isinstance<py::str>(log)) {
-            const std::string path = log.cast<std::string>();
+          if (!py::isinstance<PyLog>(log)) {
+            const std::string path = PathFrom(log, "log");
             io::ForgetNotedInputs();  // each call is its own command (the provenance's inputs)
             py::gil_scoped_release release;
             ScopedCLocale c;
@@ -609,7 +606,7 @@ reasons, fit_percent (the simulated output's NRMSE fit %), chi2_per_dof of the
 fresh response against the model in units of its per-bin std with chi2_limit,
 the residual's autocorrelation and cross-correlation with the input against
 correlation_bound (99 %), warnings, and the provenance. Raises InputError for
-a log of another rate than the model's or one too short.)doc");
+a log of another rate than the model's or one too short.)doc", kCLocale);
 }
 
 void BindIdent(py::module_& m) {

@@ -53,22 +53,24 @@ std::optional<double> CheckedPeriod(std::optional<double> T) {
   return T;
 }
 
-// The plant after `change`, kept only when it validates (a Model never holds
-// what zwidth would refuse to read back).
-template <typename F>
-void Change(io::ModelFile& mf, F&& change) {
-  model::Plant p = mf.plant;
-  change(p);
-  p.Validate();
-  mf.plant = std::move(p);
-}
-
-// The model JSON as the CLI writes it, checked by the CLI's reader first, so
-// that save() never writes a file `zwidth` refuses.
+// The model JSON as the CLI writes it, checked by the CLI's reader
+// (io::ParseModelJson: finite, the plausible range, the delay's and the
+// period's bounds, the covariance), so that a Model never holds and save()
+// never writes what `zwidth` refuses to read.
 nlohmann::json CheckedJson(const io::ModelFile& mf) {
+  mf.plant.Validate();  // its messages name the keyword (m, modes[0].omega, ...)
   nlohmann::json j = io::ModelToJson(mf);
   io::ParseModelJson(j.dump(), "the model");
   return j;
+}
+
+// The model after `change`, kept only when the reader takes it.
+template <typename F>
+void Change(io::ModelFile& mf, F&& change) {
+  io::ModelFile m = mf;
+  change(m);
+  CheckedJson(m);
+  mf = std::move(m);
 }
 
 std::string ReprOf(const io::ModelFile& mf) {
@@ -134,29 +136,31 @@ void DefModelConstructionAndFiles(py::class_<io::ModelFile>& cls) {
              mf.plant.modes = ModesFrom(modes);
              mf.plant.delay_samples = Integer(delay_samples, "delay_samples");
              mf.plant.name = name;
-             mf.plant.Validate();
              mf.sample_period_s = CheckedPeriod(sample_period_s);
+             CheckedJson(mf);
              return mf;
            }),
            py::arg("m"), py::arg("b"), py::arg("modes") = std::vector<ModeTuple>{}, py::arg("delay_samples") = 0,
-           py::arg("name") = "", py::arg("sample_period_s") = py::none())
-      .def_static("load", [](const std::string& path) { ScopedCLocale c; return io::ReadModelJson(path); }, py::arg("path"),
-                  "Reads a model JSON file (the CLI's format); InputError names the file and the key.")
+           py::arg("name") = "", py::arg("sample_period_s") = py::none(), kCLocale)
+      .def_static("load", [](const py::object& path) { ScopedCLocale c; return io::ReadModelJson(PathFrom(path, "path")); }, py::arg("path"),
+                  "Reads a model JSON file (the CLI's format); InputError names the file and the key.", kCLocale)
       .def_static("from_json", [](const std::string& text) { return io::ParseModelJson(text, "<string>"); },
-                  py::arg("text"), "Parses model JSON text.")
-      .def_static("table1", &io::Table1Model, "Table I of the paper (PHANToM 1.0, phi axis), built into the library.")
-      .def("save", [](const io::ModelFile& mf, const std::string& path) {
+                  py::arg("text"), "Parses model JSON text.", kCLocale)
+      .def_static("table1", &io::Table1Model, "Table I of the paper (PHANToM 1.0, phi axis), built into the library.", kCLocale)
+      .def("save", [](const io::ModelFile& mf, const py::object& p) {
+             const std::string path = PathFrom(p, "path");
              CheckedJson(mf);
              ScopedCLocale c;
              io::ForgetNotedInputs();  // each call is its own command: a model loaded earlier may be replaced
              io::SetInvocation("zwidth.Model.save(" + nlohmann::json(io::Utf8ForJson(path)).dump() + ")");  // provenance
              io::WriteModelJson(path, mf);
            },
-           py::arg("path"), "Writes the model JSON (atomically; the CLI reads it back).")
+           py::arg("path"), "Writes the model JSON (atomically; the CLI reads it back).", kCLocale)
       .def("to_json", [](const io::ModelFile& mf) { return io::ModelToJson(mf).dump(2); },
-           "The model JSON as text.")
-      .def("export", [](const io::ModelFile& mf, const std::string& path, const std::string& format,
+           "The model JSON as text.", kCLocale)
+      .def("export", [](const io::ModelFile& mf, const py::object& p, const std::string& format,
                         std::optional<double> period_s) {
+             const std::string path = PathFrom(p, "path");
              io::ExportFormat f;
              if (!io::FromString(format, &f)) {
                throw InputError("format '" + format + "' is not one of json, hdf5, matlab, python, statespace, mat, mat73");
@@ -172,28 +176,30 @@ void DefModelConstructionAndFiles(py::class_<io::ModelFile>& cls) {
            },
            py::arg("path"), py::arg("format"), py::arg("period_s") = py::none(),
            "Exports like `zwidth export` (format json | hdf5 | matlab | python | statespace); "
-           "period_s adds the discrete model.");
+           "period_s adds the discrete model.", kCLocale);
 }
 
 // Model: the parameters (read-write), std, covariance, fit_info.
 void DefModelParameters(py::class_<io::ModelFile>& cls) {
   cls.def_property("m", [](const io::ModelFile& mf) { return mf.plant.m; },
-                    [](io::ModelFile& mf, const py::object& v) { Change(mf, [&](model::Plant& p) { p.m = Number(v, "m"); }); }, "rigid-body inertia [kg m^2]")
+                    [](io::ModelFile& mf, const py::object& v) { Change(mf, [&](io::ModelFile& c) { c.plant.m = Number(v, "m"); }); }, "rigid-body inertia [kg m^2]")
       .def_property("b", [](const io::ModelFile& mf) { return mf.plant.b; },
-                    [](io::ModelFile& mf, const py::object& v) { Change(mf, [&](model::Plant& p) { p.b = Number(v, "b"); }); }, "rigid-body viscous damping [N m s/rad]")
+                    [](io::ModelFile& mf, const py::object& v) { Change(mf, [&](io::ModelFile& c) { c.plant.b = Number(v, "b"); }); }, "rigid-body viscous damping [N m s/rad]")
       .def_property("modes", [](const io::ModelFile& mf) { return ModesOf(mf.plant); },
                     [](io::ModelFile& mf, const py::object& t) {
-                      Change(mf, [&](model::Plant& p) { p.modes = ModesFrom(t); });
-                      // The covariance and std are of the old sections: dropped, never kept truncated.
-                      mf.log_covariance.clear();
-                      mf.std_errors.reset();
+                      Change(mf, [&](io::ModelFile& c) {
+                        c.plant.modes = ModesFrom(t);
+                        // The covariance and std are of the old sections: dropped, never kept truncated.
+                        c.log_covariance.clear();
+                        c.std_errors.reset();
+                      });
                     },
                     "list of (omega, c, v, d) per section [rad/s]: pole pair w, its damping c = 2 zeta w, "
                     "zero pair v, its damping d. Setting it drops the covariance and std (they were of the "
                     "old sections).")
       .def_property("delay_samples", [](const io::ModelFile& mf) { return mf.plant.delay_samples; },
                     [](io::ModelFile& mf, const py::object& v) {
-                      Change(mf, [&](model::Plant& p) { p.delay_samples = Integer(v, "delay_samples"); });
+                      Change(mf, [&](io::ModelFile& c) { c.plant.delay_samples = Integer(v, "delay_samples"); });
                     },
                     "input delay of the sampled model [samples]")
       .def_property("name", [](const io::ModelFile& mf) { return mf.plant.name; },
@@ -203,7 +209,9 @@ void DefModelParameters(py::class_<io::ModelFile>& cls) {
                     "the axis: 'rotary' (kg m^2, N m s/rad, rad) or 'linear' (kg, N s/m, m); kept in the "
                     "model file, and every label that reads the model follows it")
       .def_property("sample_period_s", [](const io::ModelFile& mf) { return mf.sample_period_s; },
-                    [](io::ModelFile& mf, std::optional<double> v) { mf.sample_period_s = CheckedPeriod(v); },
+                    [](io::ModelFile& mf, std::optional<double> v) {
+                      Change(mf, [&](io::ModelFile& c) { c.sample_period_s = CheckedPeriod(v); });
+                    },
                     "sample period the model was fitted at [s], or None")
       .def_property_readonly("std", &StdOf,
                              "standard errors {'m', 'b', 'modes': [(omega, c, v, d), ...]} of a fitted model "
@@ -211,10 +219,16 @@ void DefModelParameters(py::class_<io::ModelFile>& cls) {
       .def_property("covariance", &CovarianceOf,
                     [](io::ModelFile& mf, const py::object& c) {
                       if (c.is_none()) { mf.log_covariance.clear(); return; }
-                      py::array a = CheckedArray(py::array::ensure(c).attr("ravel")(), "covariance");
-                      std::vector<double> v = Samples(a, "covariance");
-                      stability::CheckLogCovariance(mf.plant, v);
-                      mf.log_covariance = std::move(v);
+                      // An (n, n) array, as the JSON's rows (io::ParseModelJson reads them).
+                      const py::array a = CheckedArray(c, "covariance", false, 2);
+                      const auto n = static_cast<py::ssize_t>(stability::LogParameterNames(mf.plant).size());
+                      if (a.ndim() != 2 || a.shape(0) != n || a.shape(1) != n) {
+                        throw InputError("covariance has shape " + py::str(a.attr("shape")).cast<std::string>() +
+                                         ": give the (" + std::to_string(n) + ", " + std::to_string(n) +
+                                         ") matrix of covariance_names");
+                      }
+                      std::vector<double> v = Samples(a.attr("ravel")(), "covariance");
+                      Change(mf, [&](io::ModelFile& m) { m.log_covariance = std::move(v); });
                     },
                     "the fit's parameter covariance in log space (the JSON's \"covariance\"), an (2 + 4 N)^2 "
                     "array ordered as covariance_names; None when the model has none. Gives 'std' in "
@@ -244,16 +258,16 @@ void DefModelParameters(py::class_<io::ModelFile>& cls) {
 // Model: validate, response, state_space, repr, pickling.
 void DefModelComputations(py::class_<io::ModelFile>& cls) {
   cls.def("validate", [](const io::ModelFile& mf) { mf.plant.Validate(); },
-           "Raises InputError naming the first invalid parameter.")
+           "Raises InputError naming the first invalid parameter.", kCLocale)
       .def("response", &Response, py::arg("f_hz"), py::arg("period_s") = py::none(),
            R"doc(Frequency response at f_hz (array-like, Hz), complex, same shape.
 period_s=None: G(j 2 pi f) of eq. (1). Else the exact zero-order-hold
-sampled model G_d(e^{j 2 pi f T}) z^-delay_samples at T = period_s.)doc")
+sampled model G_d(e^{j 2 pi f T}) z^-delay_samples at T = period_s.)doc", kCLocale)
       .def("state_space", &StateSpaceOf, py::arg("period_s") = py::none(),
            R"doc((A, B, C, D) NumPy matrices. period_s=None: the continuous cascade
 realisation of model/state_space.h. Else its exact ZOH discretisation with
-the input delay realised as extra states.)doc")
-      .def("__repr__", &ReprOf);
+the input delay realised as extra states.)doc", kCLocale)
+      .def("__repr__", &ReprOf, kCLocale);
   DefValue(cls, [](const io::ModelFile& mf) { return py::make_tuple(io::ModelToJson(mf).dump()); },
            [](const py::tuple& t) { return io::ParseModelJson(t[0].cast<std::string>(), "<pickle>"); });
 }

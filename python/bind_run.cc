@@ -39,11 +39,12 @@ py::dict RunResult(const report::RunJobResult& r, const std::string& folder) {
 void BindRun(py::module_& m) {
   const analysis::RunOptions d;
   m.def("_run",
-        [](const py::object& logs, const std::string& out_dir, const analysis::LogsEstimateOptions& estimate,
+        [](const py::object& logs, const py::object& out_path, const analysis::LogsEstimateOptions& estimate,
            const fit::FitOptions& fit, bool force, bool figures, bool png, const std::optional<std::string>& reference,
            const std::vector<int>& delays, const std::string& units, std::optional<double> velocity_filter_hz,
            std::optional<std::tuple<double, double, double>> hand, std::optional<double> b_step, int b_points,
            double report_filter_hz, const std::string& friction, bool table2, const std::string& command_line) {
+          const std::string out_dir = PathFrom(out_path, "out_dir");
           report::RunJob job;
           job.input.logs = PathsFrom(logs);
           if (job.input.logs.empty()) throw InputError("logs: no log given: pass a log file's path (or several)");
@@ -64,7 +65,8 @@ void BindRun(py::module_& m) {
           io::ForgetNotedInputs();  // each call is its own command (the provenance's inputs)
           io::SetInvocation(command_line);
           if (reference) {
-            job.input.reference = io::ReadReferenceModel(*reference, "reference", &job.input.reference_is_table1);
+            job.input.reference = io::ReadReferenceModel(CheckedPath(*reference, "reference"), "reference",
+                                                         &job.input.reference_is_table1);
             job.input.reference_name = *reference;
           }
           // The run's files are `zwidth run`'s, byte for byte (advice in the CLI's
@@ -96,7 +98,7 @@ void BindRun(py::module_& m) {
         py::arg("hand") = py::none(), py::arg("b_step") = py::none(), py::arg("b_points") = d.grid.b_points,
         py::arg("report_filter_hz") = d.report_filter_hz, py::arg("friction") = "auto", py::arg("table2") = false,
         py::arg("command_line") = "",
-        "zwidth.run's core: the options made by _estimate_logs_options and _fit_options.");
+        "zwidth.run's core: the options made by _estimate_logs_options and _fit_options.", kCLocale);
   // zwidth.batch's tables (python/zwidth/_batch.py works on their CSV text): io::ReadBatchTable
   // and io::WriteBatchTable, so that a table at an .h5 path is the command's HDF5 table.
   m.def("_read_batch_table",
@@ -108,14 +110,14 @@ void BindRun(py::module_& m) {
           }
           return io::FormatBatchCsv(t);
         },
-        py::arg("path"), "The batch table at path (CSV or HDF5) as CSV text.");
+        py::arg("path"), "The batch table at path (CSV or HDF5) as CSV text.", kCLocale);
   m.def("_write_batch_table",
         [](const std::string& path, const std::string& csv_text) {
           py::gil_scoped_release release;
           io::WriteBatchTable(path, io::ParseBatchCsv(csv_text, "the rows of zwidth.batch"));
         },
         py::arg("path"), py::arg("csv_text"),
-        "Writes a batch table's CSV text to path atomically: HDF5 for .h5/.hdf5/.he5, else CSV.");
+        "Writes a batch table's CSV text to path atomically: HDF5 for .h5/.hdf5/.he5, else CSV.", kCLocale);
 }
 
 }  // namespace zwidth::python

@@ -47,8 +47,9 @@ stability::LoopOptions LoopFrom(std::optional<double> velocity_filter_hz,
 namespace {
 
 
+// A loop delay by the CLI's rule of --delays (io::LoopDelaysProblem: [0, 1000] samples).
 void CheckDelay(int d, const char* name) {
-  if (d < 0) throw InputError(std::string(name) + " = " + std::to_string(d) + ": delays must be >= 0 samples");
+  if (const std::string why = io::LoopDelaysProblem({d}, name); !why.empty()) throw InputError(why);
 }
 
 // B (or K) values as a C-order double array, each finite and >= 0 as `zwidth
@@ -87,20 +88,35 @@ py::tuple ZWidthState(const PyZWidth& z) {
                         z.velocity_filter_hz, z.hand);
 }
 
-std::unique_ptr<PyZWidth> ZWidthFrom(const py::tuple& t) {
+// A ZWidth from what the constructor takes, each value checked (the
+// constructor's and the pickled state's one way in).
+std::unique_ptr<PyZWidth> NewZWidth(const io::ModelFile& model, std::optional<double> period_s,
+                                    const py::object& delay_samples, const stability::BoundaryOptions& options,
+                                    std::optional<double> velocity_filter_hz, std::optional<Hand> hand) {
   auto p = std::make_unique<PyZWidth>();
-  p->model = io::ParseModelJson(t[0].cast<std::string>(), "<pickle>");
-  p->period_arg = t[1].cast<std::optional<double>>();
-  p->delay_samples = t[2].cast<int>();
-  const py::tuple o = t[3];
-  p->options.min_grid_points = o[0].cast<int>();
-  p->options.grid_points_per_delay = o[1].cast<int>();
-  p->options.theta_tolerance = o[2].cast<double>();
-  p->options.verify = o[3].cast<bool>();
-  p->velocity_filter_hz = t[4].cast<std::optional<double>>();
-  p->hand = t[5].cast<std::optional<Hand>>();
+  p->delay_samples = Integer(delay_samples, "delay_samples");
+  CheckDelay(p->delay_samples, "delay_samples");
+  p->options = options;
+  std::string why;
+  if (!p->options.IsValid(&why)) throw InputError(why);
+  model.plant.Validate();
+  p->model = model;
+  p->period_arg = period_s;
+  p->velocity_filter_hz = velocity_filter_hz;
+  p->hand = hand;
   Build(p.get());
   return p;
+}
+
+std::unique_ptr<PyZWidth> ZWidthFrom(const py::tuple& t) {
+  const py::tuple o = t[3];
+  stability::BoundaryOptions options;
+  options.min_grid_points = o[0].cast<int>();
+  options.grid_points_per_delay = o[1].cast<int>();
+  options.theta_tolerance = o[2].cast<double>();
+  options.verify = o[3].cast<bool>();
+  return NewZWidth(io::ParseModelJson(t[0].cast<std::string>(), "<pickle>"), t[1].cast<std::optional<double>>(),
+                   t[2], options, t[4].cast<std::optional<double>>(), t[5].cast<std::optional<Hand>>());
 }
 
 std::string ZWidthRepr(const PyZWidth& z) {
@@ -130,48 +146,53 @@ void ForEachB(const DoubleArray& B, F&& f) {
 bool IsScalar(const py::object& o) { return py::array::ensure(o).ndim() == 0; }
 
 
+// A scene path, or a list of {"name", "K", "B"} dicts or (name, K, B) tuples
+// checked by the reader's rules (io::ParseScene of the same objects as JSON):
+// a list is refused exactly where the same objects in a file are.
 std::vector<io::SceneObject> SceneFrom(const py::object& scene) {
-  if (py::isinstance<py::str>(scene) || py::hasattr(scene, "__fspath__")) {
-    return io::ReadScene(py::str(py::module_::import("os").attr("fspath")(scene)).cast<std::string>());
+  if (py::isinstance<py::str>(scene) || py::isinstance<py::bytes>(scene) || py::hasattr(scene, "__fspath__")) {
+    return io::ReadScene(PathFrom(scene, "scene"));
   }
-  // A list of {"name", "K", "B"} dicts or (name, K, B) tuples, checked as ReadScene checks a file.
-  std::vector<io::SceneObject> out;
+  if (!py::hasattr(scene, "__iter__")) {
+    throw py::type_error("scene must be a scene file's path or a list of objects, not " +
+                         py::str(py::type::of(scene).attr("__name__")).cast<std::string>());
+  }
+  nlohmann::json objects = nlohmann::json::array();
+  const py::module_ np = py::module_::import("numpy");
+  // A Python value as the JSON the reader would see: numbers (not bools) as
+  // numbers (NaN and inf named here: JSON has none), anything else as its text.
+  auto value = [&](const py::handle& v, const std::string& where, const char* key) -> nlohmann::json {
+    if (v.is_none()) return nullptr;
+    if (py::isinstance<py::str>(v)) return v.cast<std::string>();
+    const bool number = !py::isinstance<py::bool_>(v) && !py::isinstance(v, np.attr("bool_")) &&
+                        py::hasattr(v, "__float__");
+    if (!number) return py::repr(v).cast<std::string>();
+    const double x = v.cast<double>();
+    if (!std::isfinite(x)) throw InputError("scene: " + where + ": '" + key + "' = " + G(x) + " must be finite and >= 0");
+    return x;
+  };
   size_t i = 0;
   for (const py::handle& h : scene) {
-    const std::string where = "objects[" + std::to_string(i) + "]";
-    io::SceneObject so;
-    py::object name, K, B;
+    const std::string where = "objects[" + std::to_string(i++) + "]";
+    nlohmann::json o = nlohmann::json::object();
     if (py::isinstance<py::dict>(h)) {
-      py::dict d = py::reinterpret_borrow<py::dict>(h);
-      for (const auto& kv : d) {
+      for (const auto& kv : py::reinterpret_borrow<py::dict>(h)) {
         const std::string k = py::str(kv.first).cast<std::string>();
-        if (k != "name" && k != "K" && k != "B") throw InputError(where + ": unknown key '" + k + "' (allowed: name, K, B)");
+        o[k] = value(kv.second, where, k.c_str());
       }
-      name = d.contains("name") ? py::object(d["name"]) : py::none();
-      K = d.contains("K") ? py::object(d["K"]) : py::none();
-      B = d.contains("B") ? py::object(d["B"]) : py::none();
     } else {
-      py::tuple t = py::tuple(py::reinterpret_borrow<py::object>(h));
-      if (t.size() != 3) throw InputError(where + ": expected {'name', 'K', 'B'} or (name, K, B)");
-      name = t[0]; K = t[1]; B = t[2];
-    }
-    so.name = py::isinstance<py::str>(name) ? name.cast<std::string>() : "object" + std::to_string(i);
-    for (auto [key, val, dst] : {std::tuple{"K", K, &so.K}, std::tuple{"B", B, &so.B}}) {
-      // Numbers, NumPy scalars included; not bools or strings (a JSON scene's rule).
-      if (val.is_none() || py::isinstance<py::bool_>(val) || py::isinstance<py::str>(val) ||
-          py::isinstance(val, py::module_::import("numpy").attr("bool_")) || !py::hasattr(val, "__float__")) {
-        throw InputError(where + ": '" + key + "' must be a number");
+      if (py::isinstance<py::str>(h) || !py::hasattr(h, "__len__") || py::len(h) != 3) {
+        throw InputError("scene: " + where + ": expected {'name', 'K', 'B'} or (name, K, B)");
       }
-      const double v = val.template cast<double>();
-      if (!std::isfinite(v) || v < 0.0) {
-        throw InputError(where + ": '" + key + "' = " + std::to_string(v) + " must be finite and >= 0");
-      }
-      *dst = v;
+      const py::sequence t = py::reinterpret_borrow<py::sequence>(h);
+      if (!t[0].is_none()) o["name"] = value(t[0], where, "name");
+      o["K"] = value(t[1], where, "K");
+      o["B"] = value(t[2], where, "B");
     }
-    out.push_back(so);
-    ++i;
+    objects.push_back(std::move(o));
+    if (objects.size() > io::kMaxSceneObjects) break;  // the reader names the bound
   }
-  return out;
+  return io::ParseScene(nlohmann::json{{"objects", objects}}.dump(), "scene");
 }
 
 // zwidth.CriticalPoint: the boundary at one B.
@@ -206,12 +227,12 @@ void BindCriticalPoint(py::module_& m) {
       .def_property_readonly("margin_agrees", [](const stability::CriticalPoint& c) { return c.AgreesWithMargin(); })
       .def("__iter__", [](const stability::CriticalPoint& c) {
         return py::iter(py::make_tuple(c.K_cr, c.f_cr_hz));
-      }, "K_cr, f_cr_hz = point")
+      }, "K_cr, f_cr_hz = point", kCLocale)
       .def("__repr__", [](const stability::CriticalPoint& c) {
         return "<zwidth.CriticalPoint B=" + G(c.B) + " K_cr=" + G(c.K_cr) + " f_cr_hz=" + G(c.f_cr_hz) +
                (c.verified ? " verified" : " not verified") + (c.unstable_at_zero_k ? " unstable_at_zero_k" : "") +
                (c.AgreesWithMargin() ? "" : " (margin() reads K=" + G(c.K_margin) + ")") + ">";
-      });
+      }, kCLocale);
 }
 
 // ZWidth(...) and its read-only properties.
@@ -219,30 +240,20 @@ void DefZWidthConstruction(py::class_<PyZWidth>& cls) {
   cls.def(py::init([](const io::ModelFile& model, std::optional<double> period_s, const py::object& delay_samples,
                        int min_grid_points, int grid_points_per_delay, double theta_tolerance, bool verify,
                        std::optional<double> velocity_filter_hz, std::optional<Hand> hand) {
-             auto p = std::make_unique<PyZWidth>();
-             p->delay_samples = Integer(delay_samples, "delay_samples");
-             CheckDelay(p->delay_samples, "delay_samples");
-             p->options.min_grid_points = min_grid_points;
-             p->options.grid_points_per_delay = grid_points_per_delay;
-             p->options.theta_tolerance = theta_tolerance;
-             p->options.verify = verify;
-             std::string why;
-             if (!p->options.IsValid(&why)) throw InputError(why);
-             model.plant.Validate();
-             p->model = model;
-             p->period_arg = period_s;
-             p->velocity_filter_hz = velocity_filter_hz;
-             p->hand = hand;
-             Build(p.get());
-             return p;
+             stability::BoundaryOptions options;
+             options.min_grid_points = min_grid_points;
+             options.grid_points_per_delay = grid_points_per_delay;
+             options.theta_tolerance = theta_tolerance;
+             options.verify = verify;
+             return NewZWidth(model, period_s, delay_samples, options, velocity_filter_hz, hand);
            }),
            py::arg("model"), py::arg("period_s") = py::none(), py::arg("delay_samples") = 2,
            py::arg("min_grid_points") = stability::BoundaryOptions{}.min_grid_points,
            py::arg("grid_points_per_delay") = stability::BoundaryOptions{}.grid_points_per_delay,
            py::arg("theta_tolerance") = stability::BoundaryOptions{}.theta_tolerance,
            py::arg("verify") = stability::BoundaryOptions{}.verify, py::arg("velocity_filter_hz") = py::none(),
-           py::arg("hand") = py::none())
-      .def("__repr__", &ZWidthRepr)
+           py::arg("hand") = py::none(), kCLocale)
+      .def("__repr__", &ZWidthRepr, kCLocale)
       .def_property_readonly("period_s", [](const PyZWidth& z) { return z.z->period_s(); }, "loop sample period T [s]")
       .def_property_readonly("delay_samples", [](const PyZWidth& z) { return z.delay_samples; }, "loop delay d")
       .def_property_readonly("total_delay_samples", [](const PyZWidth& z) { return z.z->total_delay(); },
@@ -276,7 +287,7 @@ void DefZWidthAtB(py::class_<PyZWidth>& cls) {
 (K_lo, K_hi) tuples [N m/rad] (K_lo 0 means from K = 0+, K_hi may be inf). The
 loop is stable at (K, B) exactly when K lies strictly inside one of them
 (is_stable agrees); [] when no K > 0 is stable. Past B_max_from_zero the
-first interval no longer starts at 0 (reopened bands).)doc")
+first interval no longer starts at 0 (reopened bands).)doc", kCLocale)
       .def("critical",
            [](const PyZWidth& z, const py::object& B) -> py::object {
              const DoubleArray b = Gains(B, "B");
@@ -296,13 +307,13 @@ first interval no longer starts at 0 (reopened bands).)doc")
            py::arg("B"),
            R"doc((K_cr, f_cr_hz) at B [N m s/rad]: floats for a scalar B, arrays shaped
 like B for an array (the GIL is released over the sweep). K_cr is 0 where
-the loop is unstable as K -> 0+ (B past B_max), inf with no crossing.)doc")
+the loop is unstable as K -> 0+ (B past B_max), inf with no crossing.)doc", kCLocale)
       .def("point", [](const PyZWidth& z, double B) {
              Gain(B, "B");
              py::gil_scoped_release release;
              return z.z->At(B);
            },
-           py::arg("B"), "The full CriticalPoint at one B (with the margin() reading and the verification).");
+           py::arg("B"), "The full CriticalPoint at one B (with the margin() reading and the verification).", kCLocale);
 }
 
 // ZWidth: the boundary over an array of B, the crossings at one B.
@@ -338,7 +349,7 @@ void DefZWidthOverB(py::class_<PyZWidth>& cls) {
            },
            py::arg("B"),
            "The columns of `zwidth boundary`'s CSV for one delay over an array of B: a dict of arrays "
-           "B, K_cr, f_cr_hz, K_margin, f_margin_hz, unstable_at_zero_k, margin_agrees, verified.")
+           "B, K_cr, f_cr_hz, K_margin, f_margin_hz, unstable_at_zero_k, margin_agrees, verified.", kCLocale)
       .def("crossings",
            [](const PyZWidth& z, double B) {
              Gain(B, "B");
@@ -346,15 +357,21 @@ void DefZWidthOverB(py::class_<PyZWidth>& cls) {
              for (const auto& c : z.z->Crossings(B)) out.emplace_back(c.theta, c.K);
              return out;
            },
-           py::arg("B"), "Every (theta [rad/sample], K) at which a closed-loop pole is on the unit circle.");
+           py::arg("B"), "Every (theta [rad/sample], K) at which a closed-loop pole is on the unit circle.", kCLocale);
 }
 
 // ZWidth: stability at (K, B), the summary, the characteristic polynomial.
 void DefZWidthSummary(py::class_<PyZWidth>& cls) {
   cls.def("is_stable",
            [](const PyZWidth& z, const py::object& K, const py::object& B) -> py::object {
-             py::list both = py::module_::import("numpy").attr("broadcast_arrays")(
-                 Gains(K, "K"), Gains(B, "B"));
+             const DoubleArray k0 = Gains(K, "K"), b0 = Gains(B, "B");
+             py::list both;
+             try {
+               both = py::module_::import("numpy").attr("broadcast_arrays")(k0, b0);
+             } catch (py::error_already_set&) {  // NumPy's message names neither
+               throw InputError("K has shape " + py::str(k0.attr("shape")).cast<std::string>() + " and B " +
+                                py::str(b0.attr("shape")).cast<std::string>() + ": they must broadcast (NumPy's rules)");
+             }
              const DoubleArray k = DoubleArray::ensure(both[0]);  // forcecast copies to C order
              const DoubleArray b = DoubleArray::ensure(both[1]);
              py::array_t<bool> out = ShapedLike<bool>(k);
@@ -368,7 +385,7 @@ void DefZWidthSummary(py::class_<PyZWidth>& cls) {
            "The closed loop's stability at (K [N m/rad], B [N m s/rad]) by the one test behind every answer "
            "(stable_intervals, summary, check): Schur-Cohn where the polynomial is well conditioned, else the "
            "closed-loop matrix's eigenvalues (stability_test in summary()); broadcasts arrays (K = 0 is "
-           "taken as 0+). K and B must be finite and >= 0 (InputError naming the first that is not).")
+           "taken as 0+). K and B must be finite and >= 0 (InputError naming the first that is not).", kCLocale)
       .def("summary",
            [](const PyZWidth& z, const py::object& monte_carlo, uint64_t seed) {
              // One entry of the CLI's summary JSON "delays" list (apps/cmd_stability.cc, boundary --summary).
@@ -407,7 +424,7 @@ B_P_max) and, when the model carries a covariance, "std" (delta method): the
 CLI's summary JSON, one entry of 'delays' (None for NaN/inf). monte_carlo=N
 > 0 (--monte-carlo N --seed S) adds "monte_carlo" {samples, seed, std, mean}
 from N seeded draws of the covariance (seconds per hundred draws; Ctrl-C
-stops it with KeyboardInterrupt).)doc")
+stops it with KeyboardInterrupt).)doc", kCLocale)
       .def("characteristic_polynomial",
            [](const PyZWidth& z, double K, double B) {
              return ToArray(z.z->CharacteristicPolynomial(Gain(K, "K"), Gain(B, "B")));
@@ -415,7 +432,7 @@ stops it with KeyboardInterrupt).)doc")
            py::arg("K"), py::arg("B"),
            "Closed-loop characteristic polynomial coefficients, z^0 first. With many lightly damped, crowded\n"
            "modes its roots are ill-conditioned (numpy.roots can put a stable root outside the circle);\n"
-           "is_stable decides by the closed loop's eigenvalues there (docs/zwidth.md).");
+           "is_stable decides by the closed loop's eigenvalues there (docs/zwidth.md).", kCLocale);
 }
 
 // zwidth.ZWidth: the Z-width of one loop.
@@ -477,7 +494,7 @@ std::string RelayRepr(const stability::RelayResult& r) {
 void BindRelay(py::module_& m) {
   py::class_<stability::RelayResult> cls(m, "RelayResult", "The simulated relay experiment (stability/relay.h).");
   DefValue(cls, &RelayState, &RelayFrom);
-  cls.def("__repr__", &RelayRepr)
+  cls.def("__repr__", &RelayRepr, kCLocale)
       .def_readonly("K_cr", &stability::RelayResult::K_cr, "estimate [N m/rad]")
       .def_readonly("f_cr_hz", &stability::RelayResult::f_cr_hz)
       .def_property_readonly("status", [](const stability::RelayResult& r) { return stability::ToString(r.status); },
@@ -528,7 +545,7 @@ void BindRelay(py::module_& m) {
         py::arg("velocity_filter_hz") = py::none(), py::arg("hand") = py::none(),
         R"doc(The relay experiment of section IV, simulated as `zwidth relay` does it;
 velocity_filter_hz and hand (M, B, K) as for ZWidth (the haptic loop).
-Raises ComputationError when the loop neither oscillates nor diverges.)doc");
+Raises ComputationError when the loop neither oscillates nor diverges.)doc", kCLocale);
 }
 
 // zwidth.check: is each object of a scene stable?
@@ -563,7 +580,7 @@ check --json` prints (each object with its stable intervals, its status
 stable/marginal/unstable and, when the model has a covariance, its distance to
 the nearest boundary in std, marginal within marginal_sigmas); the CLI exits
 with status 3 when an object is unstable (4 when none is but some is marginal),
-this returns normally.)doc");
+this returns normally.)doc", kCLocale);
 }
 
 }  // namespace

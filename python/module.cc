@@ -102,8 +102,8 @@ PYBIND11_MODULE(_zwidth, m) {
         py::arg("n"),
         "Threads of the parallel parts (fit starts, per-delay summaries, boundary rows): n >= 1, or None for "
         "the default (the environment's ZWIDTH_NUM_THREADS, else the cores this process may use: affinity and "
-        "cgroup quota).");
-  m.def("num_threads", &zwidth::NumThreads, "The threads a parallel part uses now (see set_num_threads).");
+        "cgroup quota).", kCLocale);
+  m.def("num_threads", &zwidth::NumThreads, "The threads a parallel part uses now (see set_num_threads).", kCLocale);
   m.attr("InputError").attr("__module__") = "zwidth";
   m.attr("ComputationError").attr("__module__") = "zwidth";
   m.attr("InputError").attr("__doc__") =
@@ -124,7 +124,7 @@ PYBIND11_MODULE(_zwidth, m) {
   info["pybind11"] = zwidth::build_info::kPybind11;
   m.attr("_build_info") = info;
   m.def("_last_cpp_seconds", [] { return zwidth::python::g_last_cpp_seconds; },
-        "Seconds the last fit() or ZWidth.critical() spent in the C++ library (for bench/python_overhead.py).");
+        "Seconds the last fit() or ZWidth.critical() spent in the C++ library (for bench/python_overhead.py).", kCLocale);
   BindModel(m);
   BindIdent(m);
   BindFit(m);

@@ -49,6 +49,59 @@ class FitQualityWarning(UserWarning):
 
 for _cls in (Model, Log, FrequencyResponse, FitResult, CriticalPoint, ZWidth, RelayResult):
     _signatures.wrap_class(_cls)
+
+
+_ORIGINAL_NEW = {}
+
+
+def _restore(cls, state):
+    """An object of cls from its pickled state: allocated, then built by __setstate__ (which
+    checks the state as the constructor checks its arguments)."""
+    obj = _ORIGINAL_NEW[cls](cls)
+    obj.__setstate__(state)
+    return obj
+
+
+def _guard_new(cls, constructible):
+    """cls.__new__(cls) without __init__ made an object whose C++ value was never constructed
+    (pybind11): repr() or any attribute read uninitialised memory and crashed the interpreter.
+    So __new__ constructs (the bound __init__ on the new object, which checks the arguments) and
+    __init__ is left with nothing to do; pickle, copy and multiprocessing build through _restore.
+    A class the module alone makes (FitResult, CriticalPoint, RelayResult) has no __new__."""
+    original = cls.__new__
+    _ORIGINAL_NEW[cls] = original
+    init = cls.__init__
+
+    def __new__(c, *args, **kwargs):
+        if not constructible:
+            raise TypeError(f"zwidth.{cls.__name__} is made by the module (zwidth.fit, ZWidth.point, "
+                            "zwidth.relay), not by hand")
+        _signatures.check_numbers(init._numbers, (None,) + args, kwargs)
+        obj = original(c)
+        try:
+            init._builtin(obj, *args, **kwargs)  # C++: no Python frame holds obj if it raises
+        except BaseException:
+            del obj  # never constructed: not left in the traceback's locals (a verbose traceback reprs them)
+            raise
+        return obj
+
+    def __init__(self, *args, **kwargs):
+        pass  # built by __new__
+
+    if constructible:  # inspect.signature(cls) reads __new__ first: the constructor's
+        import inspect
+        __new__.__signature__ = inspect.signature(init)
+        __init__.__signature__ = inspect.signature(init)
+        __init__.__doc__ = init.__doc__
+        cls.__init__ = __init__
+    cls.__new__ = staticmethod(__new__)
+    cls.__reduce_ex__ = lambda self, protocol: (_restore, (type(self), self.__getstate__()))
+
+
+for _cls in (Model, Log, FrequencyResponse, ZWidth):
+    _guard_new(_cls, True)
+for _cls in (FitResult, CriticalPoint, RelayResult):
+    _guard_new(_cls, False)
 for _e in (InputError, ComputationError):
     _e.__module__ = "zwidth"
 
@@ -84,6 +137,7 @@ def _estimate_signature():
 
 
 def estimate(data, y=None, sample_rate_hz=None, **options):
+    _signatures.check_numbers(_ESTIMATE_NUMBERS, (), dict(options, sample_rate_hz=sample_rate_hz))
     path = _path(data)
     if isinstance(data, Log) or path is not None:
         if y is not None or sample_rate_hz is not None:
@@ -99,6 +153,7 @@ def estimate(data, y=None, sample_rate_hz=None, **options):
 
 
 estimate.__signature__ = _estimate_signature()
+_ESTIMATE_NUMBERS = (None, _signatures.number_names(_zwidth.estimate)[1])
 estimate.__doc__ = """The Welch frequency response y/u, as `zwidth estimate` computes it.
 
 estimate(u, y, sample_rate_hz, ...): from two 1-D arrays (u [N m], y [rad]) sampled at
@@ -120,6 +175,7 @@ def fit(data, *args, **kwargs):
     if not isinstance(data, FrequencyResponse):
         raise TypeError(f"fit(data): data must be a FrequencyResponse, a Log or a log file's path, "
                         f"not {type(data).__name__}")
+    _signatures.check_numbers(_FIT_NUMBERS, (data,) + args, kwargs)
     res = _fit(data, *args, **kwargs)
     if res.quality != "good":
         warnings.warn(FitQualityWarning(res), stacklevel=2)
@@ -136,6 +192,7 @@ def _fit_with_estimate_signature():
 
 
 _fit_plain = _signatures.wrap(_fit)
+_FIT_NUMBERS = _signatures.number_names(_fit)
 _fit_signature = _fit_with_estimate_signature()
 fit.__signature__ = _fit_signature
 fit.__doc__ = _fit_plain.__doc__ + """
@@ -163,6 +220,7 @@ def _names(f):
 
 
 def estimate_logs(paths, **options):
+    _signatures.check_numbers((None, _signatures.number_names(_zwidth._estimate_logs_options)[1]), (), options)
     return _zwidth._estimate_logs(paths, _zwidth._estimate_logs_options(**options))
 
 
@@ -183,6 +241,8 @@ def run(logs, out_dir, **options):
     own = _names(_zwidth._run) - {"logs", "out_dir", "estimate", "fit", "command_line"}
     est_names = _names(_zwidth._estimate_logs_options)
     fit_names = _names(_zwidth._fit_options)
+    _signatures.check_numbers((None, set().union(*(_signatures.number_names(f)[1] for f in (
+        _zwidth._run, _zwidth._estimate_logs_options, _zwidth._fit_options)))), (), options)
     unknown = sorted(set(options) - own - est_names - fit_names)
     if unknown:
         raise TypeError(f"run() got unexpected keyword arguments {unknown}")

@@ -129,13 +129,41 @@ def signature(parsed, drop_self=False):
     return inspect.Signature(out, return_annotation=inspect.Signature.empty if ret is None else ret)
 
 
+_NUMBER_TYPES = {"float", "int", "Optional[float]", "Optional[int]"}
+
+
+def number_names(f):
+    """(names by position of the only overload, or None; every name) of f's float and int
+    parameters, from pybind11's signature lines."""
+    sigs, _ = overloads(f)
+    names = [[n for n, ann, _ in s[1] if ann in _NUMBER_TYPES or _OBJECT_TYPES.get(n) in ("float", "int")]
+             for s in sigs]
+    positional = [n for n, _, _ in sigs[0][1]] if len(sigs) == 1 else None
+    return positional, {n for ns in names for n in ns}
+
+
+def check_numbers(numbers, args, kwargs):
+    """A bool where a float or an int is taken is a TypeError naming the keyword, as the
+    module's own numbers (Number, Integer) refuse it; pybind11 would take True as 1."""
+    positional, names = numbers
+    given = list(kwargs.items())
+    if positional is not None:
+        given += [(n, a) for n, a in zip(positional, args)]
+    for name, v in given:
+        if name in names and (isinstance(v, bool) or type(v).__name__ == "bool_"):
+            raise TypeError(f"{name} must be a number, not bool")
+
+
 def wrap(f, module="zwidth", qualname=None):
     """f as a Python function with its signature (the first overload's when there are
     several) and its docstring without pybind11's signature lines."""
     sigs, text = overloads(f)
 
+    numbers = number_names(f) if sigs else (None, set())
+
     @functools.wraps(f)
     def wrapper(*args, **kwargs):
+        check_numbers(numbers, args, kwargs)
         # Paths may be os.PathLike (pathlib.Path), as open() takes them.
         if any(isinstance(a, os.PathLike) for a in args):
             args = [os.fspath(a) if isinstance(a, os.PathLike) else a for a in args]
@@ -150,6 +178,7 @@ def wrap(f, module="zwidth", qualname=None):
     if qualname:
         wrapper.__qualname__ = qualname
     del wrapper.__wrapped__  # inspect would follow it to the builtin
+    wrapper._builtin, wrapper._numbers = f, numbers  # for a caller that must not leave a Python frame
     return wrapper
 
 

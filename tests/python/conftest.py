@@ -1,4 +1,4 @@
-import json, os, subprocess
+import json, locale, os, subprocess
 import pytest
 
 
@@ -36,3 +36,15 @@ def log_csv(src):
 @pytest.fixture(scope="session")
 def table1_json(src):
     return os.path.join(src, "datasets/phantom/table1.json")
+
+
+@pytest.fixture
+def german():
+    """Python's locale set to de_DE.UTF-8 for the test (decimal commas), then restored."""
+    old = locale.setlocale(locale.LC_ALL)
+    try:
+        locale.setlocale(locale.LC_ALL, "de_DE.UTF-8")
+    except locale.Error:
+        pytest.skip("no de_DE.UTF-8 locale (scripts/setup generates it)")
+    yield
+    locale.setlocale(locale.LC_ALL, old)

@@ -30,17 +30,6 @@ def test_response_at_a_rate_zwidth_refuses_is_refused(rate):
         zwidth.FrequencyResponse(f, np.ones(4), rate, num_averages=10)
 
 
-@pytest.fixture
-def german():
-    old = locale.setlocale(locale.LC_ALL)
-    try:
-        locale.setlocale(locale.LC_ALL, "de_DE.UTF-8")
-    except locale.Error:
-        pytest.skip("no de_DE.UTF-8 locale (scripts/setup generates it)")
-    yield
-    locale.setlocale(locale.LC_ALL, old)
-
-
 def test_texts_are_the_c_locales_under_german(log_h5, german):
     frf = zwidth.estimate(zwidth.read_log(log_h5))
     res = zwidth.fit(frf, modes=2)
