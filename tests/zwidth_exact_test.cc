@@ -42,45 +42,13 @@ model::Plant Family(int n, double w0, double ratio, double zeta) {
   return p;
 }
 
-// u -> rigid body (theta, theta') -> section 1 -> ... -> y. Section (x1, x2):
-// x1' = -c x1 - w x2 + in, x2' = w x1, out = g ((d - c) x1 + (v^2 - w^2)/w x2 + in),
-// g = w^2 / v^2: (sI - A)^-1 e1 = (s, w) / (s^2 + c s + w^2), so out / in =
-// g (s^2 + d s + v^2) / (s^2 + c s + w^2).
-// R = long double: the referee (tests/brute_force.h), the same realisation
-// and ZOH in 64-bit-mantissa arithmetic.
+// The test's own realisation and ZOH (tests/brute_force.h, IndependentZoh),
+// closed by LoopBruteForceT. R = long double: the referee (tests/brute_force.h),
+// the same realisation and ZOH in 64-bit-mantissa arithmetic.
 template <typename R = double>
 LoopBruteForceT<R> IndependentBrute(const model::Plant& p, int delay, double T_, const LoopOptions& loop = {}) {
-  using Mat = typename LoopBruteForceT<R>::Mat;
-  using Vec = typename LoopBruteForceT<R>::Vec;
-  using Row = typename LoopBruteForceT<R>::Row;
-  const R T = T_, m = p.m, b = p.b;
-  const int n = 2 + 2 * static_cast<int>(p.modes.size());
-  Mat A = Mat::Zero(n, n);
-  Vec Bc = Vec::Zero(n);
-  A(0, 1) = R(1);
-  A(1, 1) = -b / m;
-  Bc(1) = R(1) / m;
-  Row out = Row::Zero(n);
-  out(0) = R(1);
-  for (size_t k = 0; k < p.modes.size(); ++k) {
-    const R w = p.modes[k].omega, c = p.modes[k].c, v = p.modes[k].v, d = p.modes[k].d;
-    const int i = 2 + 2 * static_cast<int>(k);
-    A(i, i) = -c;
-    A(i, i + 1) = -w;
-    A(i + 1, i) = w;
-    A.row(i) += out;
-    const R g = w * w / (v * v);
-    Row next = g * out;
-    next(i) += g * (d - c);
-    next(i + 1) += g * (v * v - w * w) / w;
-    out = next;
-  }
-  Mat M = Mat::Zero(n + 1, n + 1);
-  M.topLeftCorner(n, n) = A * T;
-  M.topRightCorner(n, 1) = Bc * T;
-  const Mat E = M.exp();
-  return LoopBruteForceT<R>(E.topLeftCorner(n, n), E.topRightCorner(n, 1), out, loop.filter_b, loop.filter_a,
-                            delay + p.delay_samples, T_);
+  const IndependentZoh<R> zoh(p, T_);
+  return LoopBruteForceT<R>(zoh.A, zoh.B, zoh.C, loop.filter_b, loop.filter_a, delay + p.delay_samples, T_);
 }
 
 // Smallest K > 0 at which the brute force has a root on the circle: the
