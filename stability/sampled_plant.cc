@@ -1,6 +1,8 @@
 #include "stability/sampled_plant.h"
 
 #include <cmath>
+#include <limits>
+#include <memory>
 #include <numbers>
 #include <string>
 
@@ -126,6 +128,143 @@ PoleConditioning Conditioning(const Eigen::MatrixXd& A, bool has_integrator) {
   return c;
 }
 
+}  // namespace
+
+namespace internal {
+#if defined(__SIZEOF_FLOAT128__)
+// IEEE binary128 (113-bit significand, eps 2^-112 = 1.9e-34) through GCC's and
+// clang's __float128: the arithmetic is libgcc's, and the functions that
+// ZohModalForm::Build needs are written here (no libquadmath), each to a few
+// eps: exp and expm1 by Taylor series after halving the argument below 1/2,
+// sin and cos by Taylor series after reducing by 2 pi (2 pi as a sum of two
+// doubles, exact to ~1e-32).
+struct Quad {
+  __float128 v = 0;
+  Quad() = default;
+  Quad(double d) : v(d) {}  // NOLINT: ZohModalForm writes T(2.0)
+  static Quad Of(__float128 q) { Quad r; r.v = q; return r; }
+  friend Quad operator+(Quad a, Quad b) { return Of(a.v + b.v); }
+  friend Quad operator-(Quad a, Quad b) { return Of(a.v - b.v); }
+  friend Quad operator*(Quad a, Quad b) { return Of(a.v * b.v); }
+  friend Quad operator/(Quad a, Quad b) { return Of(a.v / b.v); }
+  friend Quad operator-(Quad a) { return Of(-a.v); }
+  friend bool operator>(Quad a, Quad b) { return a.v > b.v; }
+  friend Quad sqrt(Quad x) {
+    if (!(x.v > 0)) return Of(x.v == 0 ? 0.0 : std::numeric_limits<double>::quiet_NaN());
+    __float128 y = std::sqrt(static_cast<double>(x.v));
+    for (int i = 0; i < 3; ++i) y = 0.5 * (y + x.v / y);  // Newton: 53 -> 106 -> 113 bits
+    return Of(y);
+  }
+  friend Quad expm1(Quad x) {
+    if (!(x.v < 0.5 && x.v > -0.5)) {
+      const Quad e = expm1(Of(x.v / 2));  // e^x - 1 = (e^{x/2} - 1)(e^{x/2} + 1)
+      return e * (e + Of(2));
+    }
+    __float128 sum = 0, term = 1;
+    for (int k = 1; k < 60; ++k) {
+      term *= x.v / k;
+      sum += term;
+      if (!(term > 1e-38 * (sum > 0 ? sum : -sum) || -term > 1e-38 * (sum > 0 ? sum : -sum))) break;
+    }
+    return Of(sum);
+  }
+  friend Quad exp(Quad x) {
+    int halvings = 0;
+    while (!(x.v < 0.5 && x.v > -0.5) && halvings < 64) { x.v /= 2; ++halvings; }
+    Quad e = Of(1) + expm1(x);  // relative error a few eps, doubled by each squaring
+    for (int i = 0; i < halvings; ++i) e = e * e;
+    return e;
+  }
+  static Quad Reduced(Quad x) {  // x - 2 pi k in [-pi, pi]
+    const __float128 two_pi = static_cast<__float128>(6.283185307179586) + static_cast<__float128>(2.4492935982947064e-16);
+    const double k = std::nearbyint(static_cast<double>(x.v / two_pi));
+    return Of(x.v - static_cast<__float128>(k) * two_pi);
+  }
+  friend Quad sin(Quad x) {
+    const __float128 r = Reduced(x).v, r2 = r * r;
+    __float128 sum = r, term = r;
+    for (int k = 1; k < 40; ++k) { term *= -r2 / ((2 * k) * (2 * k + 1)); sum += term; }
+    return Of(sum);
+  }
+  friend Quad cos(Quad x) {
+    const __float128 r = Reduced(x).v, r2 = r * r;
+    __float128 sum = 1, term = 1;
+    for (int k = 1; k < 40; ++k) { term *= -r2 / ((2 * k - 1) * (2 * k)); sum += term; }
+    return Of(sum);
+  }
+};
+#endif
+
+struct Binary128Modal {
+#if defined(__SIZEOF_FLOAT128__)
+  model::ZohModalForm<Quad> form;
+#endif
+};
+}  // namespace internal
+
+namespace {
+
+#if defined(__SIZEOF_FLOAT128__)
+using internal::Quad;
+
+// G_d(z) = the pole-residue sum in binary128 at z = c + j s, and in *abs_sum
+// (when given) sum |t_k| of its terms (|re| + |im|).
+std::complex<double> Binary128At(const model::ZohModalForm<Quad>& f, double c, double s, double* abs_sum) {
+  using Q = __float128;
+  const Q zr = c, zi = s;
+  Q gr = 0, gi = 0;
+  double mag = 0.0;
+  auto add = [&](Q nr, Q ni, Q pr, Q pi) {  // (nr + j ni) / (z - (pr + j pi))
+    const Q dr = zr - pr, di = zi - pi, inv = 1 / (dr * dr + di * di);
+    const Q tr = (nr * dr + ni * di) * inv, ti = (ni * dr - nr * di) * inv;
+    gr += tr;
+    gi += ti;
+    if (abs_sum) mag += std::abs(static_cast<double>(tr)) + std::abs(static_cast<double>(ti));
+  };
+  add(f.integrator.v, 0, 1, 0);
+  add(f.rigid_coeff.v, 0, f.rigid_pole.v, 0);
+  for (size_t k = 0; k < f.pole.size(); ++k) {
+    add(f.coeff[k].re.v, f.coeff[k].im.v, f.pole[k].re.v, f.pole[k].im.v);
+    add(f.coeff[k].re.v, -f.coeff[k].im.v, f.pole[k].re.v, -f.pole[k].im.v);
+  }
+  if (abs_sum) *abs_sum = mag;
+  return {static_cast<double>(gr), static_cast<double>(gi)};
+}
+#endif
+
+// Where the pole-residue form fails in double (its terms cancel: crowded,
+// lightly damped modes), the same form in binary128 when its rounding stays
+// below 1e-12 of |G_d| at the check points (16 uniform, every 160th mode-patch
+// point: each patch's centre and edges, where the cancellation peaks): each
+// term comes from exact parameters through ~n + 6 roundings and the sum adds
+// one per term, so the error is at most 4 (n + 3) 2^-112 sum |t_k|. 64
+// sections 1 % apart at damping 1e-4 cancel by 2e14: 1e-17 of |G_d|, where the
+// double state space errs by 1e-3 (its poles rounded; conditioning()) and its
+// rounding makes B(theta) jagged (23844 extrema on the boundary grid; 128 in
+// binary128). nullptr where binary128 is not available or the bound fails.
+std::shared_ptr<const internal::Binary128Modal> Binary128Form(const model::Plant& plant, double T,
+                                                               const std::vector<double>& patch_theta) {
+#if defined(__SIZEOF_FLOAT128__)
+  auto q = std::make_shared<internal::Binary128Modal>();
+  std::vector<Quad> sec;
+  for (const model::Mode& md : plant.modes) sec.insert(sec.end(), {md.omega, md.c, md.v, md.d});
+  if (!q->form.Build(Quad(plant.m), Quad(plant.b), sec.data(), static_cast<int>(plant.modes.size()), T)) return nullptr;
+  std::vector<double> check;
+  for (int k = 1; k <= 16; ++k) check.push_back(std::numbers::pi * (k - 0.5) / 16.0);
+  for (size_t i = 0; i < patch_theta.size(); i += 2 * kModePatchHalfWidth / 4) check.push_back(patch_theta[i]);
+  const double bound = 4.0 * (static_cast<double>(plant.modes.size()) + 3.0) * 1.925929944387236e-34;
+  for (double th : check) {
+    double mag = 0.0;
+    const std::complex<double> g = Binary128At(q->form, std::cos(th), std::sin(th), &mag);
+    if (!(bound * mag <= 1e-12 * std::abs(g))) return nullptr;
+  }
+  return q;
+#else
+  (void)plant; (void)T; (void)patch_theta;
+  return nullptr;
+#endif
+}
+
 // The double pole-residue sum against the same sum in long double at the 16
 // uniform points and every 40th point of the mode patches (see the
 // constructor): within kModalRoundingTolerance, relative, at every one.
@@ -238,12 +377,16 @@ SampledPlant::SampledPlant(const model::Plant& plant, double period_s, const Han
   }
   for (const std::complex<double>& l : hand_poles) patch(std::abs(l), -2.0 * l.real());
   if (modal_built && !d->use_modal) d->use_modal = ModalRoundingIsSmall(plant, T, d->modal, d->patch_theta);
+  if (modal_built && !d->use_modal) d->quad = Binary128Form(plant, T, d->patch_theta);
   d->g_minus_one = d->response.AtZ(-1.0);
   d->conditioning = Conditioning(discrete.A, d->has_integrator);
   d_ = std::move(d);
 }
 
 std::complex<double> SampledPlant::Gd(std::complex<double> z) const {
+#if defined(__SIZEOF_FLOAT128__)
+  if (d_->quad) return Binary128At(d_->quad->form, z.real(), z.imag(), nullptr);
+#endif
   if (!d_->use_modal) return d_->response.AtZ(z);
   const model::Cx<double> g = d_->modal.At(z.real(), z.imag());
   return {g.re, g.im};
