@@ -334,12 +334,13 @@ INSTANTIATE_TEST_SUITE_P(
 // (zwidth_exact_stress_test). Measured under load 15 on 2 cores: 6.6 s and
 // 39 s (was 10.5 s with one false point, and 361 s). Open (issue 31): 64
 // sections 1 % apart at damping 1e-4 (d = 0) does not finish in 10.8 CPU
-// minutes: its ZWidth constructor alone takes 65 s, in the crossings'
-// Hessenberg solves (model::DiscreteResponse::AtZ). There the state space's
-// response is off by 1e-3 (median over the grid, against the pole-residue
-// form in __float128) and the pole-residue form's terms cancel by 1e14, so
-// B(theta) is jagged: 23870 extrema on a 90559-point grid, each refined. So it
-// is not in the suite yet.
+// minutes. Its ZWidth constructor took 65 s in the Hessenberg solves: the
+// double state space's response is off by 1e-3 there (median over the grid)
+// and its rounding made B(theta) jagged (23844 extrema on a 90559-point grid);
+// with G_d in binary128 (stability/sampled_plant.cc) it takes 4.6 s and the
+// grid has 128 extrema. Still not in the suite: Summarize's scans of the
+// O(n^3) eigenvalue test, and a double brute force that errs as much as the
+// state space does (its poles moved by 3.4e-4 of their distance to the circle).
 INSTANTIATE_TEST_SUITE_P(
     ManyModes, ZWidthFamilies,
     ::testing::Values(FamilyCase{"thirtytwo_sections_1pct_zeta1e3_d3", 32, 500, 1.01, 1e-3, 3, false},
