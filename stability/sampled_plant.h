@@ -5,8 +5,9 @@
 //
 //   - the exact ZOH state-space response G_d(z) (balanced, Hessenberg form;
 //     model/state_space.h), without the plant's own input delay;
-//   - its pole-residue form (model/zoh_modal.h) where that reproduces the
-//     state-space response to 1e-10 (no hand; distinct underdamped modes);
+//   - its pole-residue form (model/zoh_modal.h) where that is checked exact
+//     (no hand; distinct underdamped modes): in double, or where crowded modes
+//     make its terms cancel past double, in binary128 (see the constructor);
 //   - G_d = N(z)/D(z): D from the exactly known discrete poles e^{pT}, N by
 //     interpolation at the rotated roots of unity;
 //   - the theta points around every resonance and antiresonance that the
@@ -26,6 +27,9 @@
 #include "stability/loop_options.h"
 
 namespace zwidth::stability {
+namespace internal {
+struct Binary128Modal;  // the pole-residue form in binary128 (sampled_plant.cc)
+}  // namespace internal
 
 // Each patch: the damped frequency sqrt(w^2 - c^2/4) T +- k h, h = max(c T / 16,
 // 1e-9) rad, k = -kModePatchHalfWidth..kModePatchHalfWidth, inside (pi 1e-7, pi (1 - 1e-9)).
@@ -69,9 +73,14 @@ class SampledPlant {
   // Without a hand stiffness G has its integrator pole at z = 1.
   bool has_integrator() const { return d_->has_integrator; }
 
-  // G_d(z) without any delay: the pole-residue form when it reproduces the
-  // state-space response, else the Hessenberg solve.
+  // G_d(z) without any delay: the pole-residue form where it is checked
+  // exact (in double, O(n); else built in binary128 and summed in
+  // double-double, O(n) at ~12 double-double operations per term),
+  // else the Hessenberg solve (O(n^2)).
   std::complex<double> Gd(std::complex<double> z) const;
+  // Which form Gd uses.
+  bool gd_pole_residue() const { return d_->use_modal; }
+  bool gd_binary128() const { return d_->quad != nullptr; }
   // G_d(z) by the Hessenberg solve alone, without any delay.
   std::complex<double> GdStateSpace(std::complex<double> z) const { return d_->response.AtZ(z); }
   // G_d(e^{j theta}) e^{-j theta delay} with the plant's own input delay: the
@@ -109,6 +118,7 @@ class SampledPlant {
     model::DiscreteResponse response;
     model::ZohModalForm<double> modal;
     bool use_modal = false;
+    std::shared_ptr<const internal::Binary128Modal> quad;  // set where Gd uses binary128
     std::vector<double> num, den, den1;
     std::vector<double> patch_theta;
     std::complex<double> g_minus_one;

@@ -65,6 +65,54 @@ double GoldenExtremum(const std::function<double(double)>& f, double a, double b
   return 0.5 * (a + b);
 }
 
+// Brent's method for the extremum of f on [a, b] (sign = +1 max, -1 min):
+// parabolic interpolation through the three best points, a golden-section step
+// wherever the parabola does not shrink the bracket (R. P. Brent, Algorithms
+// for Minimization without Derivatives, 1973, ch. 5, procedure localmin).
+// The same bracket and guarantee as GoldenExtremum, but superlinear on a
+// smooth peak: about 10 evaluations where the golden search takes 48 to
+// narrow a bracket by 1e-10. It stops once x is within 2 tol of the bracket's
+// midpoint and returns the best point evaluated.
+template <class F>
+double BrentExtremum(const F& f, double a, double b, double sign, double tol) {
+  const double golden = 0.5 * (3.0 - std::sqrt(5.0));
+  double x = a + golden * (b - a), w = x, v = x, e = 0.0, d = 0.0;
+  double fx = -sign * f(x), fw = fx, fv = fx;  // minimised
+  for (int iter = 0; iter < 200; ++iter) {
+    const double m = 0.5 * (a + b), tol2 = 2.0 * tol;
+    if (std::abs(x - m) <= tol2 - 0.5 * (b - a)) break;
+    double p = 0.0, q = 0.0, r = 0.0;
+    if (std::abs(e) > tol) {  // parabola through x, w, v
+      r = (x - w) * (fx - fv);
+      q = (x - v) * (fx - fw);
+      p = (x - v) * q - (x - w) * r;
+      q = 2.0 * (q - r);
+      if (q > 0.0) p = -p; else q = -q;
+      r = e;
+      e = d;
+    }
+    if (std::abs(p) < std::abs(0.5 * q * r) && p > q * (a - x) && p < q * (b - x)) {
+      d = p / q;
+      const double u = x + d;
+      if (u - a < tol2 || b - u < tol2) d = x < m ? tol : -tol;
+    } else {
+      e = (x < m ? b : a) - x;
+      d = golden * e;
+    }
+    const double u = x + (std::abs(d) >= tol ? d : (d > 0.0 ? tol : -tol));
+    const double fu = -sign * f(u);
+    if (fu <= fx) {
+      (u < x ? b : a) = x;
+      v = w; fv = fw; w = x; fw = fx; x = u; fx = fu;
+    } else {
+      (u < x ? a : b) = u;
+      if (fu <= fw || w == x) { v = w; fv = fw; w = u; fw = fu; }
+      else if (fu <= fv || v == x || v == w) { v = u; fv = fu; }
+    }
+  }
+  return x;
+}
+
 std::vector<double> PolyMul(const std::vector<double>& a, const std::vector<double>& b) {
   std::vector<double> r(a.size() + b.size() - 1, 0.0);
   for (size_t i = 0; i < a.size(); ++i)
@@ -183,8 +231,11 @@ void ZWidth::BuildGrid() {
     const double d1 = grid_B_[i] - grid_B_[i - 1], d2 = grid_B_[i + 1] - grid_B_[i];
     if (d1 * d2 < 0.0) {
       const double sign = d1 > 0 ? 1.0 : -1.0;
-      breaks.push_back(internal::GoldenExtremum(Bof, th[i - 1], th[i + 1], sign,
-                                                1e-10 * (th[i + 1] - th[i - 1]) + 1e-15));
+      // The peak's position to sqrt(eps) of its cell (Brent's own tolerance):
+      // B is flat there to ~eps relative, so the pieces' end values B(break)
+      // are exact to rounding and no root is lost beside them.
+      breaks.push_back(internal::BrentExtremum(Bof, th[i - 1], th[i + 1], sign,
+                                               1.5e-8 * (th[i + 1] - th[i - 1]) + 1e-15));
     }
   }
   breaks.push_back(th.back());

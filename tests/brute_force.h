@@ -159,6 +159,54 @@ struct LoopBruteForceT {
 };
 using LoopBruteForce = LoopBruteForceT<double>;
 
+// The plant of eq. (1) realised the other way round from model/state_space.cc
+// (u -> rigid body (theta, theta') -> section 1 -> ... -> y; section (x1, x2):
+// x1' = -c x1 - w x2 + in, x2' = w x1, out = g ((d - c) x1 + (v^2 - w^2)/w x2 + in),
+// g = w^2 / v^2, so that (sI - A)^-1 e1 = (s, w) / (s^2 + c s + w^2) and
+// out / in = g (s^2 + d s + v^2) / (s^2 + c s + w^2)), sampled by Eigen's
+// matrix exponential without balancing, in the scalar R (double, or long
+// double for a referee with 3 more digits): the discrete A, B, C.
+template <typename R>
+struct IndependentZoh {
+  using Mat = typename LoopBruteForceT<R>::Mat;
+  using Vec = typename LoopBruteForceT<R>::Vec;
+  using Row = typename LoopBruteForceT<R>::Row;
+  Mat A;
+  Vec B;
+  Row C;
+  IndependentZoh(const model::Plant& p, double T_) {
+    const R T = T_, m = p.m, b = p.b;
+    const int n = 2 + 2 * static_cast<int>(p.modes.size());
+    Mat Ac = Mat::Zero(n, n);
+    Vec Bc = Vec::Zero(n);
+    Ac(0, 1) = R(1);
+    Ac(1, 1) = -b / m;
+    Bc(1) = R(1) / m;
+    Row out = Row::Zero(n);
+    out(0) = R(1);
+    for (size_t k = 0; k < p.modes.size(); ++k) {
+      const R w = p.modes[k].omega, c = p.modes[k].c, v = p.modes[k].v, d = p.modes[k].d;
+      const int i = 2 + 2 * static_cast<int>(k);
+      Ac(i, i) = -c;
+      Ac(i, i + 1) = -w;
+      Ac(i + 1, i) = w;
+      Ac.row(i) += out;
+      const R g = w * w / (v * v);
+      Row next = g * out;
+      next(i) += g * (d - c);
+      next(i + 1) += g * (v * v - w * w) / w;
+      out = next;
+    }
+    Mat M = Mat::Zero(n + 1, n + 1);
+    M.topLeftCorner(n, n) = Ac * T;
+    M.topRightCorner(n, 1) = Bc * T;
+    const Mat E = M.exp();
+    A = E.topLeftCorner(n, n);
+    B = E.topRightCorner(n, 1);
+    C = out;
+  }
+};
+
 // The loop brute force of a plant (with the loop's hand): its own ZOH,
 // e^{[[A, B], [0, 0]] T} without balancing; well conditioned for heavy
 // devices, where BruteForce's N(z) = det(zI - A + BC) - det(zI - A) loses its

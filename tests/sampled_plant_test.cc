@@ -2,6 +2,7 @@
 // comparison, the rows and the figures, checked against an independent
 // closed-loop brute force.
 #include <cmath>
+#include <cstdio>
 #include <complex>
 #include <stdexcept>
 #include <string>
@@ -100,6 +101,83 @@ TEST(SampledPlant, ModePatchesAreDenseAroundEveryMode) {
       EXPECT_LT(best, 1e-12) << w;
     }
   }
+}
+
+// G_d(z) of eq. (1) from the tests' own realisation, sampled by Eigen's
+// matrix exponential in long double (tests/brute_force.h, IndependentZoh: 3
+// digits more than double) and solved by a dense LU in long double: a
+// reference independent of model/zoh_modal.h and model/state_space.cc.
+std::complex<long double> LongDoubleZoh(const model::Plant& p, double T, std::complex<double> z) {
+  using R = long double;
+  using CMat = Eigen::Matrix<std::complex<R>, Eigen::Dynamic, Eigen::Dynamic>;
+  const IndependentZoh<R> zoh(p, T);
+  const int n = static_cast<int>(zoh.A.rows());
+  const CMat zI = CMat::Identity(n, n) * std::complex<R>(z.real(), z.imag());
+  const CMat x = (zI - zoh.A.cast<std::complex<R>>()).partialPivLu().solve(zoh.B.cast<std::complex<R>>());
+  return (zoh.C.cast<std::complex<R>>() * x)(0, 0);
+}
+
+double RelativeError(std::complex<double> g, std::complex<long double> ref) {
+  return static_cast<double>(std::abs(std::complex<long double>(g.real(), g.imag()) - ref) / std::abs(ref));
+}
+
+// Issue 31, 64 sections 8 % apart at damping ratio 0.025 (the many-mode
+// benchmark's model, up to 6 kHz at T = 1 ms): the double matrix exponential
+// of the 130-state ZOH is off by ~1e-8 near 70 Hz, so the pole-residue form
+// (O(n) per point) is the exact one there, and SampledPlant uses it. Before,
+// Gd fell back to the state space (held to agree with it) and this failed at
+// 1.5e-8.
+TEST(SampledPlant, ManyWideBandModesUseThePoleResidueFormWhereItIsTheExactOne) {
+  model::Plant p = model::PhantomTable1();
+  p.modes.clear();
+  for (int i = 0; i < 64; ++i) {
+    const double w = 300.0 * std::pow(1.08, i), v = 0.93 * w;
+    p.modes.push_back({w, 0.05 * w, v, 0.05 * v});
+  }
+  const SampledPlant sp(p, 1e-3);
+  double worst_gd = 0.0, worst_state_space = 0.0;
+  for (int k = 1; k < 24; ++k) {
+    const std::complex<double> z = std::polar(1.0, 0.25 + 0.3 * k / 24.0);  // 40-87 Hz, where the ZOH errs most
+    const std::complex<long double> ref = LongDoubleZoh(p, 1e-3, z);
+    worst_gd = std::max(worst_gd, RelativeError(sp.Gd(z), ref));
+    worst_state_space = std::max(worst_state_space, RelativeError(sp.GdStateSpace(z), ref));
+  }
+  std::printf("64 sections: Gd %.3g, state space %.3g from the long double ZOH\n", worst_gd, worst_state_space);
+  EXPECT_LE(worst_gd, 1e-10);
+  // The reference resolves the state space's error (else the test proves nothing).
+  EXPECT_GT(worst_state_space, 1e-9);
+}
+
+// Where the modes crowd (8 sections 1 % apart at damping 1e-4) the double
+// pole-residue sum cancels (its terms 1e10 times G_d) and the double state
+// space errs near the modes (its poles rounded); SampledPlant then sums the
+// pole-residue form in binary128. Against the long double ZOH (its own error
+// ~2000 times below the double one's) at every 80th mode-patch point. Before,
+// Gd was the state space and this failed at 1.2e-6.
+TEST(SampledPlant, CrowdedModesUseThePoleResidueFormInBinary128) {
+  model::Plant p = model::PhantomTable1();
+  p.modes.clear();
+  for (int i = 0; i < 8; ++i) {
+    const double w = 300.0 * std::pow(1.01, i), v = 0.93 * w;
+    p.modes.push_back({w, 2e-4 * w, v, 2e-4 * v});
+  }
+  const SampledPlant sp(p, 1e-3);
+  EXPECT_FALSE(sp.gd_pole_residue());
+#if defined(__SIZEOF_FLOAT128__)
+  EXPECT_TRUE(sp.gd_binary128());
+  double worst_gd = 0.0, worst_state_space = 0.0;
+  for (size_t i = 0; i < sp.mode_patch_theta().size(); i += 80) {
+    const std::complex<double> z = std::polar(1.0, sp.mode_patch_theta()[i]);
+    const std::complex<long double> ref = LongDoubleZoh(p, 1e-3, z);
+    worst_gd = std::max(worst_gd, RelativeError(sp.Gd(z), ref));
+    worst_state_space = std::max(worst_state_space, RelativeError(sp.GdStateSpace(z), ref));
+  }
+  std::printf("8 crowded sections: Gd %.3g, state space %.3g from the long double ZOH\n", worst_gd, worst_state_space);
+  EXPECT_LE(worst_gd, 1e-8);
+  EXPECT_GT(worst_state_space, 1e-7);  // the reference resolves the state space's error
+#else
+  EXPECT_FALSE(sp.gd_binary128());
+#endif
 }
 
 TEST(SampledPlant, AHandOtherThanTheSampledOnesIsABrokenContract) {
