@@ -495,7 +495,8 @@ Round IdimRound(FrictionTopology topology, const Motion& mo, const std::vector<c
 // std alone, which treats the simulated regressors as exact, was 10-400x
 // too small on the tests' logs).
 Sliding SimulatedIdim(FrictionTopology topology, const Motion& mo, const std::vector<cd>& Y, const std::vector<double>& U,
-                      const model::Plant& p, double m_std, double b_sim, double fs, double fc, double min_speed_fraction,
+                      const model::Plant& p, const model::Plant& p_std, double b_sim, double fs, double fc,
+                      double min_speed_fraction,
                       Idim* id) {
   Eigen::Vector2d x(std::max(b_sim > 0 ? b_sim : id->b, 1e-9 * p.m * fs), std::max(id->fc, 0.0));
   double offset = id->offset;
@@ -554,18 +555,37 @@ Sliding SimulatedIdim(FrictionTopology topology, const Motion& mo, const std::ve
   Eigen::Matrix2d C;
   C << r.id.b_std * r.id.b_std, r.id.b_fc_cov, r.id.b_fc_cov, r.id.fc_std * r.id.fc_std;
   const Eigen::Matrix2d Ji = J.inverse();
+  model::Plant pp = p;  // perturbed one parameter at a time
   if (Ji.allFinite()) {
     // m is held at the refit's value: its std moves the fixed point by
-    // -J^{-1} dG/dm std(m) (forward difference), added as independent.
-    Eigen::Vector2d dm = Eigen::Vector2d::Zero();
-    if (m_std > 0) {
-      model::Plant pm = p;
-      const double h = 1e-3 * p.m;
-      pm.m += h;
-      const Round rm = IdimRound(topology, mo, Y, U, pm, x(0), x(1), offset, fs, fc, min_speed_fraction);
-      dm = -Ji * (Eigen::Vector2d(rm.id.b - r.id.b, rm.id.fc - r.id.fc) / h) * m_std;
+    // -J^{-1} dG/dm std(m) (forward difference), added as independent. On
+    // the collocated topology the sections' parameters too: there they set
+    // when the encoder's velocity stops and what holds it (measured on
+    // Table I at 13 % friction, 40960 counts: the refit's sections, c1 +3.8 %
+    // and c2 +2.3 % off, moved the fixed point by b +2.1 %, 23 of its std
+    // without them; with the true sections, b -0.07 %). On the rigid body the
+    // regressor does not depend on them (the stress grid's std was measured
+    // without).
+    Eigen::Matrix2d Cp = Eigen::Matrix2d::Zero();
+    auto propagate = [&](double* value, double sd) {
+      if (!(sd > 0) || !std::isfinite(sd)) return;
+      const double keep = *value, h = 1e-3 * std::abs(keep);
+      *value += h;
+      const Round rp = IdimRound(topology, mo, Y, U, pp, x(0), x(1), offset, fs, fc, min_speed_fraction);
+      *value = keep;
+      const Eigen::Vector2d d = -Ji * (Eigen::Vector2d(rp.id.b - r.id.b, rp.id.fc - r.id.fc) / h) * sd;
+      Cp += d * d.transpose();
+    };
+    propagate(&pp.m, p_std.m);
+    if (topology == FrictionTopology::kCollocated && p_std.modes.size() == pp.modes.size()) {
+      for (size_t i = 0; i < pp.modes.size(); ++i) {
+        propagate(&pp.modes[i].omega, p_std.modes[i].omega);
+        propagate(&pp.modes[i].c, p_std.modes[i].c);
+        propagate(&pp.modes[i].v, p_std.modes[i].v);
+        propagate(&pp.modes[i].d, p_std.modes[i].d);
+      }
     }
-    const Eigen::Matrix2d Cx = Ji * C * Ji.transpose() + dm * dm.transpose();
+    const Eigen::Matrix2d Cx = Ji * C * Ji.transpose() + Cp;
     id->b_std = std::sqrt(Cx(0, 0));
     id->fc_std = std::sqrt(Cx(1, 1));
     id->b_fc_cov = Cx(0, 1);
@@ -711,9 +731,9 @@ FrictionFitResult FitFriction(const std::vector<double>& input, const std::vecto
   auto round = [&](Hypothesis* h) {
     const int it = h->iterations;
     const double b_sim = it > 0 && h->refit.std_errors.b < h->id.b_std ? h->plant.b : 0.0;
-    const double m_std = it == 0 ? seed.std_errors.m : h->refit.std_errors.m;
+    const model::Plant& p_std = it == 0 ? seed.std_errors : h->refit.std_errors;
     const Sliding sl =
-        SimulatedIdim(h->topology, h->mo, Y, U, h->plant, m_std, b_sim, fs, r.cutoff_hz, o.min_speed_fraction, &h->id);
+        SimulatedIdim(h->topology, h->mo, Y, U, h->plant, p_std, b_sim, fs, r.cutoff_hz, o.min_speed_fraction, &h->id);
     FitOptions fh = fo;
     fh.init = h->plant;
     h->refit = FitModel(ident::EstimateFrequencyResponse(LinearPartInput(U, sl, h->plant.delay_samples, h->id), output,

@@ -76,9 +76,9 @@ void ExpectTruth(const Outcome& o, const char* what, double fraction) {
   const FrictionFitResult& r = o.r;
   ASSERT_EQ(r.status, FrictionFitStatus::kFitted) << r.message;
   const double fc = r.friction.coulomb_pos, b = r.fit.plant.b;
-  std::printf("%s: F_c %2.0f %% of rms: F_c %.4g +- %.2g (%+.1f %%), b %.4g +- %.2g (%+.1f %%, %.1f std) | %s\n", what,
+  std::printf("%s: F_c %2.0f %% of rms: F_c %.4g +- %.2g (%+.1f %%), b %.4g +- %.2g (%+.1f %%, %.1f std), m %+.2f %% | %s\n", what,
               100 * fraction, fc, r.friction_std.coulomb_pos, 100 * (fc / o.fc_true - 1), b, r.fit.std_errors.b,
-              100 * (b / truth.b - 1), (b - truth.b) / r.fit.std_errors.b, r.message.c_str());
+              100 * (b / truth.b - 1), (b - truth.b) / r.fit.std_errors.b, 100 * (r.fit.plant.m / truth.m - 1), r.message.c_str());
   EXPECT_NEAR(fc / o.fc_true, 1.0, 0.10);
   EXPECT_NEAR(b / truth.b, 1.0, 0.10);
   EXPECT_LT(std::abs(b - truth.b), 4 * r.fit.std_errors.b);
