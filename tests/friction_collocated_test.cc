@@ -6,8 +6,8 @@
 // the rigid body's velocity with the sections after it. The two differ only
 // by the modes, so the truth is the simulated device (Table I) and its
 // Coulomb level. Measured on the fit that assumed the rigid body's topology
-// (2026-12-02): F_c -32 %, -50 %, -84 % and b +11 %, +79 %, +413 % at 5, 13
-// and 25 % of the torque rms.
+// (2026-12-02), on SimulateNonlinearLog's logs of these seeds: F_c -32 %,
+// -50 %, -84 % and b +11 %, +79 %, +413 % at 5, 13 and 25 % of the torque rms.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -115,6 +115,16 @@ std::string Name(const ::testing::TestParamInfo<Case>& i) {
 
 INSTANTIATE_TEST_SUITE_P(Levels, CollocatedFriction,
                          ::testing::Values(Case{0.05, 31}, Case{0.13, 32}, Case{0.25, 33}), Name);
+
+TEST(FrictionTopology, NamesRoundTrip) {
+  for (FrictionTopology t : {FrictionTopology::kRigidBody, FrictionTopology::kCollocated}) {
+    FrictionTopology back = FrictionTopology::kRigidBody;
+    EXPECT_TRUE(FrictionTopologyFromString(ToString(t), &back));
+    EXPECT_EQ(back, t);
+  }
+  FrictionTopology x;
+  EXPECT_FALSE(FrictionTopologyFromString("distal", &x));
+}
 
 }  // namespace
 }  // namespace zwidth::fit
