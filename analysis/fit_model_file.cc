@@ -76,7 +76,7 @@ std::optional<fit::QualityReason> SignOrSwap(const ident::FrequencyResponse& frf
 
 // The friction fit's record in model.json's "fit" (the linear-only b beside).
 nlohmann::json FrictionRecord(const fit::FrictionFitResult& ff) {
-  return {{"status", fit::ToString(ff.status)},
+  nlohmann::json j = {{"status", fit::ToString(ff.status)},
           {"detected", ff.detected},
           {"detection_coulomb", ff.detection_coulomb},
           {"detection_coulomb_std", ff.detection_coulomb_std},
@@ -88,6 +88,13 @@ nlohmann::json FrictionRecord(const fit::FrictionFitResult& ff) {
           {"rows_used", ff.rows_used},
           {"iterations", ff.iterations},
           {"message", ff.message}};
+  if (ff.status == fit::FrictionFitStatus::kFitted) {
+    // Where the friction acts, chosen by the first round's IDIM residual (fit/friction_fit.h).
+    j["topology"] = fit::ToString(ff.topology);
+    j["rigid_body_residual_rms"] = ff.rigid_body_residual_rms;
+    j["collocated_residual_rms"] = ff.collocated_residual_rms;
+  }
+  return j;
 }
 
 }  // namespace

@@ -81,6 +81,21 @@ bool FrictionModelFromString(const std::string& s, FrictionModel* f) {
   return false;
 }
 
+std::string ToString(FrictionTopology t) {
+  switch (t) {
+    case FrictionTopology::kRigidBody: return "rigid body";
+    case FrictionTopology::kCollocated: return "collocated";
+  }
+  return "?";
+}
+
+bool FrictionTopologyFromString(const std::string& s, FrictionTopology* t) {
+  for (FrictionTopology c : {FrictionTopology::kRigidBody, FrictionTopology::kCollocated}) {
+    if (s == ToString(c)) { *t = c; return true; }
+  }
+  return false;
+}
+
 std::string ToString(FrictionFitStatus s) {
   switch (s) {
     case FrictionFitStatus::kNotRun: return "not run";
