@@ -23,6 +23,7 @@
 #include "analysis/compare.h"
 #include "io/provenance.h"
 #include "io/stability_files.h"
+#include "model/units.h"
 #include "report/report_internal.h"
 
 namespace zwidth::report {
@@ -44,14 +45,6 @@ std::string Num(double v, const char* fmt = "%.5g") {
   char b[64];
   std::snprintf(b, sizeof b, fmt, v);
   return b;
-}
-
-struct Units {
-  const char* K;
-  const char* B;
-};
-Units UnitsOf(const analysis::RunAnalysis& a) {
-  return a.options.linear ? Units{"N/m", "N s/m"} : Units{"N m/rad", "N m s/rad"};
 }
 
 const char* kStyle = R"css(
@@ -139,7 +132,7 @@ std::string PlusMinus(double v, double sd) {
 // The Z-width table: one row per delay, units in the header, reopened bands below.
 void ZWidthTable(const analysis::RunAnalysis& a, std::ostringstream& h) {
   const analysis::PlantStability& st = a.stability;
-  const Units u = UnitsOf(a);
+  const model::UnitLabels& u = model::Units(a.options.linear);
   h << "<table class='zw' id='zwidth-table'><tr><th>loop delay + model delay = total [samples]</th><th>K_CR(B = 0) [" << u.K
     << "]</th><th>B_t [" << u.B << "]</th><th>K_CR^max [" << u.K << "]</th><th>B_max_from_zero [" << u.B
     << "]</th><th>B_max [" << u.B << "]</th></tr>\n";
@@ -191,8 +184,10 @@ void ZWidthSection(const analysis::RunAnalysis& a, std::ostringstream& h) {
     << "interval closes (the paper's B_max); B_max: the largest B at which some K &gt; 0 is stable. "
     << "&plusmn; one std by the delta method from the fit's parameter covariance"
     << (st.has_std ? "" : " (not available: the fit has no covariance)")
-    << ". boundary.csv lists every stable K interval per B.</p>\n";  if (!a.friction_amplitudes.empty()) {
-    h << "<p>Friction (Coulomb " << a.input.model.friction->MeanCoulomb() << " at the motor): outside the linear "
+    << ". boundary.csv lists every stable K interval per B.</p>\n";
+  if (!a.friction_amplitudes.empty()) {
+    h << "<p>Friction (Coulomb " << a.input.model.friction->MeanCoulomb() << " " << model::Units(a.options.linear).input
+      << " at the motor): outside the linear "
       << "Z-width a wall is still stable for oscillations below the describing-function amplitude A* "
       << "(docs/friction.md; boundary.csv's A_star column):</p>\n<ul>\n";
     for (int d : st.delays) {
@@ -239,12 +234,12 @@ nlohmann::json ChartData(const analysis::RunAnalysis& a) {
     }
     kcr.push_back(row);
   }
-  const Units u = UnitsOf(a);
+  const model::UnitLabels& u = model::Units(a.options.linear);
   return {{"mag", mag},
           {"phase", ph},
           {"kcr", kcr},
           {"kcr_labels", labels},
-          {"units", {{"K", u.K}, {"B", u.B}, {"H", a.options.linear ? "m/N" : "rad/(N m)"}}},
+          {"units", {{"K", u.K}, {"B", u.B}, {"H", u.H}}},
           {"model_band", band}};
 }
 

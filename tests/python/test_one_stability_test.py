@@ -60,7 +60,7 @@ def test_every_caller_agrees_at_every_point_of_a_grid(ratio, zeta, d):
     K = np.array([p[0] for p in points])
     B = np.array([p[1] for p in points])
     got = z.is_stable(K, B)
-    verdicts = zwidth.check([("o", k, b) for k, b in points], model, d, period_s=T)["objects"]
+    verdicts = zwidth.check([(f"o{i}", k, b) for i, (k, b) in enumerate(points)], model, d, period_s=T)["objects"]
     assert len(verdicts) == len(points)
     for i, (k, b) in enumerate(points):
         assert bool(got[i]) == inside_one(ivs[i], k), (k, b)
