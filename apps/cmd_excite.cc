@@ -24,7 +24,7 @@ void AddExciteCommand(CLI::App& app) {
   cmd->add_option("--rms", f->o.rms, "RMS [input unit, e.g. N m]")->capture_default_str();
   cmd->add_option("--fmin", f->o.fmin_hz, "band start [Hz]; the multisine's line spacing")->capture_default_str();
   cmd->add_option("--fmax", f->o.fmax_hz, "band end [Hz], below Nyquist")->capture_default_str();
-  cmd->add_option("--seed", f->o.seed, "random seed (noise; a multisine's --random-phases)")->capture_default_str();
+  AddSeedOption(cmd, &f->o.seed, "random seed (noise; a multisine's --random-phases)");
   cmd->add_flag("--random-phases", f->o.random_phases,
                 "multisine: random phases from --seed instead of Schroeder's (one realisation per seed, for "
                 "estimate --estimator robust)");

@@ -35,7 +35,7 @@ void AddSimulateCommand(CLI::App& app) {
   cmd->add_option("--encoder-step", f->o.encoder_step_rad, "rad per encoder count (0: none)")->capture_default_str();
   cmd->add_option("--noise-std", f->o.noise_std_rad, "sensor noise std [rad]")->capture_default_str();
   cmd->add_option("--delay-samples", f->o.delay_samples, "extra input delay [samples]")->capture_default_str();
-  cmd->add_option("--seed", f->o.seed, "random seed")->capture_default_str();
+  AddSeedOption(cmd, &f->o.seed, "random seed");
   AddFrictionFlags(cmd, &f->friction);
   cmd->callback([f] {
     io::CheckOutputFolder(f->out, {f->model});

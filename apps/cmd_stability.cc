@@ -244,7 +244,7 @@ void AddBoundaryCommand(CLI::App& app) {
   b->add_option("--summary", bf->summary, "summary JSON (B_t, K_CR^max, B_max, bands, std ... per delay)");
   b->add_option("--monte-carlo", bf->monte_carlo, "also sample the parameter covariance N times and report the "
                 "sample std beside the delta method's (0 = off)")->capture_default_str();
-  b->add_option("--seed", bf->seed, "seed of --monte-carlo")->capture_default_str();
+  AddSeedOption(b, &bf->seed, "seed of --monte-carlo");
   AddLoopFlags(b, &bf->loop);
   AddFrictionFlags(b, &bf->friction);
   b->add_option("--encoder-step", bf->amplitude.encoder_step,

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -99,6 +100,21 @@ void AddEstimateFlags(CLI::App* cmd, EstimateFlags* f) {
 
 void AddUnitsFlag(CLI::App* cmd, std::string* units) {
   cmd->add_option("--units", *units, "labels: rotary (kg m^2, N m s/rad) | linear (kg, N s/m)")->capture_default_str();
+}
+
+CLI::Option* AddSeedOption(CLI::App* cmd, std::uint64_t* seed, const std::string& help) {
+  const CLI::Validator whole(
+      [](std::string& s) -> std::string {
+        std::uint64_t v = 0;
+        const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+        if (s.empty() || s.find_first_not_of("0123456789") != std::string::npos || ec != std::errc() ||
+            end != s.data() + s.size()) {
+          return "must be a whole number from 0 to 18446744073709551615 (a random seed), got '" + s.substr(0, 40) + "'";
+        }
+        return "";
+      },
+      "SEED");
+  return cmd->add_option("--seed", *seed, help)->check(whole)->capture_default_str();
 }
 
 bool LinearUnits(const std::string& units) { return io::ParseUnitsWord(units, "--units"); }

@@ -93,6 +93,9 @@ std::string JoinPaths(const std::vector<std::string>& paths);
 
 // --units rotary|linear: parameter labels (kg m^2, N m s/rad | kg, N s/m).
 void AddUnitsFlag(CLI::App* cmd, std::string* units);
+// --seed: a whole number in [0, 2^64 - 1]; "-1" is refused (CLI11 would wrap
+// it to 2^64 - 1 silently).
+CLI::Option* AddSeedOption(CLI::App* cmd, std::uint64_t* seed, const std::string& help);
 bool LinearUnits(const std::string& units);  // throws InputError for another word
 
 // Prints "stage: 1.23 ms" to stderr.

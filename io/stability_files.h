@@ -89,9 +89,12 @@ inline constexpr size_t kMaxSceneObjects = 100000;
 // The loop delays a command takes: each in [0, kMaxLoopDelaySamples], at most
 // kMaxLoopDelays of them. A delay's Z-width costs time and memory in
 // proportion to it (its frequency grid has ~ grid_points_per_delay x d
-// points): `boundary --delays 1000` (1000 B values) took 100.6 s and 16 MB
-// on the shared 2-core build machine under load; `--delays 5000` ran past 20 s
-// before and would take ~5x that.
+// points) while the Schur-Cohn test decides, and much more past it: on Table
+// I, `boundary --delays 100` took 0.64 s and 150 took 2.7 s, but from about
+// 170 samples the polynomial test's error bound fails and the eigenvalue test
+// of the (n + d)-state loop decides at every B: 170 took > 25 s, 200 > 120 s
+// and 1000 > 7 min (shared 2-core machine, 2026-12-02). This bound does not
+// yet bound that work (issue 30).
 inline constexpr int kMaxLoopDelaySamples = 1000;
 inline constexpr size_t kMaxLoopDelays = 64;
 // "" when `delays` keeps those bounds (and is not empty), else the message

@@ -137,5 +137,11 @@ if [ $rc -eq 1 ] && grep -q "did not converge" "$T/stderr" && [ ! -e "$T/nc.json
 else
   echo "FAIL fit-no-convergence: exit $rc"; cat "$T/stderr"; fail=$((fail+1))
 fi
+# --seed: CLI11 wraps -1 to 2^64 - 1 in an unsigned option; a seed is a
+# whole number in [0, 2^64 - 1] (simulate, excite, boundary's Monte Carlo).
+expect seed-negative "--seed: must be a whole number.*got '-1'" "$T/s1.h5" -- "$ZW" simulate --model "$M" --seed -1 --seconds 1 -o "$T/s1.h5"
+expect seed-overflow "--seed: must be a whole number.*18446744073709551616" "$T/s2.h5" -- "$ZW" simulate --model "$M" --seed 18446744073709551616 --seconds 1 -o "$T/s2.h5"
+expect seed-fraction "--seed: must be a whole number.*got '1.5'" "$T/e1.txt" -- "$ZW" excite --seed 1.5 -o "$T/e1.txt"
+expect seed-boundary "--seed: must be a whole number" "$T/b1.csv" -- "$ZW" boundary "$M" --monte-carlo 10 --seed -2 -o "$T/b1.csv"
 echo "$pass passed, $fail failed"
 [ $fail -eq 0 ]
