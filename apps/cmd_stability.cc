@@ -18,6 +18,7 @@
 #include "io/model_json.h"
 #include "io/stability_files.h"
 #include "model/error.h"
+#include "model/units.h"
 #include "stability/friction_prediction.h"
 #include "stability/relay.h"
 #include "stability/uncertainty.h"
@@ -365,7 +366,10 @@ void AddFilterSweepCommand(CLI::App& app) {
     }
     if (r.best < 0) throw ComputationError("no cut-off gave a finite measure");
     std::printf("measure %s (%s); delay %d, T = %g s, %zu cut-offs from %g to %g Hz\n", sf->measure.c_str(),
-                o.measure == stability::SweepMeasure::kKcrMax ? "K_CR^max [N m/rad]" : "area [N m/rad x N m s/rad]",
+                (o.measure == stability::SweepMeasure::kKcrMax
+                     ? "K_CR^max [" + std::string(model::Units(mf.linear).K) + "]"
+                     : "area [" + std::string(model::Units(mf.linear).K) + " x " + model::Units(mf.linear).B + "]")
+                    .c_str(),
                 sf->delay, T, r.cutoffs_hz.size(), r.cutoffs_hz.front(), r.cutoffs_hz.back());
     std::printf("best cut-off %.5g Hz: %.6g (lowest %.5g Hz: %.6g; highest %.5g Hz: %.6g; without filter: %.6g)\n",
                 r.cutoffs_hz[r.best], r.measure[r.best], r.cutoffs_hz.front(), r.measure.front(), r.cutoffs_hz.back(),
@@ -436,7 +440,7 @@ void WarnRelay(const stability::RelayResult& res) {
 
 // The relay's readings and the exact K_cr on stdout, or the JSON alone.
 void PrintRelay(const stability::RelayResult& res, const stability::CriticalPoint& cp, const nlohmann::json& j,
-                bool json) {
+                bool json, const model::UnitLabels& u) {
   if (json) {
     nlohmann::json out = j;
     out["provenance"] = io::ProvenanceJson();
@@ -445,18 +449,18 @@ void PrintRelay(const stability::RelayResult& res, const stability::CriticalPoin
     std::printf("relay: the loop diverges with the relay alone, so K -> 0+ is unstable here (B past B_max_from_zero): "
                 "K_cr = 0\n");
   } else {
-    std::printf("relay, paper's reading (spectral peak, first harmonics): K_cr = %.6g N m/rad at %.5g Hz\n",
-                res.K_cr_peak, res.f_cr_peak_hz);
-    std::printf("relay, -180 deg crossings measured by steered runs:    K_cr = %.6g N m/rad at %.5g Hz%s\n",
-                res.K_cr, res.f_cr_hz, res.refined() ? "" : " (no crossing found: the paper's reading)");
+    std::printf("relay, paper's reading (spectral peak, first harmonics): K_cr = %.6g %s at %.5g Hz\n",
+                res.K_cr_peak, u.K, res.f_cr_peak_hz);
+    std::printf("relay, -180 deg crossings measured by steered runs:    K_cr = %.6g %s at %.5g Hz%s\n",
+                res.K_cr, u.K, res.f_cr_hz, res.refined() ? "" : " (no crossing found: the paper's reading)");
   }
   if (!json) {
     if (std::isfinite(cp.f_cr_hz)) {
-      std::printf("exact (eq. 2, with this loop's filter and hand):        K_cr = %.6g N m/rad at %.5g Hz\n",
-                  cp.K_cr, cp.f_cr_hz);
+      std::printf("exact (eq. 2, with this loop's filter and hand):        K_cr = %.6g %s at %.5g Hz\n",
+                  cp.K_cr, u.K, cp.f_cr_hz);
     } else {  // K_cr = 0 past B_max_from_zero: no crossing, so no frequency
-      std::printf("exact (eq. 2, with this loop's filter and hand):        K_cr = %.6g N m/rad (no crossing)\n",
-                  cp.K_cr);
+      std::printf("exact (eq. 2, with this loop's filter and hand):        K_cr = %.6g %s (no crossing)\n",
+                  cp.K_cr, u.K);
     }
   }
 }
@@ -506,7 +510,7 @@ void AddRelayCommand(CLI::App& app) {
     if (!rf->trace.empty()) WriteRelayTrace(rf->trace, res, rf->o.period_s);
     const nlohmann::json j = RelayJson(res, cp, rf->o);
     WarnRelay(res);
-    PrintRelay(res, cp, j, rf->json);
+    PrintRelay(res, cp, j, rf->json, model::Units(mf.linear));
   });
 }
 

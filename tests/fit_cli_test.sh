@@ -55,6 +55,8 @@ check "fit --units linear: model.json says linear, the table kg and N s/m" 'grep
 check "compare: the linear model in kg and N s/m without --units" 'grep -q " kg" "$T/out" && grep -q "N s/m" "$T/out" && ! grep -q "kg m^2" "$T/out" && ! grep -q "N m s/rad" "$T/out"'
 "$ZW" export "$T/axis_fit.json" --format matlab --period 0.001 -o "$T/axis.m" > /dev/null 2>&1
 check "export .m: inertia [kg], damping [N s/m]" 'grep -q "inertia \[kg\]" "$T/axis.m" && grep -q "damping \[N s/m\]" "$T/axis.m" && ! grep -q "kg m^2" "$T/axis.m"'
+"$ZW" relay "$T/axis_fit.json" --damping 1 --delay 2 > "$T/out" 2>&1
+check "relay: the linear model's K_cr in N/m" 'grep -q "K_cr = .* N/m at" "$T/out" && ! grep -q "N m/rad" "$T/out"'
 "$ZW" run "$T/axis.h5" --units linear --modes 1 --no-figures -o "$T/axis_run" > /dev/null 2>&1
 check "run --units linear: model.json says linear" 'grep -q "\"units\": \"linear\"" "$T/axis_run/model.json"'
 "$ZW" run "$T/log.h5" --no-figures -o "$T/rot_run" > /dev/null 2>&1
