@@ -5,6 +5,7 @@
 #include <map>
 #include <utility>
 
+#include "io/stability_files.h"
 #include "model/error.h"
 #include "model/friction.h"
 #include "model/parallel.h"
@@ -57,7 +58,7 @@ std::string Cell(const Table2Prediction& p) {
 }
 
 nlohmann::json PredictionJson(const Table2Prediction& p) {
-  auto num = [](double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); };
+  const auto num = io::NumberOrNull;
   return {{"K", std::isinf(p.K) ? nlohmann::json("inf") : num(p.K)},
           {"f_hz", num(p.f_hz)},
           {"K_rel_error", num(p.K_rel_error)},
@@ -151,7 +152,7 @@ Table2Comparison CompareTable2(const model::Plant& plant, double period_s, const
 }
 
 nlohmann::json Table2Json(const Table2Comparison& c) {
-  auto num = [](double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); };
+  const auto num = io::NumberOrNull;
   nlohmann::json j;
   j["coulomb_levels"] = c.coulomb_levels;
   j["encoder_step"] = c.encoder_step;

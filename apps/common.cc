@@ -106,9 +106,9 @@ CLI::Option* AddSeedOption(CLI::App* cmd, std::uint64_t* seed, const std::string
   const CLI::Validator whole(
       [](std::string& s) -> std::string {
         std::uint64_t v = 0;
-        const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-        if (s.empty() || s.find_first_not_of("0123456789") != std::string::npos || ec != std::errc() ||
-            end != s.data() + s.size()) {
+        // Digits only (no sign, no fraction); from_chars refuses what does not fit 64 bits.
+        if (s.empty() || s.find_first_not_of("0123456789") != std::string::npos ||
+            std::from_chars(s.data(), s.data() + s.size(), v).ec != std::errc()) {
           return "must be a whole number from 0 to 18446744073709551615 (a random seed), got '" + s.substr(0, 40) + "'";
         }
         return "";

@@ -140,7 +140,8 @@ struct FrictionFitResult {
   double linear_b = 0.0, linear_b_std = 0.0;  // the linear-only fit's b
   // The topology kept (kFitted, kFailed), and each topology's IDIM residual
   // after the first round, which chose it (the weighted frequency-domain
-  // rows' rms; inf when its refit failed).
+  // rows' rms; inf when its first refit was tried and failed: the other's is
+  // tried only when the chosen one's fails).
   FrictionTopology topology = FrictionTopology::kRigidBody;
   double rigid_body_residual_rms = 0.0, collocated_residual_rms = 0.0;
   // The linear part: the refit when kFitted, else the linear fit (with the

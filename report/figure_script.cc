@@ -4,6 +4,7 @@
 #include <sstream>
 #include <vector>
 
+#include "model/units.h"
 #include "report/report_internal.h"
 
 namespace zwidth::report {
@@ -27,7 +28,7 @@ std::string FigureScript(const FigureScriptOptions& o) {
     const std::string ext = std::string(term).rfind("svg", 0) == 0 ? "svg" : "png";
     gp << "set terminal " << term << "\n";
     gp << "set output 'bode." << ext << "'\nset multiplot layout 2,1 title 'Bode diagram: measured (" << ident::ToString(o.method) << ") and fitted model (exact ZOH) - Fig. 3'\n"
-       << "set logscale x\nset logscale y\nset format y '10^{%L}'\nset ylabel 'magnitude [" << (o.linear ? "m/N" : "rad/(N m)") << "]'\nunset xlabel\n"
+       << "set logscale x\nset logscale y\nset format y '10^{%L}'\nset ylabel 'magnitude [" << model::Units(o.linear).H << "]'\nunset xlabel\n"
        << "plot 'bode.dat' index 0 u 1:2 w l lc rgb '#1f77b4' t 'measured, fitted band', "
        << "'' index 1 u 1:2 w p pt 7 ps 0.25 lc rgb '#bbbbbb' t 'measured, not used', "
        << "'' index 2 u 1:2 w l lw 2 lc rgb 'black' t 'fitted model'\n"
@@ -40,7 +41,7 @@ std::string FigureScript(const FigureScriptOptions& o) {
                  : "plot 'bode.dat' index 3 u 1:2 w l lc rgb '#1f77b4' t 'coherence'\n")
        << "set yrange [*:*]\nunset logscale x\nunset title\n";
     gp << "set output 'kcr." << ext << "'\nset multiplot layout 2,1 title 'Critical stiffness and ultimate frequency vs damping - Fig. 6 / Fig. 10'\n"
-       << "set xlabel 'B [" << (o.linear ? "N s/m" : "N m s/rad") << "]'\nset ylabel 'K_{CR} [" << (o.linear ? "N/m" : "N m/rad") << "]'\n"
+       << "set xlabel 'B [" << model::Units(o.linear).B << "]'\nset ylabel 'K_{CR} [" << model::Units(o.linear).K << "]'\n"
        << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:2 w l lt i t sprintf('model, d = %s + %d', word(delays,i), model_delay)"
        << (o.have_ref ? ", for [i=1:words(delays)] 'kcr_reference.dat' index i-1 u 1:2 w l lt i dt 2 lw 1 t 'reference, d='.word(delays,i)" : "")
        << (o.table1 ? ", 'table2.dat' u 2:3 w p pt 7 ps 0.8 lc rgb 'red' t 'Table II (relay)'" : "") << "\n"
@@ -68,7 +69,7 @@ std::string FigureScript(const FigureScriptOptions& o) {
        << "'loop_passive.dat' index i-1 u 1:2 w l lw 2 lc rgb 'black' t 'K_P, raw', '' index i-1 u 1:3 w l lw 2 dt 2 lc rgb '#7f2704' t 'K_P, filtered'\n"
        << "}\nunset multiplot\nset yrange [*:*]\nunset title\n";
     gp << "set output 'rigid." << ext << "'\nset title 'With the vibration modes and without (rigid body only) - Fig. 7'\n"
-       << "set xlabel 'B [" << (o.linear ? "N s/m" : "N m s/rad") << "]'\nset ylabel 'K_{CR} [" << (o.linear ? "N/m" : "N m/rad") << "]'\n"
+       << "set xlabel 'B [" << model::Units(o.linear).B << "]'\nset ylabel 'K_{CR} [" << model::Units(o.linear).K << "]'\n"
        << "plot for [i=1:words(delays)] 'kcr_model.dat' index i-1 u 1:2 w l lt i t 'with modes, d='.word(delays,i), "
        << "for [i=1:words(delays)] 'kcr_rigid.dat' index i-1 u 1:2 w l lt i dt 2 t 'rigid only, d='.word(delays,i)\nunset title\n";
   }

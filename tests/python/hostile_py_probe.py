@@ -774,6 +774,7 @@ def run_keyword(code, want_name, german_check=True):
                 locale.setlocale(locale.LC_ALL, "de_DE.UTF-8")
                 try:
                     exec(code, globals())
+                    de = "accepted under de_DE.UTF-8"
                 except Exception as e2:
                     de = str(e2)
             finally:
