@@ -283,12 +283,13 @@ void AddBoundaryCommand(CLI::App& app) {
       amps = analysis::FrictionAmplitudes(mf.plant, T, loops[0], t.rows, friction, bf->amplitude);
       analysis::SetFrictionColumns(amps, &t.rows);
     }
-    io::WriteBoundaryCsv(bf->out, t.rows);
+    // The summary (and its Monte Carlo) before any file: a failure leaves nothing written.
     nlohmann::json js = BoundarySummaryJson(t, mf, T, bf->delays, loops, bf->monte_carlo, bf->seed);
     for (size_t i = 0; i < bf->delays.size() && !amps.empty(); ++i) {
       js["delays"][i]["friction"] = analysis::FrictionSummaryJson(amps, bf->delays[i], friction, bf->amplitude);
     }
     js["provenance"] = io::ProvenanceJson();
+    io::WriteBoundaryCsv(bf->out, t.rows);
     if (!bf->summary.empty()) io::WriteTextAtomically(bf->summary, js.dump(2) + "\n");
     PrintBoundarySummary(t, mf, bf->delays, loops);
     for (size_t i = 0; i < bf->delays.size() && !amps.empty(); ++i) {

@@ -3,6 +3,8 @@
 #include <vector>
 
 #include "io/printable.h"
+#include "model/error.h"
+#include "stability/uncertainty.h"
 
 namespace zwidth::io {
 namespace {
@@ -34,6 +36,15 @@ ModelFile FittedModelFile(const fit::FitResult& r, const ident::FrequencyRespons
   mf.plant.name = "fitted from " + shown;
   mf.std_errors = r.std_errors;
   mf.log_covariance = r.log_covariance;
+  std::string covariance_omitted;
+  if (!mf.log_covariance.empty()) {
+    try {  // a model file zwidth writes must load: an unusable covariance is left out, and said so
+      stability::CheckLogCovariance(mf.plant, mf.log_covariance);
+    } catch (const InputError& e) {
+      covariance_omitted = e.what();
+      mf.log_covariance.clear();
+    }
+  }
   mf.sample_period_s = frf.period_s();
   mf.fit = {{"status", fit::ToString(r.status)},
             {"source", shown},
@@ -59,7 +70,7 @@ ModelFile FittedModelFile(const fit::FitResult& r, const ident::FrequencyRespons
             {"nrmse_note", "100 (1 - |H - G| / |H - mean H|), unweighted: dominated by the largest |H|; judge by chi2/dof and quality"},
             {"worst_misfit_hz", r.worst_misfit_hz},
             {"std_scale", r.std_scale},
-            {"covariance_ok", r.covariance_ok},
+            {"covariance_ok", r.covariance_ok && covariance_omitted.empty()},
             {"num_bins", r.num_residuals / 2},
             {"num_averages", frf.num_averages},
             {"estimator", frf.estimator.empty() ? std::string("unknown") : frf.estimator},
@@ -70,6 +81,7 @@ ModelFile FittedModelFile(const fit::FitResult& r, const ident::FrequencyRespons
             {"residual", "exact ZOH response, weighted by the Welch per-bin std"},
             {"order", "canonical: pole pairs sorted by omega, zero pairs by v (G is unchanged)"},
             {"warnings", r.warnings}};
+  if (!covariance_omitted.empty()) mf.fit["covariance_omitted"] = covariance_omitted;
   return mf;
 }
 

@@ -11,6 +11,7 @@
 
 #include <Eigen/Dense>
 
+#include "model/c_locale.h"
 #include "model/error.h"
 #include "model/state_space.h"
 
@@ -75,7 +76,15 @@ void CheckLogCovariance(const model::Plant& plant, const std::vector<double>& co
     if (!std::isfinite(v)) throw InputError("the parameter covariance has a non-finite entry");
     scale = std::max(scale, std::abs(v));
   }
+  const std::vector<std::string> names = LogParameterNames(plant);
   for (size_t i = 0; i < p; ++i) {
+    if (cov[i * p + i] > kMaxLogVariance) {
+      throw InputError("the parameter covariance gives log(" + names[i] + ") a variance of " + FormatG(cov[i * p + i]) +
+                       " (a std of " + FormatG(std::sqrt(cov[i * p + i])) + " in its natural log, a factor of e^" +
+                       FormatG(std::sqrt(cov[i * p + i])) + "); the covariance is of the parameters' natural logs "
+                       "(relative: 1e-4 is a 1 % std) and at most " + FormatG(kMaxLogVariance) +
+                       ": convert an absolute covariance C to C_ij / (x_i x_j), or drop the covariance");
+    }
     for (size_t j = 0; j < i; ++j) {
       if (std::abs(cov[i * p + j] - cov[j * p + i]) > 1e-9 * scale) {
         throw InputError("the parameter covariance is not symmetric (entry " + std::to_string(i) + "," +
@@ -87,7 +96,7 @@ void CheckLogCovariance(const model::Plant& plant, const std::vector<double>& co
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (S + S.transpose()));
   if (p > 0 && es.eigenvalues().minCoeff() < -1e-9 * scale) {
     throw InputError("the parameter covariance is not positive semi-definite (smallest eigenvalue " +
-                     std::to_string(es.eigenvalues().minCoeff()) + ")");
+                     FormatG(es.eigenvalues().minCoeff()) + ")");
   }
 }
 

@@ -50,8 +50,17 @@ struct UncertaintyOptions {
   bool IsValid(std::string* why) const;
 };
 
-// Throws InputError when the covariance is not (2 + 4 N)^2 finite numbers, or
-// not symmetric positive semi-definite (to 1e-9 relative).
+// The largest variance of a parameter's natural log that the delta method and
+// Monte Carlo take: a std of 10 (a factor e^10 = 2.2e4 at one std). Past it
+// the parameter is unknown, the linearisation means nothing, and Monte Carlo
+// draws plants at factors e^{+-40} and beyond (exp over- and underflows by
+// 1e300, and a variance of 1e4 took over 120 s for 20 samples): such a matrix
+// is almost always an absolute covariance given where a relative one belongs.
+inline constexpr double kMaxLogVariance = 100.0;
+
+// Throws InputError when the covariance is not (2 + 4 N)^2 finite numbers, not
+// symmetric positive semi-definite (to 1e-9 relative), or has a diagonal entry
+// above kMaxLogVariance (naming the parameter).
 void CheckLogCovariance(const model::Plant& plant, const std::vector<double>& log_covariance);
 
 // The sampled plant at x0 and at x0 +- log_step e_i for every log parameter,

@@ -54,6 +54,11 @@ expect check-negative-K "'K'" "" -- "$ZW" check "$T/negK.json" --model "$M" --de
 expect check-scene-pipe "scene file is a FIFO.*not a regular file" "" -- "$ZW" check <(echo '{"objects":[{"name":"w","K":1,"B":0}]}') --model "$M" --delay 2
 sed 's/"modes"/"covariance": {"space": "log", "parameters": ["m", "b"], "matrix": [[1e-4, 0], [0, 1e-4]]}, "modes"/' "$M" > "$T/cov.json"
 expect model-covariance-shape "covariance.parameters" "$T/o26.csv" -- "$ZW" boundary "$T/cov.json" -o "$T/o26.csv"
+python3 -c "import json, sys; m = json.load(open(sys.argv[1])); n = 2 + 4 * len(m['modes']); \
+names = ['m', 'b'] + ['modes[%d].%s' % (i, k) for i in range(len(m['modes'])) for k in ('omega', 'c', 'v', 'd')]; \
+m['covariance'] = {'space': 'log', 'parameters': names, 'matrix': [[1e300 * (i == j) for j in range(n)] for i in range(n)]}; \
+json.dump(m, open(sys.argv[2], 'w'))" "$M" "$T/cov300.json"
+expect model-covariance-absolute "log\(m\).*variance of 1e\+300.*natural logs" "$T/o27.csv" -- "$ZW" boundary "$T/cov300.json" --monte-carlo 5 -o "$T/o27.csv"
 expect b-grid-cap "over the cap.*--b-step" "$T/o24.csv" -- "$ZW" boundary "$M" --b-max 1e300 --b-step 1e-3 -o "$T/o24.csv"
 expect b-grid-bad-max "--b-max.*not a finite number" "$T/o25.csv" -- "$ZW" boundary "$M" --b-max inf -o "$T/o25.csv"
 # check: exit 3 (not 1 or 2) when an object is unstable, 0 when all are stable.

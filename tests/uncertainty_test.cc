@@ -1,6 +1,7 @@
 // stability/uncertainty.h: the standard deviation of K_cr by the delta method
 // against a seeded Monte Carlo over the model's parameters.
 #include <cmath>
+#include <string>
 #include <cstdio>
 #include <numbers>
 #include <random>
@@ -113,6 +114,29 @@ TEST(Uncertainty, RejectsABadCovariance) {
   std::vector<double> neg(n * n, 0.0);
   neg[0] = -1.0;
   EXPECT_THROW(CheckLogCovariance(p, neg), InputError);
+}
+
+// A log variance past kMaxLogVariance (an absolute covariance given as a
+// relative one) is refused at the check, naming the parameter; the bound
+// itself is accepted.
+TEST(Uncertainty, RejectsALogVarianceBeyondTheBound) {
+  const model::Plant p = model::PhantomTable1();
+  const int n = NumLogParameters(p);
+  const int last = n - 1;  // log(modes[N-1].d)
+  std::vector<double> c(n * n, 0.0);
+  for (int i = 0; i < n; ++i) c[i * n + i] = 1e-4;
+  c[last * n + last] = kMaxLogVariance;
+  EXPECT_NO_THROW(CheckLogCovariance(p, c));
+  for (double v : {std::nextafter(kMaxLogVariance, 1e300), 1e4, 1e300}) {
+    c[last * n + last] = v;
+    try {
+      CheckLogCovariance(p, c);
+      ADD_FAILURE() << "variance " << v << " accepted";
+    } catch (const InputError& e) {
+      const std::string name = "log(modes[" + std::to_string(p.modes.size() - 1) + "].d)";
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace
