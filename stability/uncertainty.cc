@@ -76,13 +76,13 @@ void CheckLogCovariance(const model::Plant& plant, const std::vector<double>& co
     if (!std::isfinite(v)) throw InputError("the parameter covariance has a non-finite entry");
     scale = std::max(scale, std::abs(v));
   }
-  const std::vector<std::string> names = LogParameterNames(plant);
   for (size_t i = 0; i < p; ++i) {
     if (cov[i * p + i] > kMaxLogVariance) {
-      throw InputError("the parameter covariance gives log(" + names[i] + ") a variance of " + FormatG(cov[i * p + i]) +
-                       " (a std of " + FormatG(std::sqrt(cov[i * p + i])) + " in its natural log, a factor of e^" +
-                       FormatG(std::sqrt(cov[i * p + i])) + "); the covariance is of the parameters' natural logs "
-                       "(relative: 1e-4 is a 1 % std) and at most " + FormatG(kMaxLogVariance) +
+      const std::string sd = FormatG(std::sqrt(cov[i * p + i]));
+      throw InputError("the parameter covariance gives log(" + LogParameterNames(plant)[i] + ") a variance of " +
+                       FormatG(cov[i * p + i]) + " (a std of " + sd + " in its natural log, a factor of e^" + sd +
+                       "); the covariance is of the parameters' natural logs (relative: 1e-4 is a 1 % std) and at "
+                       "most " + FormatG(kMaxLogVariance) +
                        ": convert an absolute covariance C to C_ij / (x_i x_j), or drop the covariance");
     }
     for (size_t j = 0; j < i; ++j) {

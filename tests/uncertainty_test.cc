@@ -1,10 +1,10 @@
 // stability/uncertainty.h: the standard deviation of K_cr by the delta method
 // against a seeded Monte Carlo over the model's parameters.
 #include <cmath>
-#include <string>
 #include <cstdio>
 #include <numbers>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -127,13 +127,13 @@ TEST(Uncertainty, RejectsALogVarianceBeyondTheBound) {
   for (int i = 0; i < n; ++i) c[i * n + i] = 1e-4;
   c[last * n + last] = kMaxLogVariance;
   EXPECT_NO_THROW(CheckLogCovariance(p, c));
+  const std::string name = "log(modes[" + std::to_string(p.modes.size() - 1) + "].d)";
   for (double v : {std::nextafter(kMaxLogVariance, 1e300), 1e4, 1e300}) {
     c[last * n + last] = v;
     try {
       CheckLogCovariance(p, c);
       ADD_FAILURE() << "variance " << v << " accepted";
     } catch (const InputError& e) {
-      const std::string name = "log(modes[" + std::to_string(p.modes.size() - 1) + "].d)";
       EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
     }
   }
