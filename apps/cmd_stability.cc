@@ -150,11 +150,7 @@ void PrintBoundarySummary(const BoundaryTable& t, const io::ModelFile& mf, const
       std::printf("  f_CR jumps at B = %.6g: K_CR %.6g -> %.6g, f_CR %.5g -> %.5g Hz%s\n", j.B, j.K_before, j.K_after,
                   j.f_before_hz, j.f_after_hz, j.B == s.B_t ? " (B_t)" : "");
     }
-    if (!s.polynomial_test) {
-      std::printf("  stability from the closed loop's eigenvalues: the characteristic polynomial cannot place its "
-                  "roots here (rounding moves D(z)'s poles by %.3g of their distance to the unit circle)\n",
-                  s.pole_shift);
-    }
+    if (!s.polynomial_test) std::printf("  %s\n", stability::StabilityTestNote(s).c_str());
     if (!s.conditioning_warning.empty()) std::printf("  warning: %s\n", s.conditioning_warning.c_str());
   }
   std::printf("B_max_0: where the interval from K = 0+ closes; B_max: the largest B with some stable K > 0\n");

@@ -226,6 +226,18 @@ void BM_StableIntervals(benchmark::State& state) {
 }
 BENCHMARK(BM_StableIntervals)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
+// The brute force's boundary near an interval end k at B: 60 bisections of
+// its closed-loop eigenvalues on [k (1 - span), k (1 + span)].
+double BisectEnd(const stability::LoopBruteForce& bf, double k, double B, double span) {
+  double lo = (1 - span) * k, hi = (1 + span) * k;
+  const bool s_lo = bf.MaxRoot(lo, B) < 1;
+  for (int it = 0; it < 60; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    ((bf.MaxRoot(mid, B) < 1) == s_lo ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
 // Issue 16: the stable intervals on a 1000-point B grid (0 to 1.05 B_max) of
 // Table I at d = 4 with a 50 Hz velocity low-pass and a hand (M = 0.3 m,
 // B = b, K giving 2 Hz), construction included; error: every finite interval
@@ -260,13 +272,7 @@ void BM_LoopBoundary(benchmark::State& state) {
     for (const auto& iv : z.StableIntervals(grid[i])) {
       for (double k : {iv.K_lo, iv.K_hi}) {
         if (!(k > 0 && std::isfinite(k))) continue;
-        double lo = 0.9 * k, hi = 1.1 * k;
-        const bool s_lo = bf.MaxRoot(lo, grid[i]) < 1;
-        for (int it = 0; it < 60; ++it) {
-          const double mid = 0.5 * (lo + hi);
-          ((bf.MaxRoot(mid, grid[i]) < 1) == s_lo ? lo : hi) = mid;
-        }
-        err = std::max(err, std::abs(0.5 * (lo + hi) / k - 1));
+        err = std::max(err, std::abs(BisectEnd(bf, k, grid[i], 0.1) / k - 1));
         ++ends;
       }
     }
@@ -409,6 +415,47 @@ void BM_CrowdedModeBoundary(benchmark::State& state) {
   state.counters["K_cr_at_zero_B"] = K[0];
 }
 BENCHMARK(BM_CrowdedModeBoundary)->Arg(8)->Arg(16)->Arg(32)->Unit(benchmark::kMillisecond);
+
+// Long loop delays (Table I, T = 1 ms, d = 100, 170, 240 samples; past ~163
+// the characteristic polynomial's boundary error exceeds 1e-9 and the
+// closed loop's eigenvalues decide): the summary and the boundary rows of a
+// 100-point B grid (0 to 1.05 B_max), construction included, as `boundary
+// --delays d --b-points 100` computes them. Error: every finite interval end
+// at 10 of the B values against a 60-step bisection of the brute force's
+// closed-loop eigenvalues (tests/brute_force.h, IndependentZoh + LoopBruteForce).
+void BM_LongDelayBoundary(benchmark::State& state) {
+  const model::Plant p = model::PhantomTable1();
+  const int d = static_cast<int>(state.range(0));
+  std::vector<double> grid(100);
+  std::vector<std::vector<stability::KInterval>> rows(grid.size());
+  bool eigen = false;
+  for (auto _ : state) {
+    const stability::ZWidth z(p, 1e-3, d);
+    const stability::DelaySummary s = z.Summarize();
+    for (size_t i = 0; i < grid.size(); ++i) grid[i] = 1.05 * s.B_max * i / (grid.size() - 1.0);
+    for (size_t i = 0; i < grid.size(); ++i) rows[i] = z.RowAt(grid[i]).intervals;
+    eigen = !z.uses_polynomial_test();
+  }
+  const stability::IndependentZoh<double> zoh(p, 1e-3);
+  const stability::LoopBruteForce bf(zoh.A, zoh.B, zoh.C, {}, {}, d, 1e-3);
+  double err = 0;
+  int ends = 0, unverified = 0;
+  for (size_t i = 0; i < grid.size(); i += 10) {
+    for (const stability::KInterval& iv : rows[i]) {
+      unverified += !iv.verified;
+      for (double k : {iv.K_lo, iv.K_hi}) {
+        if (!(k > 0 && std::isfinite(k))) continue;
+        err = std::max(err, std::abs(BisectEnd(bf, k, grid[i], 0.01) / k - 1));
+        ++ends;
+      }
+    }
+  }
+  state.counters["max_rel_err_ends_vs_brute_force"] = err;
+  state.counters["ends_checked"] = ends;
+  state.counters["unverified_intervals"] = unverified;
+  state.counters["eigenvalue_test"] = eigen;
+}
+BENCHMARK(BM_LongDelayBoundary)->Arg(100)->Arg(170)->Arg(240)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 // `zwidth run`'s boundary stage (analysis::AnalysePlantStability): Table I
 // with the seeded covariance of BM_DeltaMethodStd, delays 2, 4, 8, 1000 B

@@ -200,6 +200,30 @@ ZWidth::ZWidth(const SampledPlant& sampled, int delay_samples, const LoopOptions
   const double sgn = (total_delay_ % 2 == 0) ? 1.0 : -1.0;  // z^d at z = -1
   K_pi_at_zero_B_ = (-sgn / gpi).real();
   V_pi_ = V(-1.0, 0.0).real();
+  // dW/dx and dV/dx at x = -1 (real axis), by central differences at two
+  // steps; kept only where the two agree to 1e-4 (else a theta = pi crossing
+  // has no known direction and is probed).
+  auto W_at = [&](double x) { return (-std::pow(x, total_delay_) / sp_.Gd({x, 0.0})).real(); };
+  auto V_at = [&](double x) {
+    std::complex<double> F = 1.0;
+    if (has_filter_) {
+      std::complex<double> nb = 0.0, na = 0.0;
+      for (size_t i = loop_.filter_b.size(); i-- > 0;) nb = nb / x + loop_.filter_b[i];
+      for (size_t i = loop_.filter_a.size(); i-- > 0;) na = na / x + loop_.filter_a[i];
+      F = nb / na;
+    }
+    return (F * (1.0 - 1.0 / x) / period_s_).real();
+  };
+  auto slope = [](const auto& f) {
+    const double h1 = 1e-4, h2 = 2.5e-5;
+    const double d1 = (f(-1.0 + h1) - f(-1.0 - h1)) / (2 * h1), d2 = (f(-1.0 + h2) - f(-1.0 - h2)) / (2 * h2);
+    return std::isfinite(d2) && std::abs(d1 - d2) <= 1e-4 * std::abs(d2) ? d2 : std::numeric_limits<double>::quiet_NaN();
+  };
+  dW_pi_ = slope(W_at);
+  dV_pi_ = slope(V_at);
+  zero_k_b_ = ZeroKCandidates();
+  zero_k_counts_ = std::make_shared<std::vector<std::atomic<int>>>(zero_k_b_.size() + 1);
+  for (std::atomic<int>& c : *zero_k_counts_) c.store(-1);
 }
 
 void ZWidth::BuildGrid() {
@@ -288,6 +312,10 @@ void ZWidth::ChooseStabilityTest() {
   // exact root at (K(theta), B(theta)), the rounding moves the boundary by a
   // relative dK/K or dB/B of at most kPolynomialRelativeTolerance:
   // eps sum |p_k| / |dP/dK K| (or / |dP/dB B|), since dz = -dP / P'(z).
+  // The same bound, looser, decides whether Schur-Cohn may verify the ends
+  // (Verify): those points lie 1e-6 (relative) off a boundary, which rounding
+  // the coefficients cannot move past them while it moves it by at most
+  // kPolynomialVerifyTolerance, a hundredth of that.
   polynomial_error_ = 0.0;
   const bool poles_ok = sp_.denominator_pole_shift() <= 1e-3;
   for (size_t i = 0; poles_ok && i < grid_theta_.size(); ++i) {
@@ -304,9 +332,10 @@ void ZWidth::ChooseStabilityTest() {
     const double dp = std::max(std::abs(K * z * fd * n), std::abs(B / period_s_ * (z - 1.0) * fn * n));
     const double e = 2.220446049250313e-16 * mag / dp;
     polynomial_error_ = std::max(polynomial_error_, std::isfinite(e) ? e : 1.0);
-    if (polynomial_error_ > kPolynomialRelativeTolerance) break;
+    if (polynomial_error_ > kPolynomialVerifyTolerance) break;
   }
   use_polynomial_ = poles_ok && polynomial_error_ <= kPolynomialRelativeTolerance;
+  polynomial_verifies_ = poles_ok && polynomial_error_ <= kPolynomialVerifyTolerance;
 }
 
 std::string ConditioningWarning(bool polynomial_test, const PoleConditioning& c) {
@@ -317,6 +346,21 @@ std::string ConditioningWarning(bool polynomial_test, const PoleConditioning& c)
                 "the unit circle (eigenvalue condition %.3g, relative pole separation %.3g); (K, B) within about "
                 "that (relative) of a boundary may be misclassified",
                 c.eigenvalue_shift, c.eigenvalue_condition, c.relative_separation);
+  return buf;
+}
+
+std::string StabilityTestNote(const DelaySummary& s) {
+  if (s.polynomial_test) return "";
+  char buf[300];
+  if (!(s.pole_shift <= 1e-3)) {
+    std::snprintf(buf, sizeof buf,
+                  "stability from the closed loop's eigenvalues: rounding the characteristic polynomial moves D(z)'s "
+                  "poles by %.3g of their distance to the unit circle (over 1e-3)", s.pole_shift);
+  } else {
+    std::snprintf(buf, sizeof buf,
+                  "stability from the closed loop's eigenvalues: rounding the characteristic polynomial moves the "
+                  "boundary by %.3g (relative, over %.0e)", s.polynomial_error, kPolynomialRelativeTolerance);
+  }
   return buf;
 }
 
@@ -348,9 +392,16 @@ std::vector<Crossing> ZWidth::Crossings(double B) const {
     Point(t, &b, &k);
     // Reject a spurious "root" at a singularity of B(theta) (a zero of G_d).
     if (!std::isfinite(k) || std::abs(b - B) > 1e-6 * (std::abs(B) + std::abs(lo) + std::abs(hi) + 1e-12)) continue;
-    out.push_back({t, k});
+    // Direction (see the header): sign(Im V) x sign(B'(theta)); unknown at
+    // an end of the piece, where B' vanishes (a tangency).
+    const double iv = V(std::cos(t), std::sin(t)).imag();
+    const bool at_end = std::min(t - s.ta, s.tb - t) <= 4.0 * options_.theta_tolerance;
+    const int dir = (at_end || iv == 0.0 || s.Ba == s.Bb) ? 0 : ((s.Bb > s.Ba) == (iv > 0.0) ? 1 : -1);
+    out.push_back({t, k, dir});
   }
-  out.push_back({std::numbers::pi, K_pi_at_zero_B_ - B * V_pi_});
+  const double g1 = dW_pi_ - B * dV_pi_;  // g'(-1): the real root leaves through -1 when < 0
+  const bool known = std::isfinite(g1) && std::abs(g1) > 1e-6 * (std::abs(dW_pi_) + std::abs(B * dV_pi_));
+  out.push_back({std::numbers::pi, K_pi_at_zero_B_ - B * V_pi_, known ? (g1 < 0.0 ? 1 : -1) : 0});
   return out;
 }
 
@@ -383,9 +434,53 @@ int ZWidth::UnstableRoots(double K, double B) const {
     // The closed-loop state matrix (stability/closed_loop.h): K = 0 is 0+,
     // the integrator's eigenvalue at 1 deflated (it moves inside for K > 0).
     if (K < 0.0 && has_integrator_) return 1;
-    return closed_loop_->RootsOutside(K, B, K == 0.0 && has_integrator_);
+    if (K == 0.0) return RootsOutsideAtZeroK(B);
+    return closed_loop_->RootsOutside(K, B, false);
   }
   return PolynomialStable(K, B) ? 0 : 1;
+}
+
+std::vector<double> ZWidth::ZeroKCandidates() const {
+  std::vector<double> cand;
+  auto Kof = [this](double t) { double b, k; Point(t, &b, &k); return k; };
+  for (size_t i = 1; i < grid_theta_.size(); ++i) {
+    if ((i & 255) == 0) PollCancel();  // model/cancel.h: a host's Ctrl-C
+    if ((grid_K_[i - 1] > 0) != (grid_K_[i] > 0)) {
+      const double t = BrentRoot(Kof, grid_theta_[i - 1], grid_theta_[i], grid_K_[i - 1], grid_K_[i],
+                                 options_.theta_tolerance);
+      double b, k;
+      Point(t, &b, &k);
+      if (b > 0.0 && std::isfinite(b)) cand.push_back(b);
+    }
+  }
+  if (V_pi_ != 0.0 && K_pi_at_zero_B_ / V_pi_ > 0.0) cand.push_back(K_pi_at_zero_B_ / V_pi_);
+  std::sort(cand.begin(), cand.end());
+  return cand;
+}
+
+int ZWidth::RootsOutsideAtZeroK(double B) const {
+  // K = 0+ (the integrator's eigenvalue at 1 deflated). Between two
+  // candidates no root crosses the circle, so the count is the same for every
+  // B there: one eigenvalue count per interval. Within 1e-9 of a candidate
+  // (whose B is known to the theta tolerance) the count is taken at B itself.
+  const bool deflate = has_integrator_;
+  const auto it = std::upper_bound(zero_k_b_.begin(), zero_k_b_.end(), B);
+  const bool near = (it != zero_k_b_.end() && std::abs(*it - B) <= 1e-9 * std::abs(*it)) ||
+                    (it != zero_k_b_.begin() && std::abs(B - *(it - 1)) <= 1e-9 * std::abs(*(it - 1)));
+  if (near || !(B >= 0.0) || !zero_k_counts_) return closed_loop_->RootsOutside(0.0, B, deflate);
+  std::atomic<int>& slot = (*zero_k_counts_)[static_cast<size_t>(it - zero_k_b_.begin())];
+  int c = slot.load(std::memory_order_relaxed);
+  if (c < 0) {
+    c = closed_loop_->RootsOutside(0.0, B, deflate);
+    slot.store(c, std::memory_order_relaxed);
+  }
+  return c;
+}
+
+template <typename Stable>
+bool ZWidth::ConfirmsEnd(double K_in, double K_out, double B, const Stable& stable) const {
+  if (!use_polynomial_ && polynomial_verifies_ && PolynomialStable(K_in, B) && !PolynomialStable(K_out, B)) return true;
+  return stable(K_in) == 0 && stable(K_out) != 0;
 }
 
 bool ZWidth::PolynomialStable(double K, double B) const {
@@ -483,7 +578,7 @@ CriticalPoint ZWidth::PointFrom(double B, const std::vector<Crossing>& xs, const
     return cp;
   }
   cp.verified = !verify || !options_.verify ||
-                (stable(cp.K_cr * (1.0 - 1e-6)) == 0 && stable(cp.K_cr * (1.0 + 1e-6)) != 0);
+                ConfirmsEnd(cp.K_cr * (1.0 - 1e-6), cp.K_cr * (1.0 + 1e-6), B, stable);
   return cp;
 }
 
@@ -498,20 +593,31 @@ double ZWidth::FindTransition(double lo, double hi, double f_lo, double f_hi) co
 }
 
 template <typename Stable>
-std::vector<KInterval> ZWidth::IntervalsFrom(const std::vector<Crossing>& xs, const Stable& stable, Check check) const {
+std::vector<KInterval> ZWidth::IntervalsFrom(double B, const std::vector<Crossing>& xs, const Stable& stable,
+                                             Check check, bool use_directions) const {
   std::vector<Crossing> pos;
   for (const Crossing& x : xs) if (x.K > 0.0 && std::isfinite(x.K)) pos.push_back(x);
   std::sort(pos.begin(), pos.end(), [](const Crossing& a, const Crossing& b) { return a.K < b.K; });
   // Merge coincident crossings (a double root at one K); weight: how many
   // roots can cross the circle there (a conjugate pair at 0 < theta < pi, one
   // real root at theta = pi).
+  // change: how the number of roots outside changes there, from the
+  // directions (known: every merged crossing's direction is known).
   std::vector<Crossing> ks;
-  std::vector<int> weight;
+  std::vector<int> weight, change;
+  std::vector<char> known;
   for (const Crossing& x : pos) {
     const int w = x.theta < std::numbers::pi ? 2 : 1;
-    if (!ks.empty() && x.K - ks.back().K <= 1e-13 * x.K) { weight.back() += w; continue; }
+    if (!ks.empty() && x.K - ks.back().K <= 1e-13 * x.K) {
+      weight.back() += w;
+      change.back() += w * x.direction;
+      known.back() = known.back() && x.direction != 0;
+      continue;
+    }
     ks.push_back(x);
     weight.push_back(w);
+    change.push_back(w * x.direction);
+    known.push_back(x.direction != 0);
   }
   const double inf = std::numeric_limits<double>::infinity();
   const size_t n = ks.size();
@@ -522,16 +628,29 @@ std::vector<KInterval> ZWidth::IntervalsFrom(const std::vector<Crossing>& xs, co
   // Roots cross the circle only at crossings: a region after one with u
   // unstable roots has at least u - weight unstable, and is not tested while
   // that is positive (the eigenvalue test counts u; Schur-Cohn says u >= 1).
-  int unstable_at_least = 0;
+  // With the eigenvalue test the count is exact, and where every crossing's
+  // direction is known it follows from the region before without a test:
+  // count_i = count_{i-1} + change_{i-1} (the Nyquist count), so only K -> 0+
+  // and the regions after a crossing of unknown direction are tested.
+  const bool count = use_directions && !use_polynomial_;
+  int unstable_at_least = 0, exact = -1;  // exact: the region's count, -1 not known
   for (size_t i = 0; i <= n; ++i) {
-    if (i > 0) unstable_at_least -= weight[i - 1];
-    if (unstable_at_least > 0) continue;
+    if (i > 0) {
+      unstable_at_least -= weight[i - 1];
+      exact = (exact >= 0 && known[i - 1] && exact + change[i - 1] >= 0) ? exact + change[i - 1] : -1;
+    }
     const double a = lo_of(i), b = hi_of(i);
-    double probe;
-    if (i == 0) probe = n == 0 ? 0.0 : 0.5 * b;  // K -> 0+ when there is no crossing at all
-    else if (i == n) probe = 2.0 * a;
-    else probe = std::sqrt(a * b);
-    unstable_at_least = stable(probe);
+    if (exact >= 0) {
+      unstable_at_least = exact;
+    } else {
+      if (unstable_at_least > 0) continue;
+      double probe;
+      if (i == 0) probe = (n == 0 || count) ? 0.0 : 0.5 * b;  // K -> 0+ when there is no crossing at all
+      else if (i == n) probe = 2.0 * a;
+      else probe = std::sqrt(a * b);
+      unstable_at_least = stable(probe);
+      if (count) exact = unstable_at_least;
+    }
     if (unstable_at_least != 0) continue;
     if (n == 0 && stable(NoCrossingProbe(xs)) != 0) continue;  // see PointFrom
     if (!out.empty() && out.back().K_hi == a) {  // a tangential crossing: both sides stable
@@ -547,14 +666,19 @@ std::vector<KInterval> ZWidth::IntervalsFrom(const std::vector<Crossing>& xs, co
     out.push_back(iv);
     if (check == Check::kFirstOnly) return out;
   }
+  bool all_ok = true;
   for (KInterval& iv : out) {
     bool ok = true;
     if (check == Check::kVerify && options_.verify) {
-      if (iv.K_lo > 0.0) ok = ok && stable(iv.K_lo * (1.0 + 1e-6)) == 0 && stable(iv.K_lo * (1.0 - 1e-6)) != 0;
-      if (std::isfinite(iv.K_hi)) ok = ok && stable(iv.K_hi * (1.0 - 1e-6)) == 0 && stable(iv.K_hi * (1.0 + 1e-6)) != 0;
+      if (iv.K_lo > 0.0) ok = ok && ConfirmsEnd(iv.K_lo * (1.0 + 1e-6), iv.K_lo * (1.0 - 1e-6), B, stable);
+      if (std::isfinite(iv.K_hi)) ok = ok && ConfirmsEnd(iv.K_hi * (1.0 - 1e-6), iv.K_hi * (1.0 + 1e-6), B, stable);
     }
     iv.verified = ok;
+    all_ok = all_ok && ok;
   }
+  // An interval from the counts that the test does not confirm: the test at
+  // every region decides instead.
+  if (count && !all_ok) return IntervalsFrom(B, xs, stable, check, false);
   return out;
 }
 
@@ -563,7 +687,7 @@ CriticalPoint ZWidth::At(double B) const {
 }
 
 std::vector<KInterval> ZWidth::StableIntervals(double B) const {
-  return IntervalsFrom(Crossings(B), [&](double K) { return UnstableRoots(K, B); }, Check::kVerify);
+  return IntervalsFrom(B, Crossings(B), [&](double K) { return UnstableRoots(K, B); }, Check::kVerify);
 }
 
 CriticalPoint ZWidth::ValueAt(double B) const {
@@ -571,7 +695,7 @@ CriticalPoint ZWidth::ValueAt(double B) const {
 }
 
 bool ZWidth::AnyStable(double B) const {
-  return !IntervalsFrom(Crossings(B), [&](double K) { return UnstableRoots(K, B); }, Check::kFirstOnly).empty();
+  return !IntervalsFrom(B, Crossings(B), [&](double K) { return UnstableRoots(K, B); }, Check::kFirstOnly).empty();
 }
 
 ZWidth::Row ZWidth::RowAt(double B) const {
@@ -587,7 +711,7 @@ ZWidth::Row ZWidth::RowAt(double B) const {
   const std::vector<Crossing> xs = Crossings(B);
   Row r;
   r.point = PointFrom(B, xs, stable, Check::kVerify);
-  r.intervals = IntervalsFrom(xs, stable, Check::kVerify);
+  r.intervals = IntervalsFrom(B, xs, stable, Check::kVerify);
   return r;
 }
 
@@ -646,20 +770,7 @@ DelaySummary ZWidth::Summarize() const {
 std::vector<double> ZWidth::ZeroKBoundary(const CriticalPoint& c0, DelaySummary* out) const {
   DelaySummary& s = *out;
   // B_max_from_zero: the first B > 0 on the K = 0 boundary where K -> 0+ turns unstable.
-  std::vector<double> cand;
-  auto Kof = [this](double t) { double b, k; Point(t, &b, &k); return k; };
-  for (size_t i = 1; i < grid_theta_.size(); ++i) {
-    if ((i & 255) == 0) PollCancel();  // model/cancel.h: a host's Ctrl-C
-    if ((grid_K_[i - 1] > 0) != (grid_K_[i] > 0)) {
-      const double t = BrentRoot(Kof, grid_theta_[i - 1], grid_theta_[i], grid_K_[i - 1],
-                                 grid_K_[i], options_.theta_tolerance);
-      double b, k;
-      Point(t, &b, &k);
-      if (b > 0.0 && std::isfinite(b)) cand.push_back(b);
-    }
-  }
-  if (V_pi_ != 0.0 && K_pi_at_zero_B_ / V_pi_ > 0.0) cand.push_back(K_pi_at_zero_B_ / V_pi_);
-  std::sort(cand.begin(), cand.end());
+  const std::vector<double>& cand = zero_k_b_;
   if (c0.unstable_at_zero_k) {
     s.B_max_from_zero = 0.0;
   } else {
@@ -708,7 +819,7 @@ void ZWidth::ScanStableB(const std::vector<double>& cand, DelaySummary* out) con
     std::vector<char> st(bs.size());
     std::vector<double> kmax(bs.size(), 0.0);
     for (size_t i = 0; i < bs.size(); ++i) {
-      const std::vector<KInterval> iv = IntervalsFrom(Crossings(bs[i]), [&](double K) { return UnstableRoots(K, bs[i]); },
+      const std::vector<KInterval> iv = IntervalsFrom(bs[i], Crossings(bs[i]), [&](double K) { return UnstableRoots(K, bs[i]); },
                                                       Check::kValuesOnly);
       st[i] = !iv.empty();
       for (const KInterval& v : iv) kmax[i] = std::max(kmax[i], std::isfinite(v.K_hi) ? v.K_hi : v.K_lo);

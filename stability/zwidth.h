@@ -18,6 +18,7 @@
 // polynomial just below and just above it.
 #pragma once
 
+#include <atomic>
 #include <limits>
 #include <memory>
 #include <string>
@@ -35,6 +36,9 @@ class ClosedLoopMatrix;
 // the boundary by at most this, relative (ZWidth::polynomial_error): 1e-3 of
 // the smallest offset at which the Z-width probes a boundary's sides (1e-6).
 constexpr double kPolynomialRelativeTolerance = 1e-9;
+// The same bound under which Schur-Cohn may verify the ends (K_cr and the
+// intervals' ends at 1 -+ 1e-6) where the eigenvalues decide the rest.
+constexpr double kPolynomialVerifyTolerance = 1e-8;
 
 struct BoundaryOptions {
   int min_grid_points = 2048;    // uniform theta grid on (0, pi), >= 64
@@ -47,6 +51,10 @@ struct BoundaryOptions {
 struct Crossing {
   double theta = 0.0;  // rad/sample
   double K = 0.0;      // N m/rad at which a closed-loop pole is at e^{j theta}
+  // How the root(s) cross the circle as K increases through K at this B:
+  // +1 outward, -1 inward, 0 not known (a tangency, or a derivative lost to
+  // rounding). See ZWidth::Crossings.
+  int direction = 0;
 };
 
 struct CriticalPoint {
@@ -145,6 +153,9 @@ struct DelaySummary {
 // The warning of DelaySummary::conditioning_warning for a test and a
 // conditioning: the rule, once.
 std::string ConditioningWarning(bool polynomial_test, const PoleConditioning& c);
+// Why the eigenvalues decide a summary's stability (empty when Schur-Cohn
+// does): the bound of ZWidth::ChooseStabilityTest that failed, with its value.
+std::string StabilityTestNote(const DelaySummary& s);
 
 // Standard deviations [same units as the quantity] of the summary's quantities
 // from a parameter covariance (stability/uncertainty.h); nan = not computed.
@@ -198,6 +209,14 @@ class ZWidth {
          const BoundaryOptions& options = {});
 
   CriticalPoint At(double B) const;
+  // Every K at which a closed-loop root is on the unit circle at this B, with
+  // the direction it crosses in. On the circle the roots solve
+  // g(z) = W(z) - B V(z) = K, so dz/dK = 1/g'(z), and with z = e^{j theta}
+  // the root moves outward exactly when Im(dg/dtheta) > 0. Off theta = pi,
+  // Im g(theta) = Im V(theta) (B(theta) - B), whose derivative at the
+  // crossing is Im V B'(theta): the sign of Im V times the direction of the
+  // monotone piece of B(theta) the crossing lies on. At theta = pi (one real
+  // root), g'(-1) < 0 on the real axis.
   std::vector<Crossing> Crossings(double B) const;
   // Schur-Cohn on the closed-loop polynomial; K = 0 is taken as 0+ (the pole
   // at z = 1 that K = 0 leaves on the circle moves inside for K > 0).
@@ -264,7 +283,12 @@ class ZWidth {
   template <typename Stable>
   CriticalPoint PointFrom(double B, const std::vector<Crossing>& xs, const Stable& stable, Check check) const;
   template <typename Stable>
-  std::vector<KInterval> IntervalsFrom(const std::vector<Crossing>& xs, const Stable& stable, Check check) const;
+  // use_directions: the counts follow the crossings' directions (eigenvalue
+  // test only; tested regions are K -> 0+ and those after a crossing of
+  // unknown direction); an interval the verification does not confirm makes
+  // it test every region instead.
+  std::vector<KInterval> IntervalsFrom(double B, const std::vector<Crossing>& xs, const Stable& stable, Check check,
+                                       bool use_directions = true) const;
   // For the summaries' scans, which read values only: At without the
   // verification, and whether some K > 0 is stable at B (the first stable
   // region found ends the search).
@@ -279,12 +303,23 @@ class ZWidth {
 
   // Picks IsStable's test from polynomial_error().
   void ChooseStabilityTest();
+  // The B > 0 where the K = 0 boundary is crossed (sorted), and the number of
+  // roots outside at K = 0+ between two of them, found once per interval
+  // (eigenvalue test only): roots cross the circle at K = 0+ only there.
+  std::vector<double> ZeroKCandidates() const;
+  int RootsOutsideAtZeroK(double B) const;
   // Schur-Cohn on the characteristic polynomial (K = 0 as 0+).
   bool PolynomialStable(double K, double B) const;
+  // Whether K_in is stable and K_out (1e-6 across a boundary from it) is
+  // not: by Schur-Cohn where polynomial_error() <= kPolynomialVerifyTolerance
+  // (O(n^2)), else, or where it does not confirm, by stable(K).
+  template <typename Stable>
+  bool ConfirmsEnd(double K_in, double K_out, double B, const Stable& stable) const;
 
   SampledPlant sp_;
   std::shared_ptr<const ClosedLoopMatrix> closed_loop_;
   bool use_polynomial_ = false;
+  bool polynomial_verifies_ = false;  // Verify uses Schur-Cohn
   double polynomial_error_ = 0.0;
   double period_s_;
   int total_delay_;
@@ -299,6 +334,12 @@ class ZWidth {
   std::vector<Segment> segments_;
   std::vector<double> grid_theta_, grid_K_, grid_B_;
   double K_pi_at_zero_B_ = 0.0;  // Re W(pi)
+  // dW/dx and dV/dx at x = -1 on the real axis (nan when rounding hides them).
+  double dW_pi_ = std::numeric_limits<double>::quiet_NaN(), dV_pi_ = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> zero_k_b_;  // ZeroKCandidates()
+  // RootsOutsideAtZeroK per interval of zero_k_b_ (-1: not yet computed),
+  // shared by copies (they share the plant and loop it depends on).
+  std::shared_ptr<std::vector<std::atomic<int>>> zero_k_counts_;
 };
 
 }  // namespace zwidth::stability
