@@ -9,14 +9,17 @@
 #include "stability/wall_simulation.h"
 #include "stability/zwidth.h"
 #include "tests/karnopp_reference.h"
+#include "tests/stick_slip_reference.h"
 
 namespace zwidth {
 namespace {
 
 // Table I, 30 s at 1 kHz, 0.03 N m rms (the simulate defaults, seed 1),
-// Coulomb 8 mN m, breakaway 10 mN m. Error: the largest position difference
-// over the first 3 s against the Karnopp reference at T/300 (tests/karnopp_reference.h),
-// relative to the range there.
+// Coulomb 8 mN m, breakaway 10 mN m. Errors: the largest position difference
+// over the first 3 s, relative to the range there, against the Karnopp
+// reference at T/300 (tests/karnopp_reference.h, O(h): its own error is
+// ~5e-6) and against the brute force at T/1000 (tests/stick_slip_reference.h,
+// RK4 with the switches bisected: good to ~1e-12).
 void BM_StickSlipLog30s(benchmark::State& state) {
   model::SimulateOptions o;
   o.encoder_step_rad = 0.0;
@@ -28,13 +31,17 @@ void BM_StickSlipLog30s(benchmark::State& state) {
   }
   const std::vector<double> u(log.torque.begin(), log.torque.begin() + 3000);
   const std::vector<double> ref = model::KarnoppReference(model::PhantomTable1(), f, u, 1e-3, 300);
-  double err = 0.0, lo = ref[0], hi = ref[0];
+  const std::vector<double> brute =
+      testing::StickSlipReferenceLog(model::ContinuousStateSpace(model::PhantomTable1()), f, u, 1e-3, 1000);
+  double err = 0.0, err_brute = 0.0, lo = ref[0], hi = ref[0];
   for (size_t k = 0; k < ref.size(); ++k) {
     err = std::max(err, std::abs(ref[k] - log.position[k]));
+    err_brute = std::max(err_brute, std::abs(brute[k] - log.position[k]));
     lo = std::min(lo, ref[k]);
     hi = std::max(hi, ref[k]);
   }
   state.counters["err_vs_karnopp_T/300"] = err / (hi - lo);
+  state.counters["err_vs_brute_force"] = err_brute / (hi - lo);
 }
 BENCHMARK(BM_StickSlipLog30s)->Unit(benchmark::kMillisecond);
 

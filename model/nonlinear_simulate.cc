@@ -16,10 +16,67 @@ constexpr int kMaxSwitchesPerPeriod = 64;
 constexpr double kRootTolerance = 1e-13;  // of the period
 constexpr int kMinCells = 2, kMaxCells = 4096;
 constexpr double kCellsPerFastestPeriod = 16.0;
+constexpr int kTaylorOrder = 4;   // K: the bounds use v .. v^(K) and a bound of v^(K+1)
+constexpr int kMaxHalvings = 48;  // of a cell: 2^-48 of it is below the root's tolerance
+// A return to v = 0 this soon after a start at v = 0 is the rounding of a
+// required torque on the static level, not motion (see RunPhase).
+constexpr double kImmediateReturn = 16 * kRootTolerance;  // of the period
 
 double SpectralRadius(const Eigen::MatrixXd& A) {
   if (A.rows() == 0) return 0.0;
   return Eigen::EigenSolver<Eigen::MatrixXd>(A, false).eigenvalues().cwiseAbs().maxCoeff();
+}
+
+// psi > 0 at 0 (or 0 at a start on the boundary), "outside" at hi (psi < 0
+// when strict, else <= 0), one crossing between: regula falsi (Illinois) to
+// tol; returns the end of the final bracket on the outside, so that the switch
+// that follows sees the new phase's condition.
+template <class Psi>
+double Bracket(const Psi& psi, double hi, bool strict, double tol) {
+  auto outside = [&](double v) { return strict ? v < 0.0 : v <= 0.0; };
+  double a = 0.0, b = hi, fa = psi(0.0), fb = psi(hi);
+  int side = 0;
+  for (int it = 0; it < 200 && b - a > tol; ++it) {
+    double c = (a * fb - b * fa) / (fb - fa);
+    if (!(c > a && c < b)) c = 0.5 * (a + b);
+    const double fc = psi(c);
+    if (outside(fc)) {
+      b = c;
+      fb = fc;
+      if (side == -1) fa *= 0.5;
+      side = -1;
+    } else {
+      a = c;
+      fa = fc;
+      if (side == +1) fb *= 0.5;
+      side = +1;
+    }
+  }
+  return b;
+}
+
+// sum_{k>=1} |phi^(k)(0)| h^k/k! + M h^(K+1)/(K+1)!, phi^(k)(0) = s[k] + su[k] u_p:
+// phi varies by less than this over [0, h].
+double Spread(const double* s, const double* su, double u_p, double M, double h) {
+  double spread = 0.0, p = 1.0;
+  for (int k = 1; k <= kTaylorOrder; ++k) {
+    p *= h / k;
+    spread += std::abs(s[k] + su[k] * u_p) * p;
+  }
+  return spread + M * p * h / (kTaylorOrder + 1);
+}
+
+// Bounds of phi^(j) over [0, h] from its Taylor coefficients d[0..K] at 0 and
+// a bound M of |phi^(K+1)| there: d_j -+ (sum_{k>j} |d_k| h^(k-j)/(k-j)! +
+// M h^(K+1-j)/(K+1-j)!). Returns +1 or -1 when phi^(j) keeps that sign, else 0.
+int SignOver(const double* d, double M, int j, double h) {
+  double spread = 0.0, p = 1.0;
+  for (int k = j + 1; k <= kTaylorOrder; ++k) {
+    p *= h / (k - j);
+    spread += std::abs(d[k]) * p;
+  }
+  spread += M * p * h / (kTaylorOrder + 1 - j);
+  return d[j] > spread ? 1 : d[j] < -spread ? -1 : 0;
 }
 
 }  // namespace
@@ -44,10 +101,35 @@ StickSlipPlant::StickSlipPlant(const StateSpace& c, const Friction& friction, do
   const double rho = std::max(SpectralRadius(c.A), SpectralRadius(stuck_.continuous.A));
   const double cells = std::ceil(rho * period_s * kCellsPerFastestPeriod / (2.0 * std::numbers::pi));
   cell_s_ = period_s / std::clamp(cells, double(kMinCells), double(kMaxCells));
+  series_.resize(kTaylorOrder + 1);
+  moving_.q = CA_;
+  stuck_.q = CA2_ / g_;
   for (Regime* r : {&moving_, &stuck_}) {
     const StateSpace d = DiscretizeZoh(r->continuous, cell_s_);
     r->cell_A = d.A;
     r->cell_B = d.B;
+    // phi^(k)(0) = q A^(k-1) z = q A^k x + q A^(k-1) B u_p (k >= 1): rows q A^k
+    // of `series` times x, plus series_u(k) u_p.
+    const Eigen::MatrixXd& A = r->continuous.A;
+    const Eigen::VectorXd& B = r->continuous.B;
+    r->series.resize(kTaylorOrder + 1, A.rows());
+    r->series_u = Eigen::VectorXd::Zero(kTaylorOrder + 1);
+    Eigen::RowVectorXd row = r->q;
+    for (int k = 0; k <= kTaylorOrder; ++k) {
+      r->series.row(k) = row;
+      if (k < kTaylorOrder) r->series_u(k + 1) = row.dot(B);
+      row = row * A;
+    }
+    // |phi^(K+1)(t)| = |q A^K e^{At} z| <= ||q A^K S||_1 ||e^{S^-1 A S t}||_inf ||S^-1 z||_inf
+    // (S the balancing scales), and ||S^-1 z||_inf <= w |x| + ||S^-1 B||_inf |u_p|
+    // with w_j the largest |(S^-1 A)_ij| of column j.
+    const Eigen::VectorXd sc = internal::BalancingScales(A);
+    const Eigen::MatrixXd SiA = sc.cwiseInverse().asDiagonal() * A;
+    const double norm = (SiA * sc.asDiagonal()).cwiseAbs().rowwise().sum().maxCoeff();
+    const Eigen::RowVectorXd qAK = r->series.row(kTaylorOrder);
+    r->tail = qAK.cwiseProduct(sc.transpose()).cwiseAbs().sum() * std::exp(norm * cell_s_);
+    r->z_weights = SiA.cwiseAbs().colwise().maxCoeff();
+    r->z_weight_u = sc.cwiseInverse().cwiseProduct(B).cwiseAbs().maxCoeff();
   }
   const StateSpace full = DiscretizeZoh(c, period_s);
   full_A_ = full.A;
@@ -79,50 +161,13 @@ double StickSlipPlant::Margin(const Eigen::VectorXd& x, double u) const {
     case SlipPhase::kSlidingNeg: return -CA_.dot(x);
     case SlipPhase::kStuck: break;
   }
-  if (pinned_) return 1.0;
   const double f_req = -(u + friction_.offset) - CA2_.dot(x) / g_;
   return std::min(f_req + friction_.StaticPos(), friction_.StaticNeg() - f_req);
-}
-
-double StickSlipPlant::Acceleration(const Eigen::VectorXd& x, double u_p) const {
-  return CA2_.dot(x) + g_ * u_p;
 }
 
 Eigen::VectorXd StickSlipPlant::Advance(const Regime& r, const Eigen::VectorXd& x, double u_p, double t) const {
   const StateSpace d = DiscretizeZoh(r.continuous, t);
   return d.A * x + d.B * u_p;
-}
-
-// psi > 0 at lo, psi "outside" at hi; returns the end of the final bracket on
-// the outside, so that the switch that follows sees the new phase's condition.
-double StickSlipPlant::FindRoot(const Regime& r, const Eigen::VectorXd& x0, double u, double u_p, double lo,
-                                double hi, bool on_acceleration) const {
-  const double s = phase_ == SlipPhase::kSlidingNeg ? -1.0 : 1.0;
-  const bool strict = phase_ == SlipPhase::kStuck && !on_acceleration;
-  auto psi = [&](double t) {
-    const Eigen::VectorXd x = t == 0.0 ? x0 : Advance(r, x0, u_p, t);
-    return on_acceleration ? -s * Acceleration(x, u_p) : Margin(x, u);
-  };
-  auto outside = [&](double v) { return strict ? v < 0.0 : v <= 0.0; };
-  double a = lo, b = hi, fa = psi(lo), fb = psi(hi);
-  int side = 0;
-  for (int it = 0; it < 200 && b - a > kRootTolerance * period_s_; ++it) {
-    double c = (a * fb - b * fa) / (fb - fa);
-    if (!(c > a && c < b)) c = 0.5 * (a + b);
-    const double fc = psi(c);
-    if (outside(fc)) {
-      b = c;
-      fb = fc;
-      if (side == -1) fa *= 0.5;
-      side = -1;
-    } else {
-      a = c;
-      fa = fc;
-      if (side == +1) fb *= 0.5;
-      side = +1;
-    }
-  }
-  return b;
 }
 
 void StickSlipPlant::Switch(double u) {
@@ -137,6 +182,48 @@ void StickSlipPlant::Switch(double u) {
   }
   ++switches_;
   fresh_start_ = true;
+  pinned_ = false;
+}
+
+double StickSlipPlant::DerivativeBound(const Regime& r, const Eigen::VectorXd& x, double u_p) const {
+  return r.tail * (r.z_weights.dot(x.cwiseAbs()) + r.z_weight_u * std::abs(u_p));
+}
+
+double StickSlipPlant::Exit(const Regime& r, const Watch& w, const Eigen::VectorXd& xa, const Eigen::VectorXd& xb,
+                            double u_p, double h, int depth) const {
+  series_.noalias() = r.series * xa;
+  double d[kTaylorOrder + 1];
+  for (int k = 0; k <= kTaylorOrder; ++k) d[k] = w.sigma * (series_(k) + r.series_u(k) * u_p);
+  d[0] += w.kappa;
+  const double M = DerivativeBound(r, xa, u_p);
+  if (SignOver(d, M, 0, h) > 0) return -1.0;  // the usual cell: far from a switch
+  auto phi = [&](const Eigen::VectorXd& x) { return w.sigma * r.q.dot(x) + w.kappa; };
+  auto rate = [&](const Eigen::VectorXd& x) { return w.sigma * r.q.dot(r.continuous.A * x + r.continuous.B * u_p); };
+  auto at = [&](double t) { return t == 0.0 ? xa : Advance(r, xa, u_p, t); };
+  auto outside = [&](double v) { return w.strict ? v < 0.0 : v <= 0.0; };
+  const double tol = kRootTolerance * period_s_;
+  const int s1 = SignOver(d, M, 1, h), s2 = SignOver(d, M, 2, h);
+  if (outside(phi(xb))) {
+    // One crossing when phi is monotone, convex or concave over the cell.
+    if (s1 != 0 || s2 != 0 || depth >= kMaxHalvings) {
+      return Bracket([&](double t) { return phi(at(t)); }, h, w.strict, tol);
+    }
+  } else {
+    if (s1 != 0 || s2 < 0) return -1.0;  // monotone, or concave: its minimum is at an end
+    if (s2 > 0) {                        // convex: one minimum, where phi' = 0
+      if (!(d[1] < 0.0 && rate(xb) > 0.0)) return -1.0;
+      const double tm = Bracket([&](double t) { return -rate(at(t)); }, h, false, tol);
+      if (!outside(phi(at(tm)))) return -1.0;
+      return Bracket([&](double t) { return phi(at(t)); }, tm, w.strict, tol);
+    }
+    if (depth >= kMaxHalvings) return -1.0;
+  }
+  // Neither excluded nor a single crossing: halve.
+  const Eigen::VectorXd xm = Advance(r, xa, u_p, 0.5 * h);
+  const double t1 = Exit(r, w, xa, xm, u_p, 0.5 * h, depth + 1);
+  if (t1 >= 0.0) return t1;
+  const double t2 = Exit(r, w, xm, xb, u_p, 0.5 * h, depth + 1);
+  return t2 >= 0.0 ? 0.5 * h + t2 : -1.0;
 }
 
 bool StickSlipPlant::RunPhase(double u, double span, double* used) {
@@ -145,27 +232,49 @@ bool StickSlipPlant::RunPhase(double u, double span, double* used) {
   const double u_p = PlantInput(u);
   const double s = phase_ == SlipPhase::kSlidingNeg ? -1.0 : 1.0;
   const double f = stuck ? 0.0 : PlantInput(u) - u - friction_.offset;
+  // Sliding: s v. Stuck: f_req = -(u + offset) - q x inside [-StaticPos, StaticNeg],
+  // one watch per side.
+  const double held = u + friction_.offset;
+  Watch watches[2] = {stuck ? Watch{-1.0, friction_.StaticPos() - held, true} : Watch{s, 0.0, false},
+                      Watch{1.0, friction_.StaticNeg() + held, true}};
+  const int num_watches = stuck ? 2 : 1;
+  if (stuck && pinned_) {
+    // Held on the static level (see below): the band's edge moved out to where
+    // f_req is now, and a rounding beyond, so that leaving it is motion again.
+    const double slack = 1e-12 * (friction_.StaticPos() + friction_.StaticNeg());
+    for (Watch& w : watches) w.kappa += std::max(0.0, -(w.sigma * r.q.dot(x_) + w.kappa)) + slack;
+  }
   Eigen::VectorXd xa = x_, xb;
   double ta = 0.0;
   while (span - ta > 0.0) {
     const bool whole = span - ta >= cell_s_;
     const double h = whole ? cell_s_ : span - ta;
-    xb = whole ? Eigen::VectorXd(r.cell_A * xa + r.cell_B * u_p) : Advance(r, xa, u_p, h);
-    const double mb = Margin(xb, u);
+    if (whole) {
+      xb.noalias() = r.cell_A * xa;
+      xb += r.cell_B * u_p;
+    } else {
+      xb = Advance(r, xa, u_p, h);
+    }
+    // The usual cell, far from a switch, is cleared here: |phi^(k)| for k >= 1
+    // are the same for every watch of the phase (sigma = +-1).
+    series_.noalias() = r.series * xa;
+    const double spread = Spread(series_.data(), r.series_u.data(), u_p, DerivativeBound(r, xa, u_p), h);
+    const double q0 = series_(0);  // Exit reuses series_
     double root = -1.0;
-    if (stuck ? mb < 0.0 : mb <= 0.0) {
-      if (fresh_start_ && !stuck) {  // the required torque sits on the static level to rounding
-        phase_ = SlipPhase::kStuck;
-        pinned_ = true;
-        *used = ta;
-        x_ = xa;
-        return false;
-      }
-      root = FindRoot(r, xa, u, u_p, 0.0, h, false);
-    } else if (!stuck && s * Acceleration(xa, u_p) < 0.0 && s * Acceleration(xb, u_p) > 0.0) {
-      // v has a minimum inside the cell: does it touch zero there?
-      const double tm = FindRoot(r, xa, u, u_p, 0.0, h, true);
-      if (Margin(Advance(r, xa, u_p, tm), u) <= 0.0) root = FindRoot(r, xa, u, u_p, 0.0, tm, false);
+    for (int i = 0; i < num_watches; ++i) {
+      if (watches[i].sigma * q0 + watches[i].kappa > spread) continue;
+      const double t = Exit(r, watches[i], xa, xb, u_p, h, 0);
+      if (t >= 0.0 && (root < 0.0 || t < root)) root = t;
+    }
+    if (root >= 0.0 && fresh_start_ && !stuck && root <= kImmediateReturn * period_s_) {
+      // Back at v = 0 as soon as it started: the required torque sits on the
+      // static level to rounding and is moving into the band. Stuck, with the
+      // band's edge where f_req is (it may be outside by a rounding).
+      phase_ = SlipPhase::kStuck;
+      pinned_ = true;
+      *used = ta;
+      x_ = xa;
+      return false;
     }
     fresh_start_ = false;
     if (root >= 0.0) {
@@ -195,12 +304,14 @@ void StickSlipPlant::Step(double u) {
   double t = 0.0;
   for (int n = 0;; ++n) {
     double used = 0.0;
+    const bool was_pinned = pinned_;
     if (RunPhase(u, period_s_ - t, &used)) return;
     t += used;
     if (n >= kMaxSwitchesPerPeriod) {
       throw ComputationError("stick-slip simulation: more than 64 stick/slip switches in one period");
     }
-    if (!pinned_) Switch(u);
+    if (pinned_ && !was_pinned) continue;  // just pinned: the stuck phase starts here
+    Switch(u);
   }
 }
 
