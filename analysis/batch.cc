@@ -36,7 +36,9 @@ const std::vector<std::string>& FixedColumns() {
   static const std::vector<std::string> c = {"serial", "logs", "status", "error", "verdict", "verdict_reasons",
                                              "p_min", "outlier", "outlier_d2", "outlier_reasons", "input_hash", "sample_rate_hz",
                                              "fit_quality", "fit_reasons", "warnings", "m", "m_std", "b", "b_std",
-                                             "delay_samples", "modes"};
+                                             "delay_samples", "modes", "friction_status", "friction_topology", "F_c",
+                                             "F_c_std", "friction_offset", "friction_offset_std", "linear_only_b",
+                                             "linear_only_b_std"};
   return c;
 }
 const std::vector<std::string>& ModeFields() {
@@ -76,7 +78,7 @@ Cells ErrorRow(const io::BatchEntry& unit, const std::string& hash, const std::s
 
 // Columns a spec may name: the rigid body's and the modes' numbers and the figures per delay.
 bool SpecColumn(const std::string& col, const std::vector<int>& delays) {
-  if (col == "m" || col == "b") return true;
+  if (col == "m" || col == "b" || col == "F_c") return true;
   const auto [group, index, field] = Rank(col);
   if (group == 1) return index >= 1 && field % 2 == 0;  // a value, not its std
   if (group == 2) {
@@ -96,7 +98,7 @@ BatchSpec ParseBatchSpec(const std::string& text, const std::vector<int>& delays
     std::string d;
     for (int x : delays) d += (d.empty() ? "" : ", ") + std::string("d") + std::to_string(x) + "_K_cr_max";
     return InputError("spec '" + text + "': " + what + "; write COLUMN>=BOUND or COLUMN<=BOUND with a column of "
-                      "the table: m, b, mode<i>_{omega,c,v,d}, d<delay>_{K_cr_at_zero_B,K_cr_max,B_t,B_max,"
+                      "the table: m, b, F_c, mode<i>_{omega,c,v,d}, d<delay>_{K_cr_at_zero_B,K_cr_max,B_t,B_max,"
                       "B_max_from_zero} for a delay of the run (" + d + ")");
   };
   if (at == std::string::npos || (ge != std::string::npos && le != std::string::npos)) throw bad("no single >= or <=");
@@ -258,6 +260,21 @@ Cells BatchRowOf(const io::BatchEntry& unit, const std::string& input_hash, cons
   c["b_std"] = Full(s ? s->b : nan);
   c["delay_samples"] = std::to_string(p.delay_samples);
   c["modes"] = std::to_string(p.modes.size());
+  // The friction as model.json carries it (the model's friction and std, fit.friction's record).
+  const fit::FrictionFitResult& ff = a.input.friction_fit;
+  if (ff.status != fit::FrictionFitStatus::kNotRun) {
+    c["friction_status"] = fit::ToString(ff.status);
+    c["linear_only_b"] = Full(ff.linear_b);
+    c["linear_only_b_std"] = Full(ff.linear_b_std);
+  }
+  if (ff.status == fit::FrictionFitStatus::kFitted) c["friction_topology"] = fit::ToString(ff.topology);
+  if (mf.friction || ff.status != fit::FrictionFitStatus::kNotRun) {  // none found: the model's is 0 (no std)
+    const bool has_std = mf.friction && mf.friction_std && s;
+    c["F_c"] = Full(mf.friction ? mf.friction->MeanCoulomb() : 0.0);
+    c["F_c_std"] = Full(has_std ? mf.friction_std->MeanCoulomb() : nan);
+    c["friction_offset"] = Full(mf.friction ? mf.friction->offset : 0.0);
+    c["friction_offset_std"] = Full(has_std ? mf.friction_std->offset : nan);
+  }
   for (size_t i = 0; i < p.modes.size(); ++i) {
     const model::Mode& m = p.modes[i];
     const bool has = s && i < s->modes.size();
@@ -299,9 +316,34 @@ io::BatchTable BatchTableOf(const std::vector<std::optional<Cells>>& rows) {
   return t;
 }
 
+RunAnalysis AnalyseUnit(const io::BatchEntry& unit, const BatchOptions& options, const BatchUnitOptions& unit_options) {
+  RunInput in;
+  in.logs = {unit.path};
+  in.source = unit.path;
+  in.reference = options.reference;
+  in.reference_name = options.reference_name;
+  in.reference_is_table1 = options.reference_is_table1;
+  EstimateFitOptions eo = options.estimate_fit;
+  eo.reference_thread = false;
+  if (unit_options) unit_options(unit, &eo);
+  RunOptions run = options.run;
+  run.figures = false;
+  RunMessages quiet;  // the row holds the unit's warnings, in the caller's words
+  quiet.fit.words = options.words;
+  return EstimateFitAndAnalyse(std::move(in), eo, std::move(run), options.loop, quiet);
+}
+
 BatchResult RunBatch(const std::vector<io::BatchEntry>& units, const BatchOptions& options,
-                     const BatchEstimateFit& estimate_fit, const BatchUnitDone& unit_done,
+                     const BatchUnitOptions& unit_options, const BatchUnitDone& unit_done,
                      const BatchOnProgress& on_progress) {
+  return RunBatchWith(
+      units, options, [&](const io::BatchEntry& unit, const RunOptions&) { return AnalyseUnit(unit, options, unit_options); },
+      unit_done, on_progress);
+}
+
+BatchResult RunBatchWith(const std::vector<io::BatchEntry>& units, const BatchOptions& options,
+                         const BatchComputeUnit& compute, const BatchUnitDone& unit_done,
+                         const BatchOnProgress& on_progress) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError(why);
   RunOptions run = options.run;
@@ -327,7 +369,10 @@ BatchResult RunBatch(const std::vector<io::BatchEntry>& units, const BatchOption
   };
   auto one = [&](size_t i) {
     const io::BatchEntry& unit = units[i];
-    std::string key = options.options_key + "\nzwidth " + build_info::kVersion;
+    // The friction model resolved (a default a caller's key need not spell out;
+    // tables of batches that fitted no friction are computed again).
+    std::string key = options.options_key + "\nzwidth " + build_info::kVersion + "\nfriction " +
+                      (options.estimate_fit.friction ? fit::ToString(*options.estimate_fit.friction) : "not looked at");
     for (const auto& [flag, value] : unit.flags) key += "\n--" + flag + "=" + value;
     const std::string hash = io::HashInputs({unit.path}, key);
     if (auto it = previous.find(unit.serial); it != previous.end() && !hash.empty()) {
@@ -340,9 +385,7 @@ BatchResult RunBatch(const std::vector<io::BatchEntry>& units, const BatchOption
     }
     Cells row;
     try {
-      RunOptions unit_options = run;
-      RunInput in = estimate_fit(unit, &unit_options);
-      RunAnalysis a = Analyse(std::move(in), unit_options);
+      RunAnalysis a = compute(unit, run);
       if (unit_done) unit_done(unit, a);
       row = BatchRowOf(unit, hash, a);
     } catch (const Cancelled&) {

@@ -1,6 +1,6 @@
 // `zwidth batch` as data: many units (a device's log each), each estimated,
-// fitted and analysed as `run` does it (analysis::Analyse after the caller's
-// estimate and fit), into one table of text cells, one row per unit. A unit
+// fitted and analysed by `run`'s pipeline (analysis::EstimateFitAndAnalyse:
+// the same friction rule, the same numbers), into one table of text cells, one row per unit. A unit
 // that fails is a row with its error and never stops the others; a unit whose
 // inputs and options hash as in a previous table is taken from it (resume).
 // Units run on `threads` threads, each unit's own work on its thread alone
@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "analysis/run.h"
+#include "analysis/run_input.h"
 #include "io/batch_table.h"
 #include "io/design_file.h"
 
@@ -53,11 +54,32 @@ void ApplySpecs(const std::vector<BatchSpec>& specs, std::map<std::string, std::
 // design figure that is not finite.
 std::vector<BatchSpec> DesignSpecs(const io::Design& design, const ReferenceStability& design_zwidth);
 
+// The unit's own options over BatchOptions::estimate_fit (e.g. its log flags
+// from a manifest's columns, apps/cmd_batch.cc); InputError for the unit's row.
+using BatchUnitOptions = std::function<void(const io::BatchEntry&, EstimateFitOptions* options)>;
+
 struct BatchOptions {
   std::vector<BatchSpec> specs;  // end-of-line specs (ApplySpecs); none: no verdict columns
   RunOptions run;            // per unit, as `run`'s (figures are not computed)
+  // Per unit, as `run`'s: the estimate, the fit and the friction
+  // (EstimateFitOptions::friction, auto as `run --friction`'s default);
+  // reference_thread is not used (the reference's Z-width is computed on the
+  // unit's thread, so the process stays at `threads` threads).
+  EstimateFitOptions estimate_fit;
+  LoopForPeriod loop;        // the run's loop at a unit's period; run.loop when empty
+  // Each unit compared with it on the paper's loop, as `run --reference`
+  // (RunInput::reference and its names).
+  std::optional<io::ModelFile> reference;
+  std::string reference_name;
+  bool reference_is_table1 = false;
+  // The library's texts in the caller's words (FitMessages::words): the
+  // warnings column and the unit folders' files.
+  std::function<std::string(const std::string&)> words;
   int threads = 0;           // units at once, >= 0; 0 = NumThreads() (model/parallel.h)
-  std::string options_key;   // the options as text: hashed with each unit's log bytes (io::HashInputs)
+  // The options as text: hashed with each unit's log bytes (io::HashInputs),
+  // beside the version, the unit's flags and the friction model (an options
+  // field whose default a caller does not spell out).
+  std::string options_key;
   // A previous table (e.g. this batch's output from an interrupted run): a
   // unit whose serial has a row there with the same input_hash is taken from
   // it instead of being computed. Empty: every unit is computed.
@@ -65,11 +87,16 @@ struct BatchOptions {
   bool IsValid(std::string* why) const;
 };
 
-// The caller's estimate and fit of one unit (reading the log with its flags
-// and fitting, as `run` does; apps/cmd_batch.cc): the RunInput Analyse takes,
-// on a copy of BatchOptions::run that it may complete from the log (the
-// loop's period). Throws InputError / ComputationError for the unit's row.
-using BatchEstimateFit = std::function<RunInput(const io::BatchEntry&, RunOptions* options)>;
+// One unit's analysis from its log (logs = {unit.path}), as RunBatch computes
+// it: EstimateFitAndAnalyse (analysis/run_input.h), the pipeline of `run`,
+// with the batch's options (the unit's own over them), quiet. Throws
+// InputError / ComputationError for the unit's row.
+RunAnalysis AnalyseUnit(const io::BatchEntry& unit, const BatchOptions& options,
+                        const BatchUnitOptions& unit_options = {});
+
+// How the batch engine computes a unit (RunBatchWith): AnalyseUnit for
+// RunBatch; a test of the engine (resume, threads, errors) gives its own.
+using BatchComputeUnit = std::function<RunAnalysis(const io::BatchEntry&, const RunOptions& options)>;
 // Called on the unit's thread after its analysis (e.g. to write its folder);
 // an exception makes the unit's row an error.
 using BatchUnitDone = std::function<void(const io::BatchEntry&, const RunAnalysis&)>;
@@ -101,7 +128,13 @@ struct BatchResult {
 //   serial, logs, status (ok | input_error | computation_error), error,
 //   verdict, verdict_reasons, p_min (with specs),
 //   input_hash, sample_rate_hz, fit_quality, fit_reasons (codes, ';'), warnings (' | '),
-//   m, m_std, b, b_std, delay_samples, modes, mode<i>_{omega,c,v,d}[_std] (i from 1),
+//   m, m_std, b, b_std, delay_samples, modes,
+//   friction_status (fitted | not detected | failed: fit.friction.status; empty when not looked at),
+//   friction_topology (rigid body | collocated, when fitted),
+//   F_c, F_c_std, friction_offset, friction_offset_std (the model's friction: F_c its Coulomb level,
+//   coulomb_pos = coulomb_neg; 0 without std when none was found; empty when not looked at),
+//   linear_only_b, linear_only_b_std (the linear-only fit's b, when the friction was looked at),
+//   mode<i>_{omega,c,v,d}[_std] (i from 1),
 //   per delay d: d<d>_{K_cr_at_zero_B, K_cr_max, B_t, B_max}[_std], d<d>_B_max_from_zero.
 // Columns in that order (BatchColumns) over the rows given.
 std::map<std::string, std::string> BatchRowOf(const io::BatchEntry& unit, const std::string& input_hash,
@@ -110,9 +143,16 @@ std::vector<std::string> BatchColumns(const std::vector<std::map<std::string, st
 // The table of the rows finished so far (those set), columns by BatchColumns.
 io::BatchTable BatchTableOf(const std::vector<std::optional<std::map<std::string, std::string>>>& rows);
 
-// Throws InputError for invalid options (before any unit); a unit's errors go to its row.
+// Every unit by AnalyseUnit. Throws InputError for invalid options (before
+// any unit); a unit's errors go to its row.
 BatchResult RunBatch(const std::vector<io::BatchEntry>& units, const BatchOptions& options,
-                     const BatchEstimateFit& estimate_fit, const BatchUnitDone& unit_done = {},
+                     const BatchUnitOptions& unit_options = {}, const BatchUnitDone& unit_done = {},
                      const BatchOnProgress& on_progress = {});
+// The engine with another computation of a unit (`compute` is given
+// options.run without figures); options.estimate_fit, loop and reference are
+// then not used.
+BatchResult RunBatchWith(const std::vector<io::BatchEntry>& units, const BatchOptions& options,
+                         const BatchComputeUnit& compute, const BatchUnitDone& unit_done = {},
+                         const BatchOnProgress& on_progress = {});
 
 }  // namespace zwidth::analysis

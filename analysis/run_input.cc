@@ -8,6 +8,7 @@
 
 #include "analysis/laps.h"
 #include "io/model_json.h"
+#include "model/error.h"
 
 namespace zwidth::analysis {
 
@@ -63,6 +64,15 @@ RunInput EstimateAndFit(RunInput in, const EstimateFitOptions& o, const std::vec
   for (std::string& w : in.fit.warnings) w = m.fit.Words(w);  // the report shows the caller's words
   stage(in.reference ? "fit (+ reference Z-width)" : "fit");
   return in;
+}
+
+RunAnalysis EstimateFitAndAnalyse(RunInput in, const EstimateFitOptions& estimate_fit, RunOptions options,
+                                  const LoopForPeriod& loop, const RunMessages& messages, double* ms) {
+  std::string why;  // before anything is read
+  if (!options.IsValid(&why)) throw InputError(why);
+  in = EstimateAndFit(std::move(in), estimate_fit, options.delays, messages, ms);
+  if (loop) options.loop = loop(in.response.frf.period_s());
+  return Analyse(std::move(in), options);
 }
 
 }  // namespace zwidth::analysis

@@ -45,4 +45,17 @@ struct RunMessages {
 RunInput EstimateAndFit(RunInput in, const EstimateFitOptions& options, const std::vector<int>& delays,
                         const RunMessages& messages = {}, double* ms = nullptr);
 
+// The run's loop for the log's period (a velocity filter's coefficients depend on it).
+using LoopForPeriod = std::function<stability::LoopOptions(double period_s)>;
+
+// What `run` computes for one device, below the files: the options checked
+// (before anything is read), EstimateAndFit, the loop at the log's period
+// (`loop`; options.loop as it is when empty) and Analyse. The one pipeline of
+// `run` (report::RunToFolder, Python's zwidth.run) and of each unit of
+// `batch` (analysis::RunBatch): whether friction is fitted is the one rule of
+// EstimateAndFit (EstimateFitOptions::friction, FrictionInputFor). *ms: the
+// estimate and fit stages. Throws as IsValid (InputError), EstimateAndFit and Analyse.
+RunAnalysis EstimateFitAndAnalyse(RunInput in, const EstimateFitOptions& estimate_fit, RunOptions options,
+                                  const LoopForPeriod& loop, const RunMessages& messages = {}, double* ms = nullptr);
+
 }  // namespace zwidth::analysis

@@ -2,7 +2,8 @@
 // each), into one table (analysis/batch.h). This file only wires: the units
 // from arguments or a manifest (io/batch_table.h), each unit's log flags over
 // the command's, run's estimate and fit per unit (apps/run_flags.h), the
-// progress on a terminal, the table written atomically now and then.
+// progress on a terminal, the table written atomically now and then. Each
+// unit is computed by run's pipeline (analysis::AnalyseUnit).
 #include <unistd.h>
 
 #include <chrono>
@@ -197,21 +198,17 @@ void Batch(BatchFlags& b, const CLI::App* cmd) {
       last_save = std::chrono::steady_clock::now();
     }
   };
-  auto estimate_fit = [&](const io::BatchEntry& e, analysis::RunOptions* uo) {
-    QuietMessages quiet;  // the table holds each unit's warnings
-    RunFlags uf = f;
-    uf.est.select = UnitSelect(f.est.select, e);
-    uf.logs = {e.path};
-    analysis::RunInput in;
-    in.logs = uf.logs;
-    in.source = e.path;
-    in.reference = ref.reference;
-    in.reference_name = ref.reference_name;
-    in.reference_is_table1 = ref.reference_is_table1;
-    double ms = 0.0;
-    in = EstimateAndFit(uf, *uo, std::move(in), &ms, false);
-    ResolveRunLoop(uf, in.response.frf.period_s(), uo);
-    return in;
+  // Each unit is run's pipeline (analysis::AnalyseUnit) with run's estimate,
+  // fit and friction options; a unit's manifest columns are its log flags.
+  o.estimate_fit = {f.est.Options(true), f.fit.o};
+  o.estimate_fit.friction = analysis::FrictionModelNamed(f.friction);
+  o.loop = RunLoop(f);
+  o.reference = ref.reference;
+  o.reference_name = ref.reference_name;
+  o.reference_is_table1 = ref.reference_is_table1;
+  o.words = WithFlags;  // the table and the unit folders show the CLI's flags
+  auto unit_options = [&](const io::BatchEntry& e, analysis::EstimateFitOptions* eo) {
+    eo->estimate.select = UnitSelect(f.est.select, e);
   };
   analysis::BatchUnitDone unit_done;
   // A unit's files name its own log (and what the batch read before its units: a manifest, a
@@ -228,7 +225,7 @@ void Batch(BatchFlags& b, const CLI::App* cmd) {
     };
   }
   const auto start = std::chrono::steady_clock::now();
-  const analysis::BatchResult r = analysis::RunBatch(units, o, estimate_fit, unit_done, on_progress);
+  const analysis::BatchResult r = analysis::RunBatch(units, o, unit_options, unit_done, on_progress);
   // The population of this batch's units: outliers into the table, its statistics on request.
   io::BatchTable table = r.table;
   const analysis::Population pop = analysis::AnalysePopulation(table, b.population_options);
@@ -273,6 +270,7 @@ void AddBatchCommand(CLI::App& app) {
                   "probability (docs/fleet.md)")->capture_default_str();
   cmd->add_flag("--restart", b->restart, "compute every unit, ignoring the rows of an existing table");
   AddRunAnalysisFlags(cmd, &b->run);
+  AddFrictionFlag(cmd, &b->run.friction);
   cmd->get_option("--reference")
       ->description("compare with table1 or a model JSON, or judge every unit against a design: DESIGN.json "
                     "({\"format\": \"zwidth-design\", \"model\": ..., \"tolerances\": [...]}, docs/fleet.md)");

@@ -24,13 +24,10 @@ namespace {
 
 void PrintStage(const std::string& name, double ms) { std::fprintf(stderr, "  %-28s %9.3f ms\n", name.c_str(), ms); }
 
-}  // namespace
-
 // The CLI's messages of a run: the estimate's lines, the fit's warnings, the
-// notes and the stage times on stderr (in its flags), unless MessagesQuiet().
+// notes and the stage times on stderr (in its flags).
 analysis::RunMessages RunMessagesOfCli() {
   analysis::RunMessages m;
-  if (MessagesQuiet()) return m;
   m.estimate = [](const std::string& line) { std::fprintf(stderr, "%s\n", io::Printable(WithFlags(line)).c_str()); };
   m.fit.warning = [](const std::string& w) { std::fprintf(stderr, "warning: %s\n", io::Printable(WithFlags(w)).c_str()); };
   m.note = [](const std::string& n) { std::fprintf(stderr, "note: %s\n", n.c_str()); };
@@ -38,13 +35,7 @@ analysis::RunMessages RunMessagesOfCli() {
   return m;
 }
 
-analysis::RunInput EstimateAndFit(const RunFlags& f, const analysis::RunOptions& o, analysis::RunInput in,
-                                  double* t_total_ms, bool reference_thread) {
-  analysis::RunMessages m = RunMessagesOfCli();
-  m.fit.words = WithFlags;  // the report and model.json show the CLI's flags
-  return analysis::EstimateAndFit(std::move(in), {f.est.Options(true), f.fit.o, reference_thread, std::nullopt},
-                                  o.delays, m, t_total_ms);
-}
+}  // namespace
 
 analysis::RunOptions ResolveRunOptions(RunFlags* f, analysis::RunInput* in) {
   f->fit.Resolve(f->est.welch.fmin_hz, f->est.welch.fmax_hz);
@@ -66,8 +57,8 @@ analysis::RunOptions ResolveRunOptions(RunFlags* f, analysis::RunInput* in) {
   return o;
 }
 
-void ResolveRunLoop(const RunFlags& f, double period_s, analysis::RunOptions* o) {
-  o->loop = ResolveLoops(f.loop, period_s)[0];
+analysis::LoopForPeriod RunLoop(const RunFlags& f) {
+  return [loop = f.loop](double period_s) { return ResolveLoops(loop, period_s)[0]; };
 }
 
 namespace {
@@ -86,8 +77,7 @@ void Run(RunFlags& f) {
   std::fprintf(stderr, "zwidth run %s -> %s\n", io::Printable(in.source).c_str(), io::Printable(f.outdir).c_str());
   analysis::RunMessages m = RunMessagesOfCli();
   m.fit.words = WithFlags;  // the report and model.json show the CLI's flags
-  report::RunJob job{std::move(in), eo, o,
-                     [&f](double period_s) { return ResolveLoops(f.loop, period_s)[0]; },
+  report::RunJob job{std::move(in), eo, o, RunLoop(f),
                      {.draw_figures = true, .png = f.png, .fit_report = "", .command_line = CommandLine()}};
   const report::RunJobResult r = report::RunToFolder(std::move(job), folder, m);
   const analysis::RunAnalysis& a = r.analysis;

@@ -125,14 +125,6 @@ std::string JoinPaths(const std::vector<std::string>& paths) {
   return s;
 }
 
-namespace {
-thread_local bool t_quiet = false;
-}  // namespace
-
-QuietMessages::QuietMessages() : was_quiet_(t_quiet) { t_quiet = true; }
-QuietMessages::~QuietMessages() { t_quiet = was_quiet_; }
-bool MessagesQuiet() { return t_quiet; }
-
 analysis::LogsEstimateOptions EstimateFlags::Options(bool for_fit) const {
   analysis::LogsEstimateOptions o;
   o.select = select;
@@ -154,7 +146,7 @@ analysis::LogsEstimateOptions EstimateFlags::Options(bool for_fit) const {
 // The library's estimate (analysis/logs_estimate.h); its notes on stderr, in the CLI's words.
 LogsEstimate EstimateFromLogs(const std::vector<std::string>& paths, const EstimateFlags& flags, bool for_fit) {
   return analysis::EstimateFromLogs(paths, flags.Options(for_fit), [](const std::string& line) {
-    if (!t_quiet) std::fprintf(stderr, "%s\n", io::Printable(WithFlags(line)).c_str());
+    std::fprintf(stderr, "%s\n", io::Printable(WithFlags(line)).c_str());
   });
 }
 
@@ -169,13 +161,13 @@ double StageTimer::Lap(const std::string& stage) {
 double ResolvePeriod(double flag, io::ModelFile* mf) {
   std::string note;
   const double T = io::ResolveModelPeriod(std::isnan(flag) ? std::nullopt : std::optional<double>(flag), mf, &note);
-  if (!note.empty() && !t_quiet) std::fprintf(stderr, "note: %s\n", WithFlags(note).c_str());
+  if (!note.empty()) std::fprintf(stderr, "note: %s\n", WithFlags(note).c_str());
   return T;
 }
 
 void ConvertDelayToPeriod(io::ModelFile* mf, double T, const std::string& what) {
   const std::string note = io::ConvertDelayToPeriod(mf, T, what);
-  if (!note.empty() && !t_quiet) std::fprintf(stderr, "note: %s\n", note.c_str());
+  if (!note.empty()) std::fprintf(stderr, "note: %s\n", note.c_str());
 }
 
 namespace {

@@ -66,22 +66,6 @@ struct EstimateFlags {
 void AddLogFlags(CLI::App* cmd, io::LogSelect* select);
 void AddEstimateFlags(CLI::App* cmd, EstimateFlags* flags);
 
-// While one lives, EstimateFromLogs and FitToModelFile print nothing on the
-// thread that made it (how each log was read, its warnings, the fit's
-// warnings): `batch` runs many units at once and keeps the fit's warnings in
-// its table instead.
-class QuietMessages {
- public:
-  QuietMessages();
-  ~QuietMessages();
-  QuietMessages(const QuietMessages&) = delete;
-  QuietMessages& operator=(const QuietMessages&) = delete;
-
- private:
-  bool was_quiet_;
-};
-bool MessagesQuiet();  // on this thread
-
 using analysis::LogsEstimate;
 // Reads the logs (runs of one device) and combines their spectra
 // (analysis::EstimateFromLogs). Prints how each log was read, its warnings and

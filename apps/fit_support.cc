@@ -116,7 +116,7 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
                              const std::string& source, fit::FitResult* out, const FrictionInput* friction,
                              fit::FrictionFitResult* friction_out) {
   analysis::FitMessages messages{.words = WithFlags, .warning = [](const std::string& w) {
-    if (!MessagesQuiet()) std::fprintf(stderr, "warning: %s\n", io::Printable(WithFlags(w)).c_str());
+    std::fprintf(stderr, "warning: %s\n", io::Printable(WithFlags(w)).c_str());
   }};
   return analysis::FitToModelFile(frf, o, source, messages, out, friction, friction_out);
 }

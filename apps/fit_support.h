@@ -56,7 +56,7 @@ void AddTable2Flags(CLI::App* cmd, bool* on, analysis::Table2Options* options);
 std::string FrictionLine(const fit::FrictionFitResult& ff);
 
 // analysis::FitToModelFile in the CLI's words (its flags), the fit's warnings
-// on stderr unless MessagesQuiet().
+// on stderr.
 io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::FitOptions& o,
                              const std::string& source, fit::FitResult* result = nullptr,
                              const FrictionInput* friction = nullptr, fit::FrictionFitResult* friction_result = nullptr);

@@ -20,6 +20,7 @@
 #include <string>
 
 #include "fit/fit_api.h"
+#include "ident/fft.h"
 #include "io/hdf5_api.h"
 #include "model/error.h"
 #include "zwidth_abi_hash.h"  // generated (cmake/abi_hash.cmake): the shared headers' hash
@@ -65,12 +66,17 @@ const void* LoadPlugin(const char* file, const char* symbol, unsigned long long 
   return api;  // the handle stays open for the process's life
 }
 
-// The loaded table, once; a failed load throws and is retried on the next call.
-template <class Api>
+// The loaded table, once; a failed load throws and is retried on the next
+// call. `bind` runs on the new table before any other thread sees it.
+template <class Api, class Bind>
 const Api& Loaded(const Api*& api, std::mutex& mutex, const char* file, const char* symbol,
-                  unsigned long long key, const char* what) {
+                  unsigned long long key, const char* what, Bind bind) {
   std::lock_guard<std::mutex> lock(mutex);
-  if (!api) api = static_cast<const Api*>(LoadPlugin(file, symbol, key, what));
+  if (!api) {
+    const Api* loaded = static_cast<const Api*>(LoadPlugin(file, symbol, key, what));
+    bind(*loaded);
+    api = loaded;
+  }
   return *api;
 }
 
@@ -86,7 +92,7 @@ namespace {
 
 const Hdf5Api& LoadedHdf5() {
   return Loaded(g_hdf5, g_hdf5_mutex, "zwidth-hdf5.so", "zwidth_hdf5_plugin", kHdf5ApiKey ^ ZWIDTH_ABI_HASH,
-                "HDF5 and MATLAB files");
+                "HDF5 and MATLAB files", [](const Hdf5Api&) {});
 }
 // Hdf5()'s table (io/hdf5_api.h) is the plugin's, loaded on first call.
 const bool kProvided = (SetHdf5Provider(&LoadedHdf5), true);
@@ -97,7 +103,10 @@ const bool kProvided = (SetHdf5Provider(&LoadedHdf5), true);
 namespace fit {
 
 const FitApi& FitLibrary() {
-  return Loaded(g_fit, g_fit_mutex, "zwidth-fit.so", "zwidth_fit_plugin", kFitApiKey ^ ZWIDTH_ABI_HASH, "fitting a model");
+  // The plugin's copy of ident/ plans FFTW (the friction fit) under this
+  // executable's lock, the one Welch's plans take (ident/fft.h).
+  return Loaded(g_fit, g_fit_mutex, "zwidth-fit.so", "zwidth_fit_plugin", kFitApiKey ^ ZWIDTH_ABI_HASH, "fitting a model",
+                [](const FitApi& a) { a.share_fftw_planner_mutex(&ident::FftwPlannerMutex()); });
 }
 
 }  // namespace fit

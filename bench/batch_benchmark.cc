@@ -1,8 +1,9 @@
 // The per-unit cost of analysis::RunBatch (issue 28): 4 units, each a log of
 // Table I simulated for 8 s (white torque, seeds 1..4, written as CSV),
-// read, Welch-estimated (1024-sample windows), fitted (FitModel, the default
-// order search), and analysed as `run` does (delays 2 and 4, 20 B values),
-// on 1 and 2 threads. units_per_s beside
+// read, Welch-estimated (1024-sample windows), fitted (the order search, the
+// friction looked at as `run` does: none found on these linear logs), and
+// analysed as `run` does (delays 2 and 4, 20 B values), by run's pipeline
+// (analysis::AnalyseUnit), on 1 and 2 threads. units_per_s beside
 // error = the largest |K_CR^max(fit) / K_CR^max(Table I) - 1| at delay 2 over
 // the units (what a fleet table is read for), and failed = rows not ok.
 #include <cmath>
@@ -16,12 +17,8 @@
 
 #include "analysis/batch.h"
 #include "analysis/compare.h"
-#include "fit/fit.h"
-#include "ident/welch.h"
-#include "io/fit_file.h"
 #include "io/log.h"
 #include "io/reference_models.h"
-#include "model/error.h"
 #include "model/simulate.h"
 
 namespace zwidth {
@@ -49,34 +46,17 @@ struct Fleet {
   ~Fleet() { std::filesystem::remove_all(dir); }
 };
 
-analysis::RunInput EstimateFit(const io::BatchEntry& unit, analysis::RunOptions* o) {
-  const io::Log log = io::ReadLog(unit.path);
-  ident::WelchOptions w;
-  w.window_length = 1024;
-  analysis::RunInput in;
-  in.response.frf = ident::EstimateFrequencyResponse(log.input, log.output, log.info.sample_rate_hz, w);
-  in.response.num_runs = 1;
-  in.total_samples = log.input.size();
-  in.logs = {unit.path};
-  in.source = unit.path;
-  fit::FitOptions fo;
-  fo.auto_modes = true;
-  in.fit = fit::FitModel(in.response.frf, fo);
-  if (in.fit.status != fit::FitStatus::kConverged) throw ComputationError(in.fit.message);
-  in.model = io::FittedModelFile(in.fit, in.response.frf, fo, unit.path);
-  o->loop = {};
-  return in;
-}
-
 // range(0): threads (units at once).
 void BM_BatchPerUnit(benchmark::State& state) {
   static const Fleet fleet;
   analysis::BatchOptions o;
   o.run.delays = {2, 4};
   o.run.grid.b_points = 20;
+  o.estimate_fit.estimate.welch.window_length = 1024;
+  o.estimate_fit.fit.auto_modes = true;
   o.threads = static_cast<int>(state.range(0));
   analysis::BatchResult r;
-  for (auto _ : state) r = analysis::RunBatch(fleet.units, o, EstimateFit);
+  for (auto _ : state) r = analysis::RunBatch(fleet.units, o);
   double err = 0.0, failed = 0.0;
   for (const auto& row : r.table.rows) {
     if (row.at("status") != "ok") {

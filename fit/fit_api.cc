@@ -4,6 +4,8 @@
 
 #include <glog/logging.h>
 
+#include "ident/fft.h"
+
 namespace zwidth::fit {
 
 const FitApi& FitLibrary() {
@@ -18,6 +20,7 @@ const FitApi& FitLibrary() {
       FLAGS_minloglevel = google::GLOG_FATAL;
       return FitFriction(input, output, fs, linear, options, friction);
     };
+    a.share_fftw_planner_mutex = &ident::ShareFftwPlannerMutex;
     return a;
   }();
   return api;

@@ -7,6 +7,8 @@
 // only by the commands that fit. See io/hdf5_api.h for the same seam of HDF5.
 #pragma once
 
+#include <mutex>
+
 #include "fit/fit.h"
 #include "fit/friction_fit.h"
 
@@ -20,6 +22,10 @@ struct FitApi {
   FrictionFitResult (*fit_friction_quiet)(const std::vector<double>& input, const std::vector<double>& output,
                                           double sample_rate_hz, const FitResult& linear, const FitOptions& options,
                                           const FrictionFitOptions& friction) = nullptr;
+  // ident::ShareFftwPlannerMutex of the table's copy of the library: the
+  // plugin's loader hands it the host's lock (ident/fft.h) before any call,
+  // so one lock guards FFTW's planner in the whole process.
+  void (*share_fftw_planner_mutex)(std::mutex* host) = nullptr;
 };
 
 // Changes whenever a type crossing the table changes size; mixed with

@@ -2,20 +2,18 @@
 // derivatives of the encoder, iterated with the frequency-domain refit.
 #include "fit/friction_fit.h"
 
-#include <fftw3.h>
-
 #include <algorithm>
 #include <cmath>
 #include <complex>
 #include <limits>
 #include <cstdio>
-#include <mutex>
 #include <numbers>
+#include <utility>
 
 #include <Eigen/Dense>
 
+#include "ident/fft.h"
 #include "model/error.h"
-#include "model/parallel.h"
 #include "model/state_space.h"
 
 namespace zwidth::fit {
@@ -37,41 +35,10 @@ struct Motion {
   std::vector<double> v, a;
 };
 
-// An FFTW plan made and destroyed under zwidth::FftwPlannerMutex (FFTW's
-// planner is not thread-safe; executing a plan is).
-class LockedPlan {
- public:
-  template <class Make>
-  explicit LockedPlan(Make make) {
-    std::lock_guard<std::mutex> lock(FftwPlannerMutex());
-    plan_ = make();
-  }
-  ~LockedPlan() {
-    std::lock_guard<std::mutex> lock(FftwPlannerMutex());
-    fftw_destroy_plan(plan_);
-  }
-  LockedPlan(const LockedPlan&) = delete;
-  LockedPlan& operator=(const LockedPlan&) = delete;
-  void Execute() const { fftw_execute(plan_); }
-
- private:
-  fftw_plan plan_;
-};
-
-std::vector<cd> Forward(std::vector<double> x) {
-  std::vector<cd> X(x.size() / 2 + 1);
-  LockedPlan([&] {
-    return fftw_plan_dft_r2c_1d(static_cast<int>(x.size()), x.data(), reinterpret_cast<fftw_complex*>(X.data()),
-                                FFTW_ESTIMATE);
-  }).Execute();
-  return X;
-}
+std::vector<cd> Forward(std::vector<double> x) { return ident::ForwardReal(std::move(x)); }
 
 std::vector<double> Inverse(std::vector<cd> X, size_t n) {
-  std::vector<double> x(n);
-  LockedPlan([&] {
-    return fftw_plan_dft_c2r_1d(static_cast<int>(n), reinterpret_cast<fftw_complex*>(X.data()), x.data(), FFTW_ESTIMATE);
-  }).Execute();
+  std::vector<double> x = ident::InverseReal(std::move(X), n);
   for (double& s : x) s /= static_cast<double>(n);
   return x;
 }

@@ -6,31 +6,11 @@
 #include <numbers>
 #include <random>
 
-#include <fftw3.h>
-
+#include "ident/fft.h"
 #include "model/error.h"
 
 namespace zwidth::ident {
 namespace {
-
-// Real inverse DFT of a one-sided spectrum X[0..n/2]: x[i] = sum over all
-// bins of X_k e^{2 pi j k i / n} (FFTW's unnormalised c2r).
-std::vector<double> InverseReal(std::vector<std::complex<double>> X, int n) {
-  std::vector<double> x(n);
-  fftw_plan p = fftw_plan_dft_c2r_1d(n, reinterpret_cast<fftw_complex*>(X.data()), x.data(), FFTW_ESTIMATE);
-  fftw_execute(p);
-  fftw_destroy_plan(p);
-  return x;
-}
-
-std::vector<std::complex<double>> ForwardReal(std::vector<double> x) {
-  const int n = static_cast<int>(x.size());
-  std::vector<std::complex<double>> X(n / 2 + 1);
-  fftw_plan p = fftw_plan_dft_r2c_1d(n, x.data(), reinterpret_cast<fftw_complex*>(X.data()), FFTW_ESTIMATE);
-  fftw_execute(p);
-  fftw_destroy_plan(p);
-  return X;
-}
 
 double Rms(const std::vector<double>& x) {
   double s = 0;

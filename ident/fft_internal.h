@@ -7,14 +7,13 @@
 
 #include <fftw3.h>
 
-#include "model/parallel.h"
+#include "ident/fft.h"
 
 namespace zwidth::ident::internal {
 
-// One r2c plan per length, made once and shared (FFTW's planner is not
-// thread-safe, hence zwidth::FftwPlannerMutex, which the friction fit's plans
-// hold too; executing a plan on new arrays is, when they have the alignment
-// fftw_alloc_* gives).
+// One r2c plan per length, made once and shared, under ident::FftwPlannerMutex
+// (ident/fft.h; executing a plan on new arrays is thread-safe when they have
+// the alignment fftw_alloc_* gives).
 struct PlanCache {
   std::map<int, fftw_plan> plans;
   ~PlanCache() {

@@ -15,10 +15,6 @@
 
 namespace zwidth {
 
-std::mutex& FftwPlannerMutex() {
-  static std::mutex mu;
-  return mu;
-}
 namespace {
 
 std::atomic<int> g_num_threads{0};  // SetNumThreads; 0 = not set

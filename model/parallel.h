@@ -22,14 +22,6 @@
 
 namespace zwidth {
 
-// Held around every call of FFTW's planner (fftw_plan_*, fftw_destroy_plan),
-// which is not thread-safe, by ident's plan cache and the friction fit, so
-// that a Welch estimate and a friction fit may run on threads side by side.
-// One per copy of this library: the Python module has one; the CLI's
-// executable and its fit plugin (fit/fit_api.h) have one each, so the CLI
-// runs friction fits only where no other thread plans (`batch` fits none).
-std::mutex& FftwPlannerMutex();
-
 // The cores this process may run on: its affinity mask (taskset, cpusets)
 // capped by a cgroup CPU quota (containers), at least 1.
 int AvailableCpus();

@@ -121,12 +121,10 @@ RunReport WriteRunReport(const analysis::RunAnalysis& a, const io::OutputFolder&
 }
 
 RunJobResult RunToFolder(RunJob job, const io::OutputFolder& folder, const analysis::RunMessages& messages) {
-  std::string why;  // before anything is read
-  if (!job.options.IsValid(&why)) throw InputError(why);
   double ms = 0.0;
-  analysis::RunInput in = analysis::EstimateAndFit(std::move(job.input), job.estimate_fit, job.options.delays, messages, &ms);
-  if (job.loop) job.options.loop = job.loop(in.response.frf.period_s());
-  RunJobResult r{analysis::Analyse(std::move(in), job.options), {}, {}, ms};
+  RunJobResult r{analysis::EstimateFitAndAnalyse(std::move(job.input), job.estimate_fit, std::move(job.options), job.loop,
+                                                 messages, &ms),
+                 {}, {}, ms};
   r.fit_report = job.report.fit_report.empty() ? messages.fit.Words(analysis::FitReport(r.analysis.input.fit))
                                                : job.report.fit_report;
   job.report.fit_report = r.fit_report;

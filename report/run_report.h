@@ -49,16 +49,16 @@ RunReport WriteRunReport(const analysis::RunAnalysis& analysis, const io::Output
                          const RunReportOptions& options = {});
 
 // The whole of `zwidth run` below the front ends (the CLI and Python's
-// zwidth.run call it): the estimate and the fit (analysis::EstimateAndFit),
-// the run's loop at the log's period, analysis::Analyse, and WriteRunReport
-// into the folder (the caller commits it).
+// zwidth.run call it): analysis::EstimateFitAndAnalyse (the pipeline each
+// unit of `batch` runs too) and WriteRunReport into the folder (the caller
+// commits it).
 struct RunJob {
   analysis::RunInput input;  // logs, source and the reference (when any)
   analysis::EstimateFitOptions estimate_fit;
   analysis::RunOptions options;
   // The run's loop for the log's period (a velocity filter's coefficients
   // depend on it); options.loop when empty.
-  std::function<stability::LoopOptions(double period_s)> loop;
+  analysis::LoopForPeriod loop;
   RunReportOptions report;  // fit_report: messages.fit.Words(analysis::FitReport) when empty
 };
 

@@ -41,6 +41,25 @@ for i, md in enumerate(plant["modes"]):
 assert int(row["delay_samples"]) == plant["delay_samples"]
 assert row["fit_quality"] == summ["fit_quality"], (row["fit_quality"], summ["fit_quality"])
 assert row["fit_reasons"] == ";".join(r["code"] for r in summ["fit_quality_reasons"])
+# The friction as model.json has it: fit.friction's status and linear-only b, the model's friction and std.
+fr = (model.get("fit") or {}).get("friction")
+for k in ("friction_status", "F_c", "F_c_std", "friction_offset", "friction_offset_std", "linear_only_b"):
+    assert k in row, f"{serial}: no column {k}"
+if fr is None:
+    assert row["friction_status"] == "", row["friction_status"]
+else:
+    assert row["friction_status"] == fr["status"], (row["friction_status"], fr["status"])
+    same(row["linear_only_b"], fr["linear_only_b"], "linear_only_b"); same(row["linear_only_b_std"], fr["linear_only_b_std"], "linear_only_b_std"); n += 2
+    assert row["friction_topology"] == fr.get("topology", ""), (row["friction_topology"], fr.get("topology"))
+if "friction" in model:
+    f, fs = model["friction"], std.get("friction", {})
+    assert f["coulomb_pos"] == f["coulomb_neg"], f
+    same(row["F_c"], f["coulomb_pos"], "F_c"); same(row["friction_offset"], f.get("offset", 0.0), "friction_offset"); n += 2
+    same(row["F_c_std"], fs.get("coulomb_pos"), "F_c_std"); same(row["friction_offset_std"], fs.get("offset"), "friction_offset_std"); n += 2
+elif fr is not None:  # looked at, none found: the model's friction is 0
+    assert float(row["F_c"]) == 0.0 and float(row["friction_offset"]) == 0.0 and math.isnan(float(row["F_c_std"])), row["F_c"]
+else:
+    assert row["F_c"] == "" and row["F_c_std"] == "", (row["F_c"], row["F_c_std"])
 for e in summ["boundary"]:
     d = e["delay_samples"]
     for k in ("K_cr_at_zero_B", "K_cr_max", "B_t", "B_max", "B_max_from_zero"):
@@ -70,6 +89,41 @@ for u in u1.csv u2.csv u3.csv u4.h5; do
   "$ZW" run "$T/$u" -o "$T/run_$u" --no-figures "${FLAGS[@]}" >/dev/null 2>&1 || bad "run $u failed"
   if msg=$(compare "$T/t.csv" "$T/$u" "$T/run_$u" 2>&1); then ok "$msg"; else bad "$msg"; fi
 done
+
+# 2b. A device with Coulomb friction (Table I, 4 mN m at the motor): batch fits it as run does (run's
+# --friction auto, one rule: analysis::EstimateAndFit), so its row is run's to the last digit, F_c included;
+# with specs on F_c and K_CR^max its verdict is the one computed here from run's values and std.
+"$ZW" simulate --model "$M" -o "$T/fric.csv" --seconds 12 --seed 7 --coulomb 0.004 2>/dev/null
+SPECS=(--spec "F_c<=0.0045" --spec "d2_K_cr_max>=30")
+"$ZW" batch "$T/fric.csv" "$T/u1.csv" -o "$T/fric_t.csv" "${SPECS[@]}" "${FLAGS[@]}" 2>"$T/err" || { bad "friction batch"; cat "$T/err"; }
+"$ZW" run "$T/fric.csv" -o "$T/run_fric" --no-figures "${FLAGS[@]}" >/dev/null 2>&1 || bad "run fric.csv failed"
+if msg=$(compare "$T/fric_t.csv" "$T/fric.csv" "$T/run_fric" 2>&1); then ok "friction unit: $msg"; else bad "$msg"; fi
+if msg=$(compare "$T/fric_t.csv" "$T/u1.csv" "$T/run_u1.csv" 2>&1); then ok "linear unit beside it: $msg"; else bad "$msg"; fi
+$PY - "$T/fric_t.csv" "$T/fric.csv" "$T/run_fric" "$T/u1.csv" "$T/run_u1.csv" <<'PY' && ok "friction fitted (not on the linear unit), verdicts as from run's values" || bad "friction verdict"
+import csv, json, math, sys
+t, fric, fdir, lin, ldir = sys.argv[1:6]
+rows = {r["serial"]: r for r in csv.DictReader(open(t))}
+def verdict(rundir):
+    m = json.load(open(rundir + "/model.json")); s = json.load(open(rundir + "/summary.json"))
+    b2 = next(e for e in s["boundary"] if e["delay_samples"] == 2)
+    fc = m.get("friction", {}).get("coulomb_pos", 0.0); fcs = m.get("std", {}).get("friction", {}).get("coulomb_pos", float("nan"))
+    ps = []
+    for v, sd, bound, at_least in ((fc, fcs, 0.0045, False), (b2["K_cr_max"], b2["std"]["K_cr_max"], 30.0, True)):
+        met = v >= bound if at_least else v <= bound
+        p = 1.0 if met else 0.0
+        if math.isfinite(v) and math.isfinite(sd) and sd > 0:
+            z = (v - bound if at_least else bound - v) / sd
+            p = 0.5 * math.erfc(-z / math.sqrt(2))
+        ps.append(p)
+    p = min(ps)
+    v = "pass" if p >= 0.95 else "fail" if p <= 0.05 else "marginal"
+    return "fail" if s["fit_quality"] == "poor" else v
+assert rows[fric]["friction_status"] == "fitted" and float(rows[fric]["F_c"]) > 0, rows[fric]["friction_status"]
+assert rows[lin]["friction_status"] == "not detected" and float(rows[lin]["F_c"]) == 0, rows[lin]["friction_status"]
+for serial, d in ((fric, fdir), (lin, ldir)):
+    assert rows[serial]["verdict"] == verdict(d), (serial, rows[serial]["verdict"], verdict(d), rows[serial]["verdict_reasons"])
+print(rows[fric]["verdict"], rows[lin]["verdict"])
+PY
 
 # 3. Resume: the same batch again computes nothing and writes the same table.
 cp "$T/t.csv" "$T/t0.csv"
@@ -182,14 +236,14 @@ import csv, sys
 r = {r["serial"]: r for r in csv.DictReader(open(sys.argv[1]))}["SN-003"]
 assert r["status"] == "input_error" and "missing.csv" in r["error"], r
 PY
-# Equal to run's but for the provenance (its command and date are batch's; its inputs the same log)
-# and run's friction detection (batch fits no friction: apps/run_flags.h), which found none here.
+# Equal to run's but for the provenance (its command and date are batch's; its inputs the same log);
+# the friction looked at by both (none found here).
 same_but_provenance() {
   $PY - "$1" "$2" <<'PY'
 import json, sys
 a, b = (json.load(open(p)) for p in sys.argv[1:3])
 pa, pb = a.pop("provenance"), b.pop("provenance")
-assert b["fit"].pop("friction")["status"] == "not detected" and "friction" not in a["fit"], b["fit"]
+assert (b.get("fit") or {}).get("friction", {}).get("status", "not detected") == "not detected", b["fit"]
 assert a == b, "content differs"
 assert pa["command"].startswith("zwidth batch") and pb["command"].startswith("zwidth run"), (pa["command"], pb["command"])
 assert [i["sha256"] for i in pa["inputs"] if i["path"].endswith("u1.csv")] == \

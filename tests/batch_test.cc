@@ -1,7 +1,7 @@
 // analysis/batch.h RunBatch: a unit's error is its row and the others go on,
 // rows in the units' order whatever the threads, resume by the input hash
 // (the caller's estimate and fit not called again), a changed log or option
-// computed again, a cancel stops the batch. The estimate and fit here hand
+// (the friction model among them) computed again, a cancel stops the batch. The estimate and fit here hand
 // Table I as the fitted model (no log is fitted: the engine is under test).
 #include <atomic>
 #include <fstream>
@@ -40,6 +40,15 @@ RunInput Table1Input() {
   return in;
 }
 
+// The engine (RunBatchWith) with a fake estimate and fit: Analyse of what `ef` hands.
+template <class EstimateFit>
+BatchResult RunFake(const std::vector<io::BatchEntry>& units, const BatchOptions& o, const EstimateFit& ef) {
+  return RunBatchWith(units, o, [&](const io::BatchEntry& u, const RunOptions& ro) {
+    RunOptions uo = ro;
+    return Analyse(ef(u, &uo), uo);
+  });
+}
+
 BatchOptions Options(int threads) {
   BatchOptions o;
   o.run.delays = {2};
@@ -57,7 +66,7 @@ TEST(RunBatch, AUnitsErrorIsItsRowAndTheOthersGoOn) {
     if (u.serial == "S4") throw std::runtime_error("something else");
     return Table1Input();
   };
-  const BatchResult r = RunBatch(f.units, Options(2), ef);
+  const BatchResult r = RunFake(f.units, Options(2), ef);
   ASSERT_EQ(r.table.rows.size(), 5u);
   const char* status[] = {"ok", "input_error", "ok", "computation_error", "computation_error"};
   for (size_t i = 0; i < 5; ++i) {
@@ -90,11 +99,11 @@ TEST(RunBatch, TheTableDoesNotDependOnTheThreadsAndEachUnitRunsSerial) {
     --running;
     return in;
   };
-  const std::string one = io::FormatBatchCsv(RunBatch(f.units, Options(1), ef).table);
+  const std::string one = io::FormatBatchCsv(RunFake(f.units, Options(1), ef).table);
   EXPECT_EQ(inner_threads.load(), NumThreads());  // one thread: the unit's own loops as usual
   most = 0;
   inner_threads = 0;
-  const std::string three = io::FormatBatchCsv(RunBatch(f.units, Options(3), ef).table);
+  const std::string three = io::FormatBatchCsv(RunFake(f.units, Options(3), ef).table);
   EXPECT_EQ(one, three);
   EXPECT_LE(most.load(), 3);
   EXPECT_EQ(inner_threads.load(), 1);  // several units at once: each on its thread alone
@@ -108,30 +117,42 @@ TEST(RunBatch, AReRunTakesUnitsWithTheSameHashAndComputesChangedOnes) {
     return Table1Input();
   };
   BatchOptions o = Options(2);
-  const BatchResult first = RunBatch(f.units, o, ef);
+  const BatchResult first = RunFake(f.units, o, ef);
   EXPECT_EQ(calls.load(), 3);
   o.previous = first.table;
   calls = 0;
-  const BatchResult again = RunBatch(f.units, o, ef);
+  const BatchResult again = RunFake(f.units, o, ef);
   EXPECT_EQ(calls.load(), 0);
   EXPECT_EQ(again.progress.resumed, 3u);
   EXPECT_EQ(io::FormatBatchCsv(again.table), io::FormatBatchCsv(first.table));
   std::ofstream(f.units[1].path, std::ios::app) << " changed";
   calls = 0;
-  EXPECT_EQ(RunBatch(f.units, o, ef).progress.resumed, 2u);
+  EXPECT_EQ(RunFake(f.units, o, ef).progress.resumed, 2u);
   EXPECT_EQ(calls.load(), 1);
   o.options_key = "--delays=4";
   calls = 0;
-  RunBatch(f.units, o, ef);
+  RunFake(f.units, o, ef);
   EXPECT_EQ(calls.load(), 3);
   // A unit's own log flags are options too.
   o.options_key = "--delays=2";
-  o.previous = RunBatch(f.units, o, ef).table;
+  o.previous = RunFake(f.units, o, ef).table;
   std::vector<io::BatchEntry> flagged = f.units;
   flagged[0].flags = {{"rate", "2000"}};
   calls = 0;
-  RunBatch(flagged, o, ef);
+  RunFake(flagged, o, ef);
   EXPECT_EQ(calls.load(), 1);
+  // The friction model is in the key whether or not the caller's key spells it
+  // out: a table of a batch that fitted no friction is not taken for one that does.
+  ASSERT_EQ(o.estimate_fit.friction, fit::FrictionModel::kAuto);  // run's default
+  o.previous = RunFake(f.units, o, ef).table;
+  BatchOptions none = o;
+  none.estimate_fit.friction = fit::FrictionModel::kNone;
+  calls = 0;
+  none.previous = RunFake(f.units, none, ef).table;
+  EXPECT_EQ(calls.load(), 3);
+  calls = 0;
+  RunFake(f.units, none, ef);
+  EXPECT_EQ(calls.load(), 0);
 }
 
 TEST(RunBatch, ACancelStopsTheBatchInsteadOfBecomingARow) {
@@ -140,10 +161,10 @@ TEST(RunBatch, ACancelStopsTheBatchInsteadOfBecomingARow) {
     if (u.serial == "S1") throw Cancelled();
     return Table1Input();
   };
-  EXPECT_THROW(RunBatch(f.units, Options(1), ef), Cancelled);
+  EXPECT_THROW(RunFake(f.units, Options(1), ef), Cancelled);
   BatchOptions bad = Options(1);
   bad.threads = -1;
-  EXPECT_THROW(RunBatch(f.units, bad, ef), InputError);
+  EXPECT_THROW(RunFake(f.units, bad, ef), InputError);
 }
 
 }  // namespace

@@ -63,17 +63,10 @@ def _unit_row(exe, unit, args):
             return f.read()
 
 
-def _is_hdf5(path):
-    return os.fspath(path).lower().endswith((".h5", ".hdf5", ".he5"))
-
-
 def _table_text(path):
-    """The table at `path` as CSV text: an HDF5 one (.h5) through the library's reader (io::ReadBatchTable)."""
-    if _is_hdf5(path):
-        from . import _zwidth
-        return _zwidth._read_batch_table(path)
-    with open(path, newline="") as f:
-        return f.read()
+    """The table at `path` as CSV text, read by the library (io::ReadBatchTable: CSV or HDF5, its rule)."""
+    from . import _zwidth
+    return _zwidth._read_batch_table(os.fspath(path))
 
 
 def _manifest_units(manifest):
@@ -138,18 +131,9 @@ def batch(logs=None, *, output, manifest=None, client=None, threads=None, zwidth
     w = csv.DictWriter(merged, fieldnames=columns, restval="", lineterminator="\n")
     w.writeheader()
     w.writerows(rows)
-    if _is_hdf5(output):  # the command's HDF5 table (io::WriteBatchTable, atomic)
-        from . import _zwidth
-        _zwidth._write_batch_table(output, merged.getvalue())
-    else:
-        tmp = f"{output}.rows-{os.getpid()}"
-        try:
-            with open(tmp, "w", newline="") as f:
-                f.write(merged.getvalue())
-            os.replace(tmp, output)
-        finally:
-            if os.path.exists(tmp):
-                os.remove(tmp)
+    # Written by the library (io::WriteBatchTable: HDF5 or CSV by its rule, atomically).
+    from . import _zwidth
+    _zwidth._write_batch_table(os.fspath(output), merged.getvalue())
     _run(exe, [*whole, "-o", output, *args])  # every unit resumed: zwidth writes the table
     text = _table_text(output)
     try:
