@@ -50,7 +50,8 @@ std::string FigureScript(const FigureScriptOptions& o) {
        << (o.table1 ? ", 'table2.dat' u 2:4 w p pt 7 ps 0.8 lc rgb 'red' t 'Table II (relay)'" : "") << "\nunset logscale y\nunset multiplot\n";
     gp << "set output 'region." << ext << "'\nset multiplot layout " << o.delays.size()
        << ",1 title 'Z-width: stable (B, K) region per delay (shaded), K_{CR}(B) and its +-2 sigma band'\n"
-       << "set xlabel 'B [N m s/rad]'\nset ylabel 'K [N m/rad]'\nset yrange [0:" << o.k_clip << "]\n"
+       << "set xlabel 'B [" << model::Units(o.linear).B << "]'\nset ylabel 'K [" << model::Units(o.linear).K
+       << "]'\nset yrange [0:" << o.k_clip << "]\n"
        << "do for [i=1:words(delays)] {\n"
        << "  set title sprintf('delay: loop %s + model %d = %d samples', word(delays,i), model_delay, word(delays,i) + model_delay)\n"
        << "  plot 'region_model.dat' index i-1 u 1:2:3 w filledcurves fs solid 1.0 noborder lc rgb '#9ecae1' notitle, "
@@ -61,7 +62,8 @@ std::string FigureScript(const FigureScriptOptions& o) {
     gp << "set output 'loop." << ext << "'\nset multiplot layout " << o.delays.size()
        << ",1 title 'Stable region without and with a " << o.report_filter_hz
        << " Hz velocity low-pass; passivity boundary K_P(B) (Colgate-Schenkel)'\n"
-       << "set xlabel 'B [N m s/rad]'\nset ylabel 'K [N m/rad]'\nset yrange [0:" << o.k_clip_loop << "]\n"
+       << "set xlabel 'B [" << model::Units(o.linear).B << "]'\nset ylabel 'K [" << model::Units(o.linear).K
+       << "]'\nset yrange [0:" << o.k_clip_loop << "]\n"
        << "do for [i=1:words(delays)] {\n"
        << "  set title sprintf('delay: loop %s + model %d = %d samples', word(delays,i), model_delay, word(delays,i) + model_delay)\n"
        << "  plot 'loop_region.dat' index 2*i-2 u 1:2:3:4 w vectors nohead lc rgb '#fdae6b' t 'stable, filtered', "

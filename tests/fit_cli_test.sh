@@ -59,6 +59,8 @@ check "export .m: inertia [kg], damping [N s/m]" 'grep -q "inertia \[kg\]" "$T/a
 check "relay: the linear model's K_cr in N/m" 'grep -q "K_cr = .* N/m at" "$T/out" && ! grep -q "N m/rad" "$T/out"'
 "$ZW" run "$T/axis.h5" --units linear --modes 1 --no-figures -o "$T/axis_run" > /dev/null 2>&1
 check "run --units linear: model.json says linear" 'grep -q "\"units\": \"linear\"" "$T/axis_run/model.json"'
+"$ZW" run "$T/axis.h5" --units linear --modes 1 -o "$T/axis_run_fig" > /dev/null 2>&1
+check "run --units linear: every figure's axes in N/m and N s/m (the region and loop figures too)" 'grep -q "K \[N/m\]" "$T/axis_run_fig/figures/figures.gp" && grep -q "B \[N s/m\]" "$T/axis_run_fig/figures/figures.gp" && ! grep -qE "N m/rad|N m s/rad" "$T/axis_run_fig/figures/figures.gp"'
 "$ZW" run "$T/log.h5" --no-figures -o "$T/rot_run" > /dev/null 2>&1
 check "a rotary run's model.json has no units key" '[ -f "$T/rot_run/model.json" ] && ! grep -q "\"units\"" "$T/rot_run/model.json"'
 echo "$pass passed, $fail failed"
