@@ -192,7 +192,7 @@ TEST(StickSlipReference, ReversalAndReturnInsideOneCellIsFound) {
   std::printf("v0 %.3g, dip's minimum %.3g rad/s (the cubic's %.3g)\n", v0, v_min, -v0);
   ASSERT_LT(v_min, 0.0);
   // The premise: the dip lies inside the first cell, 1/16 of the fastest period
-  // of the moving and the stuck system (the header's rule), or the period/2.
+  // of the moving and the stuck dynamics (as the header says), or the period/2.
   const Eigen::MatrixXd As = ss.A - ss.B * (ss.C * ss.A * ss.A) / (ss.C * ss.A).dot(ss.B);
   const double rho = std::max(Eigen::EigenSolver<Eigen::MatrixXd>(ss.A).eigenvalues().cwiseAbs().maxCoeff(),
                               Eigen::EigenSolver<Eigen::MatrixXd>(As).eigenvalues().cwiseAbs().maxCoeff());
