@@ -12,12 +12,10 @@
 #include <unsupported/Eigen/MatrixFunctions>
 
 #include "model/error.h"
+#include "stability/numerics_internal.h"
 #include "stability/schur_cohn.h"
 
 namespace zwidth::stability {
-namespace internal {
-double GoldenExtremum(const std::function<double(double)>& f, double a, double b, double sign, double tol);
-}  // namespace internal
 
 namespace {
 

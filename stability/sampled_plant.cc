@@ -12,22 +12,18 @@
 #include "model/error.h"
 #include "stability/closed_loop.h"
 #include "stability/haptic_loop.h"
+#include "stability/numerics_internal.h"
 
 namespace zwidth::stability {
 namespace {
+
+using internal::PolyMul;
 
 // How far the double pole-residue sum may stray from its long double
 // evaluation at a check point for the form to be used (see the constructor):
 // a tenth of the 1e-10 its agreement with the state space is held to, for the
 // points between the checks.
 constexpr double kModalRoundingTolerance = 1e-11;
-
-std::vector<double> PolyMul(const std::vector<double>& a, const std::vector<double>& b) {
-  std::vector<double> r(a.size() + b.size() - 1, 0.0);
-  for (size_t i = 0; i < a.size(); ++i)
-    for (size_t j = 0; j < b.size(); ++j) r[i + j] += a[i] * b[j];
-  return r;
-}
 
 model::StateSpace Sampled(const model::Plant& plant, double period_s, const Hand& hand) {
   plant.Validate();

@@ -256,6 +256,12 @@ class ZWidth {
   // of the closed-loop state matrix (stability/closed_loop.h, O(n^3),
   // backward stable).
   double polynomial_error() const { return polynomial_error_; }
+  // The B > 0 where the K = 0 boundary is crossed (sorted), and the change
+  // of the number of roots outside at K = 0+ as B grows past each: +-2 for a
+  // pair on the circle, +-1 at theta = pi, 0 where its sign is not known.
+  // Between two, UnstableRoots(0, B) is constant.
+  const std::vector<double>& zero_k_boundary() const { return zero_k_b_; }
+  const std::vector<int>& zero_k_changes() const { return zero_k_change_; }
   bool uses_polynomial_test() const { return use_polynomial_; }
 
  private:
@@ -294,6 +300,8 @@ class ZWidth {
   // region found ends the search).
   CriticalPoint ValueAt(double B) const;
   bool AnyStable(double B) const;
+  // StableIntervals without the verification (the scan of ScanStableB).
+  std::vector<KInterval> IntervalValues(double B) const;
   // The largest K_CR that a golden-section search on [lo, hi] evaluates (and
   // where, when b_at is given).
   double LargestKcr(double lo, double hi, double tol, double* b_at) const;
@@ -306,8 +314,14 @@ class ZWidth {
   // The B > 0 where the K = 0 boundary is crossed (sorted), and the number of
   // roots outside at K = 0+ between two of them, found once per interval
   // (eigenvalue test only): roots cross the circle at K = 0+ only there.
-  std::vector<double> ZeroKCandidates() const;
+  std::vector<double> ZeroKCandidates(std::vector<int>* changes) const;
   int RootsOutsideAtZeroK(double B) const;
+  // The count at K = 0+ of one interval of zero_k_b_ by the eigenvalues, and
+  // the counts of a block of kZeroKBlock intervals from its first one and the
+  // directions of the crossings between.
+  int DirectZeroKCount(size_t slot) const;
+  void FillZeroKBlock(size_t block) const;
+  static constexpr size_t kZeroKBlock = 16;
   // Schur-Cohn on the characteristic polynomial (K = 0 as 0+).
   bool PolynomialStable(double K, double B) const;
   // Whether K_in is stable and K_out (1e-6 across a boundary from it) is
@@ -337,6 +351,7 @@ class ZWidth {
   // dW/dx and dV/dx at x = -1 on the real axis (nan when rounding hides them).
   double dW_pi_ = std::numeric_limits<double>::quiet_NaN(), dV_pi_ = std::numeric_limits<double>::quiet_NaN();
   std::vector<double> zero_k_b_;  // ZeroKCandidates()
+  std::vector<int> zero_k_change_;  // the change of the count at K = 0+ past each (0: unknown)
   // RootsOutsideAtZeroK per interval of zero_k_b_ (-1: not yet computed),
   // shared by copies (they share the plant and loop it depends on).
   std::shared_ptr<std::vector<std::atomic<int>>> zero_k_counts_;

@@ -175,5 +175,46 @@ TEST(ZWidthCount, TheCountAtZeroKIsTheBruteForcesAtEveryB) {
   }
 }
 
+TEST(ZWidthCount, EveryKnownChangeAtZeroKIsTheBruteForcesAndTheCountsFollow) {
+  // The counts at K = 0+ of the intervals between the K = 0 boundary's B
+  // values are propagated from every 16th by the changes zero_k_changes()
+  // gives: each known change must be the brute force's change of count
+  // across its B, and every interval's count the brute force's, at its
+  // midpoint (at K = 1e-7 K_cr as above).
+  for (const Case& c : Cases()) {
+    const LoopOptions l = LoopOf(c);
+    const ZWidth z(c.plant, 1e-3, c.delay, l);
+    const Brute brute = MakeBrute(c, l);
+    const std::vector<double>& bs = z.zero_k_boundary();
+    const std::vector<int>& changes = z.zero_k_changes();
+    ASSERT_EQ(bs.size(), changes.size()) << c.name;
+    auto expected = [&](double B) {
+      double k1 = INFINITY;
+      for (const Crossing& x : z.Crossings(B)) if (x.K > 0.0) k1 = std::min(k1, x.K);
+      // No crossing with K > 0 (past the last boundary B): every K > 0 counts
+      // as K -> 0+; K = 1 keeps the integrator's root ~1e-4 inside, where the
+      // brute force's eigenvalues can place it (at 1e-9 it is within 1e-12).
+      return brute.Outside(std::isfinite(k1) ? 1e-7 * k1 : 1.0, B);
+    };
+    std::vector<double> mids;  // a B inside each interval
+    for (size_t i = 0; i <= bs.size(); ++i) {
+      const double lo = i == 0 ? 0.0 : bs[i - 1];
+      mids.push_back(i == bs.size() ? 2.0 * lo : 0.5 * (lo + bs[i]));
+    }
+    std::vector<int> counts;
+    for (double B : mids) counts.push_back(expected(B));
+    int known = 0;
+    for (size_t i = 0; i < bs.size(); ++i) {
+      if (changes[i] == 0) continue;
+      ++known;
+      EXPECT_EQ(counts[i + 1] - counts[i], changes[i]) << c.name << ", K = 0 boundary at B = " << bs[i];
+    }
+    EXPECT_GE(known, static_cast<int>(bs.size()) * 3 / 4) << c.name << ": most changes are known";
+    for (size_t i = 0; i < mids.size(); ++i) {
+      EXPECT_EQ(z.UnstableRoots(0.0, mids[i]), counts[i]) << c.name << ", interval " << i << ", B = " << mids[i];
+    }
+  }
+}
+
 }  // namespace
 }  // namespace zwidth::stability
