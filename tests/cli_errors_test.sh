@@ -148,5 +148,23 @@ expect seed-negative "--seed: must be a whole number.*got '-1'" "$T/s1.h5" -- "$
 expect seed-overflow "--seed: must be a whole number.*18446744073709551616" "$T/s2.h5" -- "$ZW" simulate --model "$M" --seed 18446744073709551616 --seconds 1 -o "$T/s2.h5"
 expect seed-fraction "--seed: must be a whole number.*got '1.5'" "$T/e1.txt" -- "$ZW" excite --seed 1.5 -o "$T/e1.txt"
 expect seed-boundary "--seed: must be a whole number" "$T/b1.csv" -- "$ZW" boundary "$M" --monte-carlo 10 --seed -2 -o "$T/b1.csv"
+# A log too short (issue 24): 39 ms at 1 kHz. One rule (analysis::CheckLogLength) for every
+# command that estimates: 3 segments of the shortest default window (256 samples at 1 kHz), so
+# 512 samples (0.512 s); refused with exit 2 before any fit or figure, nothing written.
+head -40 "$T/good.csv" > "$T/short.csv"
+SHORT="the log is too short: 39 samples \(0.039 s at 1000 Hz\).*256 samples.*at least 512 samples \(0.512 s\).*Record a longer log"
+expect short-estimate "$SHORT" "$T/sh1.csv" -- "$ZW" estimate "$T/short.csv" -o "$T/sh1.csv"
+expect short-fit "$SHORT" "$T/sh2.json" -- "$ZW" fit "$T/short.csv" -o "$T/sh2.json"
+expect short-run "$SHORT" "$T/sh3" -- "$ZW" run "$T/short.csv" -o "$T/sh3"
+grep -qi gnuplot "$T/stderr" && { echo "FAIL short-run: gnuplot on stderr"; fail=$((fail+1)); }
+expect short-window "39 samples \(0.039 s at 1000 Hz\), fewer than one window of 64 samples \(--window-length, 0.064 s\).*use --window-length 32 or less" "$T/sh4.csv" -- "$ZW" estimate "$T/short.csv" --window-length 64 -o "$T/sh4.csv"
+head -520 "$T/good.csv" > "$T/long_enough.csv"  # 519 samples >= 512: estimated
+if "$ZW" estimate "$T/long_enough.csv" -o "$T/sh5.csv" 2>"$T/stderr" && [ -s "$T/sh5.csv" ]; then
+  echo "ok   short-boundary: 519 samples are estimated"; pass=$((pass+1))
+else echo "FAIL short-boundary: 519 samples refused"; cat "$T/stderr"; fail=$((fail+1)); fi
+"$ZW" batch "$T/short.csv" -o "$T/sh6.csv" >"$T/stdout" 2>"$T/stderr"; rc=$?
+if [ $rc -ne 0 ] && grep -q "the log is too short: 39 samples" "$T/sh6.csv" "$T/stderr"; then
+  echo "ok   short-batch: exit $rc, the unit's row says the log is too short"; pass=$((pass+1))
+else echo "FAIL short-batch: exit $rc"; cat "$T/stderr" "$T/sh6.csv"; fail=$((fail+1)); fi
 echo "$pass passed, $fail failed"
 [ $fail -eq 0 ]
