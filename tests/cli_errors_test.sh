@@ -166,5 +166,16 @@ else echo "FAIL short-boundary: 519 samples refused"; cat "$T/stderr"; fail=$((f
 if [ $rc -ne 0 ] && grep -q "the log is too short: 39 samples" "$T/sh6.csv" "$T/stderr"; then
   echo "ok   short-batch: exit $rc, the unit's row says the log is too short"; pass=$((pass+1))
 else echo "FAIL short-batch: exit $rc"; cat "$T/stderr" "$T/sh6.csv"; fail=$((fail+1)); fi
+# simulate follows the model's units (issue 24): a linear model's log says force [N], position [m],
+# and is read back by fit --units linear --input-column force; --units must agree with the model.
+sed 's/"delay_samples": 0/"delay_samples": 0, "units": "linear"/' "$M" > "$T/lin.json"
+expect simulate-units-disagree "--units linear, but .*table1.json is a rotary model" "$T/lin1.csv" -- "$ZW" simulate --model "$M" --units linear -o "$T/lin1.csv"
+expect simulate-units-word "--units.*'metric'|metric.*rotary.*linear" "$T/lin2.csv" -- "$ZW" simulate --model "$T/lin.json" --units metric -o "$T/lin2.csv"
+if "$ZW" simulate --model "$T/lin.json" --units linear --seconds 4 -o "$T/lin.csv" 2>"$T/stderr" \
+   && [ "$(head -1 "$T/lin.csv")" = "t,force [N],position [m]" ] \
+   && "$ZW" simulate --model "$M" --seconds 1 -o "$T/rot.csv" 2>/dev/null && [ "$(head -1 "$T/rot.csv")" = "t,torque,position" ] \
+   && "$ZW" fit "$T/lin.csv" --units linear --input-column force -o "$T/lin_fit.json" 2>"$T/stderr" && grep -q '"units": "linear"' "$T/lin_fit.json"; then
+  echo "ok   simulate-linear: header '$(head -1 "$T/lin.csv")', fitted back as a linear model"; pass=$((pass+1))
+else echo "FAIL simulate-linear: $(head -1 "$T/lin.csv" 2>/dev/null)"; cat "$T/stderr"; fail=$((fail+1)); fi
 echo "$pass passed, $fail failed"
 [ $fail -eq 0 ]
