@@ -43,6 +43,7 @@ void AddSimulateCommand(CLI::App& app) {
   AddFrictionFlags(cmd, &f->friction);
   cmd->callback([f] {
     io::CheckOutputFolder(f->out, {f->model});
+    io::CheckOutputKind(f->out, "a log (CSV, or HDF5 for .h5)", io::kCsvOrHdf5Extensions);
     // The rules of the options (rate, band, length, delay) are SimulateOptions::IsValid's.
     std::string why;
     if (!f->o.IsValid(&why)) throw InputError(WithFlags(why));

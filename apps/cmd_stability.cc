@@ -254,7 +254,9 @@ void AddBoundaryCommand(CLI::App& app) {
     // The inputs: the model and a velocity filter file (text "b:..;a:.." is no file and matches nothing).
     const std::vector<std::string> inputs = {bf->model, bf->loop.filter_coeffs};
     io::CheckOutputFolder(bf->out, inputs);
+    io::CheckOutputKind(bf->out, "a boundary CSV", io::kCsvExtensions);
     if (!bf->summary.empty()) io::CheckOutputFolder(bf->summary, inputs);
+    if (!bf->summary.empty()) io::CheckOutputKind(bf->summary, "a summary JSON", {".json"});
     if (bf->out == "-" && bf->summary == "-") {
       throw InputError("-o - and --summary - would both write to standard output, mixed beyond parsing: write one "
                        "of them to a file");
@@ -326,6 +328,7 @@ void AddFilterSweepCommand(CLI::App& app) {
   sw->add_option("-o,--output", sf->out, "CSV cutoff_hz,measure");
   sw->callback([sf] {
     if (!sf->out.empty()) io::CheckOutputFolder(sf->out, {sf->model});
+    if (!sf->out.empty()) io::CheckOutputKind(sf->out, "a CSV of cutoff_hz,measure", io::kCsvExtensions);
     io::ModelFile mf = io::ReadModelJsonFor(sf->model, "filter-sweep");  // not const: --period may convert its delay
     CheckDelay(sf->delay, "--delay");
     const double T = ResolvePeriod(sf->period, &mf);
@@ -486,6 +489,7 @@ void AddRelayCommand(CLI::App& app) {
   AddFrictionFlags(r, &rf->friction);
   r->callback([rf] {
     if (!rf->trace.empty()) io::CheckOutputFolder(rf->trace, {rf->model});
+    if (!rf->trace.empty()) io::CheckOutputKind(rf->trace, "a trace CSV", io::kCsvExtensions);
     io::ModelFile mf = io::ReadModelJsonFor(rf->model, "relay");  // not const: --period may convert its delay
     rf->o.period_s = ResolvePeriod(rf->period, &mf);
     CheckDelay(rf->o.delay_samples, "--delay");

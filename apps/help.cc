@@ -295,11 +295,19 @@ std::vector<std::string> Names(const CLI::Option& o) {
 
 }  // namespace
 
+// The rule of every output (io/atomic_file.h CheckOutputPath, CheckOutputKind, OutputFolder).
+constexpr const char* kOutputRuleText =
+    "-o FILE: a new name, or an existing file, which is replaced (as cp replaces it; its mode kept).\n"
+    "Refused (exit 2, nothing written): a folder, a device, one of the command's inputs, or a name\n"
+    "whose extension is another format's than the command writes (boundary -o model.json).\n"
+    "run -o DIR: a new or empty folder, or --force to replace its files of the same names.\n";
+
 void OrganizeHelp(CLI::App& app) {
   auto formatter = std::make_shared<TopicFormatter>();
   app.formatter(formatter);
   app.name("zwidth");  // not argv[0]: the usage line reads the same wherever it runs (the man page)
-  app.footer("Examples: in zwidth COMMAND --help; every command's help: zwidth --help-all.\n"
+  app.footer(std::string("Examples: in zwidth COMMAND --help; every command's help: zwidth --help-all.\n"
+                         "Outputs: ") + kOutputRuleText +
              "Exit status: 0 success; 2 a bad request or a bad file (nothing written); 1 a computation\n"
              "that failed on valid input; 3 (check) some object of the scene is unstable.\n");
   for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
@@ -336,7 +344,7 @@ std::string ManText(const CLI::App& app) {
     help.insert(help.find('\n') + 1, "\n");  // the description, then "Usage:" as its own paragraph
     out += "\n*" + app.get_name() + " " + sub->get_name() + "*\n" + help + Footer(sub->get_name(), true);
   }
-  return out + "\n*Exit status*\n0 success; 2 a bad request or a bad file (nothing is written); 1 a computation that "
+  return out + "\n*Outputs*\n" + kOutputRuleText + "\n*Exit status*\n0 success; 2 a bad request or a bad file (nothing is written); 1 a computation that "
                "failed on valid input (nothing is written); 3 (check) some object of the scene is unstable.\n";
 }
 

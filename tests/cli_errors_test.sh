@@ -177,5 +177,23 @@ if "$ZW" simulate --model "$T/lin.json" --units linear --seconds 4 -o "$T/lin.cs
    && "$ZW" fit "$T/lin.csv" --units linear --input-column force -o "$T/lin_fit.json" 2>"$T/stderr" && grep -q '"units": "linear"' "$T/lin_fit.json"; then
   echo "ok   simulate-linear: header '$(head -1 "$T/lin.csv")', fitted back as a linear model"; pass=$((pass+1))
 else echo "FAIL simulate-linear: $(head -1 "$T/lin.csv" 2>/dev/null)"; cat "$T/stderr"; fail=$((fail+1)); fi
+# Output names (issue 24): a name of another format's extension is refused, nothing written (the
+# existing file kept byte for byte); a folder is refused; a same-kind file is replaced, as cp does.
+cp "$M" "$T/keep.json"
+"$ZW" boundary "$M" -o "$T/keep.json" >"$T/stdout" 2>"$T/stderr"; rc=$?
+if [ $rc -eq 2 ] && cmp -s "$M" "$T/keep.json" && grep -q "writes a boundary CSV, but '.json' is the extension of another format" "$T/stderr"; then
+  echo "ok   boundary-over-model: exit 2, the model kept: $(head -c 120 "$T/stderr")"; pass=$((pass+1))
+else echo "FAIL boundary-over-model: exit $rc"; cat "$T/stderr"; fail=$((fail+1)); fi
+expect simulate-json "writes a log.*'.json' is the extension of another format.*\.csv" "$T/x.json" -- "$ZW" simulate --model "$M" --seconds 1 -o "$T/x.json"
+expect export-ext "writes the python export, but '.json'.*ending \.py" "$T/m.json" -- "$ZW" export "$M" --format python -o "$T/m.json"
+expect boundary-summary-ext "writes a summary JSON, but '.csv'" "$T/bs.csv" -- "$ZW" boundary "$M" --summary "$T/bs.csv" -o "$T/bs_b.csv"
+mkdir -p "$T/adir"
+"$ZW" boundary "$M" -o "$T/adir" >"$T/stdout" 2>"$T/stderr"; rc=$?
+[ $rc -eq 2 ] && [ -z "$(ls -A "$T/adir")" ] && { echo "ok   boundary-into-folder: exit 2, $(head -c 100 "$T/stderr")"; pass=$((pass+1)); } ||
+  { echo "FAIL boundary-into-folder: exit $rc"; cat "$T/stderr"; fail=$((fail+1)); }
+echo old > "$T/again.csv"
+if "$ZW" boundary "$M" -o "$T/again.csv" 2>/dev/null >/dev/null && head -1 "$T/again.csv" | grep -q "," && "$ZW" boundary "$M" -o "$T/noext" 2>/dev/null >/dev/null && [ -s "$T/noext" ]; then
+  echo "ok   boundary-replaces-csv: an existing CSV is replaced, a name without extension written"; pass=$((pass+1))
+else echo "FAIL boundary-replaces-csv"; fail=$((fail+1)); fi
 echo "$pass passed, $fail failed"
 [ $fail -eq 0 ]
