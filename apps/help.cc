@@ -2,12 +2,17 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <iterator>
 #include <memory>
 #include <sstream>
 #include <string>
 #include <string_view>
+#include <system_error>
 #include <vector>
+
+#include <limits.h>
+#include <unistd.h>
 
 namespace zwidth::app {
 namespace {
@@ -175,10 +180,12 @@ const OptionTopic* TopicOf(std::string_view command, const CLI::Option& opt) {
   return any;
 }
 
-// An example per command: the command line, then what it does. Paths under
-// /usr/share/zwidth are the installed Table I (datasets/phantom in the
-// source tree); tests/cli_help_test.sh runs every example, in this order, in
-// one folder (each uses the files the ones before wrote).
+// An example per command: the command line, then what it does. kDataMark
+// stands for the shipped data sets' folder (Table I), DatasetsDir(): the
+// examples name files that exist for the binary printing them, installed or
+// in the build tree. tests/cli_help_test.sh checks that every path an example
+// names exists, and runs every example, in this order, in one folder (each
+// uses the files the ones before wrote).
 struct Example {
   std::string_view command;
   std::string_view line;
@@ -187,9 +194,9 @@ struct Example {
 constexpr Example kExamples[] = {
     {"excite", "zwidth excite --kind multisine --seconds 10 --rate 1000 --fmin 1 --fmax 200 -o excitation.txt",
      "a Schroeder-phase multisine, 1-200 Hz, to play on the rig"},
-    {"simulate", "zwidth simulate --model /usr/share/zwidth/phantom/table1.json --seconds 30 -o log.h5",
+    {"simulate", "zwidth simulate --model @DATA@/phantom/table1.json --seconds 30 -o log.h5",
      "30 s of white-noise torque through the paper's PHANToM model (Table I)"},
-    {"simulate", "zwidth simulate --model /usr/share/zwidth/phantom/table1.json --seed 2 -o fresh.h5",
+    {"simulate", "zwidth simulate --model @DATA@/phantom/table1.json --seed 2 -o fresh.h5",
      "another log of the same device (another seed), to validate a fit on"},
     {"estimate", "zwidth estimate log.h5 -o frf.csv", "the frequency response, Welch H1 with a Hann window"},
     {"fit", "zwidth fit log.h5 --modes auto --delay-samples auto -o model.json",
@@ -217,6 +224,29 @@ constexpr Example kExamples[] = {
      "the same command again resumes"},
 };
 
+constexpr std::string_view kDataMark = "@DATA@";
+constexpr const char* kInstalledDataDir = "/usr/share/zwidth";  // the package's, as the man page's FILES
+
+// The shipped data sets' folder of this executable, found as its plugins are
+// (apps/plugins.cc): <bindir>/ZWIDTH_DATA_DIR_FROM_BIN, /usr/share/zwidth
+// when installed, build/share/zwidth in the build tree (CMakeLists.txt copies
+// Table I and II there). The installed folder when that holds no Table I (an
+// executable copied elsewhere) and for the man page, which describes the
+// installed package.
+std::string DatasetsDir(bool man) {
+  if (man) return kInstalledDataDir;
+  char exe[PATH_MAX];
+  const ssize_t n = ::readlink("/proc/self/exe", exe, sizeof exe - 1);
+  if (n <= 0) return kInstalledDataDir;
+  std::string dir(exe, static_cast<size_t>(n));
+  dir.erase(dir.rfind('/') + 1);
+  std::error_code ec;
+  const std::filesystem::path data =
+      std::filesystem::weakly_canonical(std::filesystem::path(dir + ZWIDTH_DATA_DIR_FROM_BIN), ec);
+  if (ec || !std::filesystem::is_regular_file(data / "phantom" / "table1.json", ec)) return kInstalledDataDir;
+  return data.string();
+}
+
 // man: for help2man, whose "Examples:" line would start the EXAMPLES section
 // and whose "$ " prefix sets a line in constant width.
 std::string Footer(std::string_view command, bool man = false) {
@@ -224,7 +254,11 @@ std::string Footer(std::string_view command, bool man = false) {
   for (const Example& e : kExamples) {
     if (e.command != command) continue;
     if (out.tellp() == 0) out << (man ? "For example:\n\n" : "Examples:\n");
-    out << (man ? "  $ " : "  ") << e.line << "\n      " << e.what << "\n";
+    std::string line(e.line);
+    if (const size_t at = line.find(kDataMark); at != std::string::npos) {
+      line.replace(at, kDataMark.size(), DatasetsDir(man));
+    }
+    out << (man ? "  $ " : "  ") << line << "\n      " << e.what << "\n";
   }
   return out.str();
 }
