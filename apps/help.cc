@@ -329,6 +329,14 @@ std::vector<std::string> Names(const CLI::Option& o) {
 
 }  // namespace
 
+// Every exit status the program uses (apps/main.cc, ExitStatus in apps/common.h,
+// io/atomic_file.cc's signal handlers), for --help and the man page.
+constexpr const char* kExitStatusText =
+    "0 success; 2 a bad request or a bad file (nothing written); 1 a computation that failed on\n"
+    "valid input (nothing written), or an internal error; 3 (check) some object of the scene is unstable;\n"
+    "4 (check) none is unstable but some is marginal, (batch) some unit failed (its row says why);\n"
+    "128+N killed by signal N (SIGINT, SIGTERM, SIGHUP, SIGPIPE, SIGXFSZ remove the temporary files first).\n";
+
 // The rule of every output (io/atomic_file.h CheckOutputPath, CheckOutputKind, OutputFolder).
 constexpr const char* kOutputRuleText =
     "-o FILE: a new name, or an existing file, which is replaced (as cp replaces it; its mode kept).\n"
@@ -341,9 +349,7 @@ void OrganizeHelp(CLI::App& app) {
   app.formatter(formatter);
   app.name("zwidth");  // not argv[0]: the usage line reads the same wherever it runs (the man page)
   app.footer(std::string("Examples: in zwidth COMMAND --help; every command's help: zwidth --help-all.\n"
-                         "Outputs: ") + kOutputRuleText +
-             "Exit status: 0 success; 2 a bad request or a bad file (nothing written); 1 a computation\n"
-             "that failed on valid input; 3 (check) some object of the scene is unstable.\n");
+                         "Outputs: ") + kOutputRuleText + "Exit status: " + kExitStatusText);
   for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
     sub->formatter(formatter);
     sub->footer(Footer(sub->get_name()));
@@ -378,8 +384,7 @@ std::string ManText(const CLI::App& app) {
     help.insert(help.find('\n') + 1, "\n");  // the description, then "Usage:" as its own paragraph
     out += "\n*" + app.get_name() + " " + sub->get_name() + "*\n" + help + Footer(sub->get_name(), true);
   }
-  return out + "\n*Outputs*\n" + kOutputRuleText + "\n*Exit status*\n0 success; 2 a bad request or a bad file (nothing is written); 1 a computation that "
-               "failed on valid input (nothing is written); 3 (check) some object of the scene is unstable.\n";
+  return out + "\n*Outputs*\n" + kOutputRuleText + "\n*Exit status*\n" + kExitStatusText;
 }
 
 std::string BashCompletion(const CLI::App& app) {

@@ -110,5 +110,22 @@ else
       bad "man page: section ZWIDTH ${c^^} lacks $(echo $missing)"
   done
 fi
+# Every exit status the sources use is listed in --help and the man page's text (issue 24):
+# main()'s returns, ExitStatus{N} of the commands, and 128+N of the signal handlers.
+codes=$( { grep -ohE 'return [0-9]+;' "$SRC/apps/main.cc" | grep -oE '[0-9]+'
+           grep -ohE 'ExitStatus\{[0-9]+\}' "$SRC"/apps/*.cc | grep -oE '[0-9]+'
+           grep -ohE 'const int code = .*;' "$SRC"/apps/cmd_stability.cc | grep -oE '\? [0-9]+' | grep -oE '[0-9]+'
+           echo 0
+           grep -q '::raise(sig)' "$SRC/io/atomic_file.cc" && echo '128+N'; } | sort -u)
+[ "$(wc -w <<<"$codes")" -ge 5 ] || bad "found too few exit statuses in the sources: $(echo $codes)"
+help_status=$("$ZW" --help | awk '/^Exit status:/{on=1} on')
+man_status=$("$ZW" --help-man | awk '/^\*Exit status\*/{on=1} on')
+for c in $codes; do
+  for where in help man; do
+    text=$help_status; [ $where = man ] && text=$man_status
+    grep -qE -- "(^|[ :;])${c/+/\\+} " <<<"$text" && ok "exit status $c in --$where" ||
+      bad "exit status $c (used by the sources) not listed in zwidth's $where text"
+  done
+done
 echo "passed $pass, failed $fail"
 [ "$fail" -eq 0 ]
