@@ -291,11 +291,12 @@ void AddBoundaryCommand(CLI::App& app) {
     if (!bf->summary.empty()) io::WriteTextAtomically(bf->summary, js.dump(2) + "\n");
     PrintBoundarySummary(t, mf, bf->delays, loops);
     for (size_t i = 0; i < bf->delays.size() && !amps.empty(); ++i) {
-      std::printf("%s\n", analysis::FrictionSummaryLine(amps, bf->delays[i], bf->amplitude).c_str());
+      std::printf("%s\n", analysis::FrictionSummaryLine(amps, bf->delays[i], bf->amplitude, model::Units(mf.linear)).c_str());
     }
     if (!amps.empty()) {
-      std::printf("friction (Coulomb %g): the CSV's A_star column at %d B values per delay (docs/friction.md)\n",
-                  friction.MeanCoulomb(), bf->amplitude.rows_per_delay);
+      std::printf("friction (Coulomb %g %s): the CSV's A_star column [%s] at %d B values per delay (docs/friction.md)\n",
+                  friction.MeanCoulomb(), model::Units(mf.linear).input, model::Units(mf.linear).position,
+                  bf->amplitude.rows_per_delay);
     }
   });
 }
@@ -544,13 +545,13 @@ void PrintObjectCheck(const analysis::ObjectCheck& c, const io::SceneObject& o, 
 // the amplitude below which friction still holds it, into *j and as a note.
 std::string FrictionNote(const model::Plant& plant, double T, int delay, const stability::LoopOptions& loop,
                          const io::SceneObject& o, const model::Friction& friction, double encoder_step,
-                         nlohmann::json* j) {
+                         const model::UnitLabels& units, nlohmann::json* j) {
   if (!(friction.MeanCoulomb() > 0.0)) return "";
   const stability::FrictionPrediction p =
       stability::PredictFriction(plant, T, delay, loop, o.K, o.B, friction, encoder_step);
   (*j)["friction"] = analysis::FrictionPredictionJson(p);
   if (p.verdict != stability::FrictionVerdict::kStableBelow) return "";
-  return "  friction holds it below " + Num(p.amplitude) + " rad" +
+  return "  friction holds it below " + Num(p.amplitude) + " " + units.position +
          (p.valid ? "" : " (outside validity: " + p.invalid_reason + ")");
 }
 
@@ -602,7 +603,7 @@ void AddCheckCommand(CLI::App& app) {
       // The friction prediction for an object the linear loop does not hold.
       const std::string note = sc.objects[i].verdict.stable ? ""
                                    : FrictionNote(mf.plant, T, cf->delay, loops[0], objs[i], friction,
-                                                  cf->encoder_step, j);
+                                                  cf->encoder_step, model::Units(mf.linear), j);
       if (!cf->json) PrintObjectCheck(sc.objects[i], objs[i], note);
     }
     out["provenance"] = io::ProvenanceJson();
