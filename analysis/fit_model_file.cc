@@ -132,17 +132,6 @@ std::optional<FrictionInput> FrictionInputFor(const std::vector<std::string>& lo
 io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::FitOptions& o,
                              const std::string& source, const FitMessages& messages, fit::FitResult* out,
                              const FrictionInput* friction, fit::FrictionFitResult* friction_out) {
-  // Too few segments at the shortest window: the library's advice (a shorter
-  // window) cannot apply; the log is too short.
-  constexpr int kShortestWindow = 16;  // WelchOptions::window_length >= 16
-  if (frf.num_averages < o.min_averages && !o.allow_few_averages && frf.window_length > 0 &&
-      frf.window_length <= kShortestWindow) {  // 0: a saved response, whose window is not known
-    throw InputError("the log is too short: " + std::to_string(frf.num_averages) + " Welch segment(s) of " +
-                     std::to_string(frf.window_length) + " samples (the shortest window), fewer than the " +
-                     std::to_string(o.min_averages) + " a per-bin std needs; record a longer log (at least " +
-                     std::to_string((o.min_averages + 1) * frf.window_length / 2) +
-                     " samples at 50 % overlap), or FitOptions::allow_few_averages to fit anyway (judged poor)");
-  }
   // Ceres' glog output (e.g. "Covariance matrix is near rank deficient") is
   // kept off the terminal; the fit is in a plugin loaded here (fit/fit_api.h).
   fit::FitResult r = fit::FitLibrary().fit_model_quiet(frf, o);

@@ -53,7 +53,8 @@ struct FitMessages {
 
 // Fits and packs the model file (std, fit metrics; every text of its "fit"
 // record in messages.words); throws ComputationError when the fit does not
-// converge, InputError for a log too short for the shortest window. With
+// converge, InputError for a response of too few segments (fit::FitModel; a log
+// too short for its window is refused before, by CheckLogLength). With
 // `friction`, the friction fit (fit::FitFriction) follows, with the window of
 // `frf` unless friction->options.welch.window_length says otherwise: its linear
 // part and friction go into the file.

@@ -111,7 +111,7 @@ nlohmann::json FrictionSummaryJson(const std::vector<FrictionAmplitudeRow>& rows
 }
 
 std::string FrictionSummaryLine(const std::vector<FrictionAmplitudeRow>& rows, int d,
-                                const FrictionAmplitudeOptions& options) {
+                                const FrictionAmplitudeOptions& options, const model::UnitLabels& units) {
   const FrictionAmplitudeRow* z = ZeroBRow(rows, d);
   char buf[320];
   if (!z || !std::isfinite(z->K)) {
@@ -120,13 +120,14 @@ std::string FrictionSummaryLine(const std::vector<FrictionAmplitudeRow>& rows, i
   }
   const stability::FrictionPrediction& p = z->prediction;
   if (p.verdict != stability::FrictionVerdict::kStableBelow) {
-    std::snprintf(buf, sizeof buf, "d = %d friction: a wall at %g K_cr(0) = %.6g: %s", d, options.k_factor, z->K,
-                  stability::ToString(p.verdict).c_str());
+    std::snprintf(buf, sizeof buf, "d = %d friction: a wall at %g K_cr(0) = %.6g %s: %s", d, options.k_factor, z->K,
+                  units.K, stability::ToString(p.verdict).c_str());
     return buf;
   }
-  std::snprintf(buf, sizeof buf, "d = %d friction: a wall at %g K_cr(0) = %.6g is stable below A* = %.4g (%.4g Hz)%s%s",
-                d, options.k_factor, z->K, p.amplitude, p.frequency_hz, p.valid ? "" : ", outside validity: ",
-                p.invalid_reason.c_str());
+  std::snprintf(buf, sizeof buf,
+                "d = %d friction: a wall at %g K_cr(0) = %.6g %s is stable below A* = %.4g %s (%.4g Hz)%s%s", d,
+                options.k_factor, z->K, units.K, p.amplitude, units.position, p.frequency_hz,
+                p.valid ? "" : ", outside validity: ", p.invalid_reason.c_str());
   return buf;
 }
 

@@ -15,6 +15,7 @@
 #include "io/stability_files.h"
 #include "model/friction.h"
 #include "model/plant.h"
+#include "model/units.h"
 #include "stability/friction_prediction.h"
 #include "stability/loop_options.h"
 
@@ -65,9 +66,10 @@ nlohmann::json FrictionAmplitudeRowJson(const FrictionAmplitudeRow& r);
 // "at_zero_B": the B = 0 row's FrictionAmplitudeRowJson (null without one).
 nlohmann::json FrictionSummaryJson(const std::vector<FrictionAmplitudeRow>& rows, int delay_samples,
                                    const model::Friction& friction, const FrictionAmplitudeOptions& options);
-// One line per delay for a terminal or a report: "d = 2 friction (F_c 0.005):
-// a wall at 1.25 K_cr(0) = 3.12 is stable below A* = 0.109 rad (7.3 Hz)".
+// One line per delay for a terminal or a report, in the model's units: "d = 2
+// friction: a wall at 1.25 K_cr(0) = 3.12 N m/rad is stable below A* = 0.109
+// rad (7.3 Hz)" (N/m and m for a linear axis).
 std::string FrictionSummaryLine(const std::vector<FrictionAmplitudeRow>& rows, int delay_samples,
-                                const FrictionAmplitudeOptions& options);
+                                const FrictionAmplitudeOptions& options, const model::UnitLabels& units);
 
 }  // namespace zwidth::analysis

@@ -8,6 +8,7 @@
 
 #include "io/frf_file.h"
 #include "model/error.h"
+#include "model/sample_period.h"
 
 namespace zwidth::analysis {
 namespace {
@@ -113,6 +114,11 @@ ident::RunSpectra StreamedRun(const std::string& path, const LogsEstimateOptions
   });
   *fingerprint = fp.value();
   NoteRead(note, *info);
+  {
+    ident::WelchOptions resolved = o;
+    if (auto_window) resolved.window_length = ident::DefaultWindowLength(info->sample_rate_hz, info->num_samples);
+    CheckLogLength(info->num_samples, info->sample_rate_hz, resolved, auto_window);
+  }
   if (auto_window) {
     const int want = ident::DefaultWindowLength(info->sample_rate_hz, info->num_samples);
     if (!est || want != o.window_length) {
@@ -173,7 +179,9 @@ std::vector<ident::RunSpectra> InMemoryRuns(const std::string& path, const LogsE
     return PeriodRuns(path, log, r, static_cast<size_t>(o.period_samples), o.welch, note);
   }
   ident::WelchOptions w = o.welch;
-  if (w.window_length == 0) w.window_length = ident::DefaultWindowLength(info->sample_rate_hz, info->num_samples);
+  const bool default_window = w.window_length == 0;
+  if (default_window) w.window_length = ident::DefaultWindowLength(info->sample_rate_hz, info->num_samples);
+  if (!o.whole_record) CheckLogLength(info->num_samples, info->sample_rate_hz, w, default_window);
   if (o.whole_record) {
     if (log.input.size() > (1u << 24)) throw InputError("a whole record is limited to 2^24 samples");
     w.window_length = static_cast<int>(log.input.size());
@@ -332,6 +340,43 @@ LogsEstimate EstimateRobustLogs(const std::vector<std::string>& paths, const Log
 }
 
 }  // namespace
+
+void CheckLogLength(size_t num_samples, double rate_hz, const ident::WelchOptions& o, bool default_window) {
+  const size_t n = static_cast<size_t>(o.window_length), step = n - o.overlap_samples();
+  const size_t segments = default_window ? 3 : 1;
+  const size_t need = n + (segments - 1) * step;
+  if (num_samples >= need) return;
+  const double T = model::SamplePeriod(rate_hz);
+  char s[700];
+  if (default_window) {
+    std::snprintf(s, sizeof s,
+                  "the log is too short: %zu samples (%.3g s at %g Hz); an estimate needs 3 Welch segments of at "
+                  "least %zu samples (%.3g s, the shortest default window at this rate: bins of %.3g Hz) at 50 %% "
+                  "overlap, so at least %zu samples (%.3g s). Record a longer log: at least %.3g s, and %.3g s or "
+                  "more for the default %d-sample window (bins of %.3g Hz)",
+                  num_samples, num_samples * T, rate_hz, n, n * T, rate_hz / n, need, need * T, need * T,
+                  2 * ident::DefaultWindowLength(rate_hz, size_t{1} << 40) * T,
+                  ident::DefaultWindowLength(rate_hz, size_t{1} << 40),
+                  rate_hz / ident::DefaultWindowLength(rate_hz, size_t{1} << 40));
+  } else {
+    // The longest power-of-two windows that fit: one segment, and three.
+    size_t one = 16, three = 16;
+    while (one * 2 <= num_samples) one *= 2;
+    while (three * 4 <= num_samples) three *= 2;
+    std::string shorter = "record a longer log";
+    if (num_samples >= 16) {
+      shorter = "use WelchOptions::window_length " + std::to_string(one) + " or less";
+      if (num_samples >= 32) shorter += " (" + std::to_string(three) + " or less for the 3 segments a per-bin std needs)";
+    }
+    std::snprintf(s, sizeof s,
+                  "the log is too short: %zu samples (%.3g s at %g Hz), fewer than one window of %zu samples "
+                  "(WelchOptions::window_length, %.3g s): record a longer log (at least %zu samples, %.3g s; %zu "
+                  "samples, %.3g s, for the 3 segments a per-bin std needs), or %s",
+                  num_samples, num_samples * T, rate_hz, n, n * T, n, n * T, n + 2 * step, (n + 2 * step) * T,
+                  shorter.c_str());
+  }
+  throw InputError(s);
+}
 
 void ChooseRobust(LogsEstimateOptions* o, bool robust, int transient_periods) {
   if (!robust) {

@@ -75,6 +75,17 @@ using EstimateNote = std::function<void(const std::string& line)>;
 // and for a transient_periods other than the default without the robust method.
 void ChooseRobust(LogsEstimateOptions* options, bool robust, int transient_periods);
 
+// The one rule of how long a log must be for a Welch estimate (the CLI's
+// estimate, fit, run, batch units; Python's estimate, fit and run): with the
+// default window (default_window: o.window_length is DefaultWindowLength's),
+// 3 segments of 50 % overlap of at least ident::ShortestDefaultWindow, the
+// FitOptions::min_averages a per-bin std needs; with a window given, one
+// segment (fewer than 3 are the fit's to refuse or allow,
+// FitOptions::allow_few_averages). o: the resolved options (window_length >
+// 0). Throws InputError saying how long the log is and must be, in samples
+// and seconds, and what to do; called before the spectra are computed.
+void CheckLogLength(size_t num_samples, double rate_hz, const ident::WelchOptions& o, bool default_window);
+
 // Throws InputError naming the file first for a log that cannot be read or
 // options that do not go together, and for the same samples given twice (a
 // file, its copy or a link: averaged as two runs they would shrink every std

@@ -159,12 +159,15 @@ void Batch(BatchFlags& b, const CLI::App* cmd) {
     inputs.push_back(e.path);
   }
   io::CheckOutputPath(b.table, inputs);
+  io::CheckOutputKind(b.table, "a table (CSV, or HDF5 for .h5)", io::kCsvOrHdf5Extensions);
   if (!b.unit_folders.empty() && !std::filesystem::is_directory(b.unit_folders)) {
     throw InputError("--unit-folders " + io::Printable(b.unit_folders) + ": not a folder; create it first");
   }
   for (const std::string* out : {&b.population, &b.fleet_report}) {
     if (out->empty()) continue;
     io::CheckOutputPath(*out, inputs);
+    if (out == &b.population) io::CheckOutputKind(*out, "a population table (CSV, or HDF5 for .h5)", io::kCsvOrHdf5Extensions);
+    else io::CheckOutputKind(*out, "an HTML report", {".html", ".htm"});
     if (*out == b.table) throw InputError(io::Printable(*out) + " is named by -o and by --population or --fleet-report; give each its own file");
   }
   if (!b.population.empty() && b.population == b.fleet_report) {

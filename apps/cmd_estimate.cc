@@ -25,10 +25,12 @@ void AddEstimateCommand(CLI::App& app) {
   AddEstimateFlags(cmd, &f->est);
   cmd->callback([f] {
     io::CheckOutputFolder(f->out, f->logs);
+    io::CheckOutputKind(f->out, "a frequency response (CSV, or HDF5 for .h5)", io::kCsvOrHdf5Extensions);
     if (!f->coherences.empty()) {
       std::vector<std::string> inputs = f->logs;
       inputs.push_back(f->out);  // an existing file named twice
       io::CheckOutputFolder(f->coherences, inputs);
+      io::CheckOutputKind(f->coherences, "a coherence CSV", io::kCsvExtensions);
       std::error_code e1, e2;
       if (std::filesystem::weakly_canonical(f->coherences, e1) == std::filesystem::weakly_canonical(f->out, e2) &&
           !e1 && !e2) {

@@ -33,6 +33,7 @@ void AddExciteCommand(CLI::App& app) {
       throw InputError("--kind '" + f->kind.substr(0, 20) + "' is not one of noise, multisine, chirp");
     }
     io::CheckOutputFolder(f->out);
+    io::CheckOutputKind(f->out, "a one-column text log", io::kCsvExtensions);
     const ident::Excitation e = ident::MakeExcitation(f->o);
     std::ostringstream os;
     os.precision(17);

@@ -36,6 +36,7 @@ void AddFitCommands(CLI::App& app) {
     std::vector<std::string> read = f->inputs;
     if (!f->init.empty()) read.push_back(f->init);
     io::CheckOutputFolder(f->out, read);
+    io::CheckOutputKind(f->out, "a model JSON", {".json"});
     f->fit.Resolve(f->est.welch.fmin_hz, f->est.welch.fmax_hz);
     const fit::FrictionModel friction_model = analysis::FrictionModelNamed(f->friction);
     const bool linear = LinearUnits(f->units);

@@ -254,7 +254,9 @@ void AddBoundaryCommand(CLI::App& app) {
     // The inputs: the model and a velocity filter file (text "b:..;a:.." is no file and matches nothing).
     const std::vector<std::string> inputs = {bf->model, bf->loop.filter_coeffs};
     io::CheckOutputFolder(bf->out, inputs);
+    io::CheckOutputKind(bf->out, "a boundary CSV", io::kCsvExtensions);
     if (!bf->summary.empty()) io::CheckOutputFolder(bf->summary, inputs);
+    if (!bf->summary.empty()) io::CheckOutputKind(bf->summary, "a summary JSON", {".json"});
     if (bf->out == "-" && bf->summary == "-") {
       throw InputError("-o - and --summary - would both write to standard output, mixed beyond parsing: write one "
                        "of them to a file");
@@ -289,11 +291,12 @@ void AddBoundaryCommand(CLI::App& app) {
     if (!bf->summary.empty()) io::WriteTextAtomically(bf->summary, js.dump(2) + "\n");
     PrintBoundarySummary(t, mf, bf->delays, loops);
     for (size_t i = 0; i < bf->delays.size() && !amps.empty(); ++i) {
-      std::printf("%s\n", analysis::FrictionSummaryLine(amps, bf->delays[i], bf->amplitude).c_str());
+      std::printf("%s\n", analysis::FrictionSummaryLine(amps, bf->delays[i], bf->amplitude, model::Units(mf.linear)).c_str());
     }
     if (!amps.empty()) {
-      std::printf("friction (Coulomb %g): the CSV's A_star column at %d B values per delay (docs/friction.md)\n",
-                  friction.MeanCoulomb(), bf->amplitude.rows_per_delay);
+      std::printf("friction (Coulomb %g %s): the CSV's A_star column [%s] at %d B values per delay (docs/friction.md)\n",
+                  friction.MeanCoulomb(), model::Units(mf.linear).input, model::Units(mf.linear).position,
+                  bf->amplitude.rows_per_delay);
     }
   });
 }
@@ -326,6 +329,7 @@ void AddFilterSweepCommand(CLI::App& app) {
   sw->add_option("-o,--output", sf->out, "CSV cutoff_hz,measure");
   sw->callback([sf] {
     if (!sf->out.empty()) io::CheckOutputFolder(sf->out, {sf->model});
+    if (!sf->out.empty()) io::CheckOutputKind(sf->out, "a CSV of cutoff_hz,measure", io::kCsvExtensions);
     io::ModelFile mf = io::ReadModelJsonFor(sf->model, "filter-sweep");  // not const: --period may convert its delay
     CheckDelay(sf->delay, "--delay");
     const double T = ResolvePeriod(sf->period, &mf);
@@ -486,6 +490,7 @@ void AddRelayCommand(CLI::App& app) {
   AddFrictionFlags(r, &rf->friction);
   r->callback([rf] {
     if (!rf->trace.empty()) io::CheckOutputFolder(rf->trace, {rf->model});
+    if (!rf->trace.empty()) io::CheckOutputKind(rf->trace, "a trace CSV", io::kCsvExtensions);
     io::ModelFile mf = io::ReadModelJsonFor(rf->model, "relay");  // not const: --period may convert its delay
     rf->o.period_s = ResolvePeriod(rf->period, &mf);
     CheckDelay(rf->o.delay_samples, "--delay");
@@ -540,13 +545,13 @@ void PrintObjectCheck(const analysis::ObjectCheck& c, const io::SceneObject& o, 
 // the amplitude below which friction still holds it, into *j and as a note.
 std::string FrictionNote(const model::Plant& plant, double T, int delay, const stability::LoopOptions& loop,
                          const io::SceneObject& o, const model::Friction& friction, double encoder_step,
-                         nlohmann::json* j) {
+                         const model::UnitLabels& units, nlohmann::json* j) {
   if (!(friction.MeanCoulomb() > 0.0)) return "";
   const stability::FrictionPrediction p =
       stability::PredictFriction(plant, T, delay, loop, o.K, o.B, friction, encoder_step);
   (*j)["friction"] = analysis::FrictionPredictionJson(p);
   if (p.verdict != stability::FrictionVerdict::kStableBelow) return "";
-  return "  friction holds it below " + Num(p.amplitude) + " rad" +
+  return "  friction holds it below " + Num(p.amplitude) + " " + units.position +
          (p.valid ? "" : " (outside validity: " + p.invalid_reason + ")");
 }
 
@@ -598,7 +603,7 @@ void AddCheckCommand(CLI::App& app) {
       // The friction prediction for an object the linear loop does not hold.
       const std::string note = sc.objects[i].verdict.stable ? ""
                                    : FrictionNote(mf.plant, T, cf->delay, loops[0], objs[i], friction,
-                                                  cf->encoder_step, j);
+                                                  cf->encoder_step, model::Units(mf.linear), j);
       if (!cf->json) PrintObjectCheck(sc.objects[i], objs[i], note);
     }
     out["provenance"] = io::ProvenanceJson();

@@ -54,7 +54,9 @@ void AddValidateCommand(CLI::App& app) {
   cmd->footer("Example: zwidth validate model.json fresh_log.h5 -o validation.json");
   cmd->callback([f] {
     if (!f->out.empty()) io::CheckOutputFolder(f->out, {f->model, f->log});
+    if (!f->out.empty()) io::CheckOutputKind(f->out, "the result as JSON", {".json"});
     if (!f->trace.empty()) io::CheckOutputFolder(f->trace, {f->model, f->log});
+    if (!f->trace.empty()) io::CheckOutputKind(f->trace, "a trace CSV", io::kCsvExtensions);
     const io::ModelFile mf = io::ReadModelJsonFor(f->model, "validate");
     const io::Log log = io::ReadLog(f->log, f->select);
     const analysis::ValidationResult r = analysis::Validate(mf, log, f->options);

@@ -104,6 +104,7 @@ void AddWallCommand(CLI::App& app) {
   AddFrictionFlags(w, &f->friction);
   w->callback([f] {
     if (!f->trace.empty()) io::CheckOutputFolder(f->trace, {f->model});
+    if (!f->trace.empty()) io::CheckOutputKind(f->trace, "a trace CSV", io::kCsvExtensions);
     io::ModelFile mf = io::ReadModelJsonFor(f->model, "wall");  // not const: --period may convert its delay
     f->o.period_s = ResolvePeriod(f->period, &mf);
     const std::vector<stability::LoopOptions> loops = ResolveLoops(f->loop, f->o.period_s);

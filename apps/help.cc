@@ -2,12 +2,17 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <iterator>
 #include <memory>
 #include <sstream>
 #include <string>
 #include <string_view>
+#include <system_error>
 #include <vector>
+
+#include <limits.h>
+#include <unistd.h>
 
 namespace zwidth::app {
 namespace {
@@ -175,10 +180,12 @@ const OptionTopic* TopicOf(std::string_view command, const CLI::Option& opt) {
   return any;
 }
 
-// An example per command: the command line, then what it does. Paths under
-// /usr/share/zwidth are the installed Table I (datasets/phantom in the
-// source tree); tests/cli_help_test.sh runs every example, in this order, in
-// one folder (each uses the files the ones before wrote).
+// An example per command: the command line, then what it does. kDataMark
+// stands for the shipped data sets' folder (Table I), DatasetsDir(): the
+// examples name files that exist for the binary printing them, installed or
+// in the build tree. tests/cli_help_test.sh checks that every path an example
+// names exists, and runs every example, in this order, in one folder (each
+// uses the files the ones before wrote).
 struct Example {
   std::string_view command;
   std::string_view line;
@@ -187,9 +194,9 @@ struct Example {
 constexpr Example kExamples[] = {
     {"excite", "zwidth excite --kind multisine --seconds 10 --rate 1000 --fmin 1 --fmax 200 -o excitation.txt",
      "a Schroeder-phase multisine, 1-200 Hz, to play on the rig"},
-    {"simulate", "zwidth simulate --model /usr/share/zwidth/phantom/table1.json --seconds 30 -o log.h5",
+    {"simulate", "zwidth simulate --model @DATA@/phantom/table1.json --seconds 30 -o log.h5",
      "30 s of white-noise torque through the paper's PHANToM model (Table I)"},
-    {"simulate", "zwidth simulate --model /usr/share/zwidth/phantom/table1.json --seed 2 -o fresh.h5",
+    {"simulate", "zwidth simulate --model @DATA@/phantom/table1.json --seed 2 -o fresh.h5",
      "another log of the same device (another seed), to validate a fit on"},
     {"estimate", "zwidth estimate log.h5 -o frf.csv", "the frequency response, Welch H1 with a Hann window"},
     {"fit", "zwidth fit log.h5 --modes auto --delay-samples auto -o model.json",
@@ -217,6 +224,29 @@ constexpr Example kExamples[] = {
      "the same command again resumes"},
 };
 
+constexpr std::string_view kDataMark = "@DATA@";
+constexpr const char* kInstalledDataDir = "/usr/share/zwidth";  // the package's, as the man page's FILES
+
+// The shipped data sets' folder of this executable, found as its plugins are
+// (apps/plugins.cc): <bindir>/ZWIDTH_DATA_DIR_FROM_BIN, /usr/share/zwidth
+// when installed, build/share/zwidth in the build tree (CMakeLists.txt copies
+// Table I and II there). The installed folder when that holds no Table I (an
+// executable copied elsewhere) and for the man page, which describes the
+// installed package.
+std::string DatasetsDir(bool man) {
+  if (man) return kInstalledDataDir;
+  char exe[PATH_MAX];
+  const ssize_t n = ::readlink("/proc/self/exe", exe, sizeof exe - 1);
+  if (n <= 0) return kInstalledDataDir;
+  std::string dir(exe, static_cast<size_t>(n));
+  dir.erase(dir.rfind('/') + 1);
+  std::error_code ec;
+  const std::filesystem::path data =
+      std::filesystem::weakly_canonical(std::filesystem::path(dir + ZWIDTH_DATA_DIR_FROM_BIN), ec);
+  if (ec || !std::filesystem::is_regular_file(data / "phantom" / "table1.json", ec)) return kInstalledDataDir;
+  return data.string();
+}
+
 // man: for help2man, whose "Examples:" line would start the EXAMPLES section
 // and whose "$ " prefix sets a line in constant width.
 std::string Footer(std::string_view command, bool man = false) {
@@ -224,7 +254,11 @@ std::string Footer(std::string_view command, bool man = false) {
   for (const Example& e : kExamples) {
     if (e.command != command) continue;
     if (out.tellp() == 0) out << (man ? "For example:\n\n" : "Examples:\n");
-    out << (man ? "  $ " : "  ") << e.line << "\n      " << e.what << "\n";
+    std::string line(e.line);
+    if (const size_t at = line.find(kDataMark); at != std::string::npos) {
+      line.replace(at, kDataMark.size(), DatasetsDir(man));
+    }
+    out << (man ? "  $ " : "  ") << line << "\n      " << e.what << "\n";
   }
   return out.str();
 }
@@ -295,13 +329,27 @@ std::vector<std::string> Names(const CLI::Option& o) {
 
 }  // namespace
 
+// Every exit status the program uses (apps/main.cc, ExitStatus in apps/common.h,
+// io/atomic_file.cc's signal handlers), for --help and the man page.
+constexpr const char* kExitStatusText =
+    "0 success; 2 a bad request or a bad file (nothing written); 1 a computation that failed on\n"
+    "valid input (nothing written), or an internal error; 3 (check) some object of the scene is unstable;\n"
+    "4 (check) none is unstable but some is marginal, (batch) some unit failed (its row says why);\n"
+    "128+N killed by signal N (SIGINT, SIGTERM, SIGHUP, SIGPIPE, SIGXFSZ remove the temporary files first).\n";
+
+// The rule of every output (io/atomic_file.h CheckOutputPath, CheckOutputKind, OutputFolder).
+constexpr const char* kOutputRuleText =
+    "-o FILE: a new name, or an existing file, which is replaced (as cp replaces it; its mode kept).\n"
+    "Refused (exit 2, nothing written): a folder, a device, one of the command's inputs, or a name\n"
+    "whose extension is another format's than the command writes (boundary -o model.json).\n"
+    "run -o DIR: a new or empty folder, or --force to replace its files of the same names.\n";
+
 void OrganizeHelp(CLI::App& app) {
   auto formatter = std::make_shared<TopicFormatter>();
   app.formatter(formatter);
   app.name("zwidth");  // not argv[0]: the usage line reads the same wherever it runs (the man page)
-  app.footer("Examples: in zwidth COMMAND --help; every command's help: zwidth --help-all.\n"
-             "Exit status: 0 success; 2 a bad request or a bad file (nothing written); 1 a computation\n"
-             "that failed on valid input; 3 (check) some object of the scene is unstable.\n");
+  app.footer(std::string("Examples: in zwidth COMMAND --help; every command's help: zwidth --help-all.\n"
+                         "Outputs: ") + kOutputRuleText + "Exit status: " + kExitStatusText);
   for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
     sub->formatter(formatter);
     sub->footer(Footer(sub->get_name()));
@@ -336,8 +384,7 @@ std::string ManText(const CLI::App& app) {
     help.insert(help.find('\n') + 1, "\n");  // the description, then "Usage:" as its own paragraph
     out += "\n*" + app.get_name() + " " + sub->get_name() + "*\n" + help + Footer(sub->get_name(), true);
   }
-  return out + "\n*Exit status*\n0 success; 2 a bad request or a bad file (nothing is written); 1 a computation that "
-               "failed on valid input (nothing is written); 3 (check) some object of the scene is unstable.\n";
+  return out + "\n*Outputs*\n" + kOutputRuleText + "\n*Exit status*\n" + kExitStatusText;
 }
 
 std::string BashCompletion(const CLI::App& app) {

@@ -1,6 +1,7 @@
 // zwidth: from a haptic device's logs to a validated model and its Z-width.
 // Exit codes: 0 success; 2 bad request or bad file (nothing written);
-// 1 a computation that failed (e.g. a fit that did not converge).
+// 1 a computation that failed (e.g. a fit that did not converge); 3, 4 from
+// ExitStatus (check, batch); the full list is apps/help.cc kExitStatusText.
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>

@@ -477,6 +477,14 @@ void CheckInput(const ident::FrequencyResponse& frf, const FitOptions& o) {
   if (!o.IsValid(&why)) throw InputError(why);
   if (frf.f_hz.empty()) throw InputError("the frequency response has no bins");
   if (!(frf.sample_rate_hz > 0.0)) throw InputError("the frequency response has no sample rate");
+  if (frf.num_averages < o.min_averages && !o.allow_few_averages && frf.window_length > 0 &&
+      frf.window_length <= 16) {  // the shortest window: a shorter one cannot help; the log is too short
+    throw InputError("the log is too short: " + std::to_string(frf.num_averages) + " Welch segment(s) of " +
+                     std::to_string(frf.window_length) + " samples (the shortest window), fewer than the " +
+                     std::to_string(o.min_averages) + " a per-bin std needs; record a longer log (at least " +
+                     std::to_string((o.min_averages + 1) * frf.window_length / 2) +
+                     " samples at 50 % overlap), or FitOptions::allow_few_averages to fit anyway (judged poor)");
+  }
   if (frf.num_averages < o.min_averages && !o.allow_few_averages) {
     int w = 16;
     while (w * 2 <= frf.window_length / 4) w *= 2;

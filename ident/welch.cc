@@ -303,10 +303,23 @@ FrequencyResponse WelchEstimator::Finish(double fs) const {
   return r;
 }
 
+namespace {
+
+// The power of two nearest (in ratio) to `seconds` of samples at rate_hz, in [16, 2^24].
+int PowerOfTwoWindow(double rate_hz, double seconds) {
+  const double e = std::isfinite(rate_hz) && rate_hz > 0 ? std::round(std::log2(rate_hz * seconds))
+                                                         : std::round(std::log2(1000.0 * seconds));
+  return 1 << static_cast<int>(std::clamp(e, 4.0, 24.0));
+}
+
+}  // namespace
+
+int ShortestDefaultWindow(double rate_hz) { return PowerOfTwoWindow(rate_hz, 0.256); }
+
 int DefaultWindowLength(double rate_hz, size_t num_samples) {
-  const double e = std::isfinite(rate_hz) && rate_hz > 0 ? std::round(std::log2(rate_hz * 4.096)) : 12.0;
-  int n = 1 << static_cast<int>(std::clamp(e, 4.0, 24.0));
-  while (n > 16 && 2 * static_cast<size_t>(n) > num_samples) n /= 2;
+  int n = PowerOfTwoWindow(rate_hz, 4.096);
+  const int shortest = ShortestDefaultWindow(rate_hz);
+  while (n > shortest && 2 * static_cast<size_t>(n) > num_samples) n /= 2;
   return n;
 }
 

@@ -35,8 +35,19 @@ std::vector<double> MakeWindow(Window w, int n);
 // halved until the log holds at least 3 segments of 50 % overlap (n >= 2 N,
 // the fit's FitOptions::min_averages), and at least 16. The resolution a mode's
 // bandwidth needs is in Hz, not in samples: at 5 kHz 4096 samples (0.82 s)
-// bias the fitted mass by -0.3 % (2.4 std), 16384 by -0.06 %.
+// bias the fitted mass by -0.3 % (2.4 std), 16384 by -0.06 %. Never below
+// ShortestDefaultWindow(rate_hz): a log too short for 3 segments of that is
+// refused by analysis::CheckLogLength, not estimated with a window that
+// resolves nothing.
 int DefaultWindowLength(double rate_hz, size_t num_samples);
+
+// The shortest window DefaultWindowLength takes at rate_hz: the power of two
+// nearest (in ratio) to 0.256 s of samples (1/16 of the default's 4.096 s:
+// bins of about 3.9 Hz), and at least 16. Shorter windows leave no bin below
+// the first resonance of a haptic device (tens of Hz), where the rigid body's
+// mass and damping are read: a 39 ms log at 1 kHz (16-sample windows, bins of
+// 62.5 Hz) was fitted to a meaningless model and reported (issue 24).
+int ShortestDefaultWindow(double rate_hz);
 
 struct WelchOptions {
   // Samples per segment, >= 16. The CLI's default is DefaultWindowLength.

@@ -323,6 +323,24 @@ void CheckOutputPath(const std::string& path, const std::vector<std::string>& in
   CheckNotAnInput(path, dest, inputs);
 }
 
+void CheckOutputKind(const std::string& path, const std::string& what, const std::vector<std::string>& extensions) {
+  if (path == "-") return;
+  const std::string name = std::filesystem::path(path).filename().string();
+  const size_t dot = name.rfind('.');
+  if (dot == std::string::npos || dot == 0) return;  // no extension (a dot file is a name)
+  std::string ext = name.substr(dot);
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  for (const std::string& e : extensions) if (ext == e) return;
+  bool known = false;
+  for (const char* e : kKnownOutputExtensions) known = known || ext == e;
+  if (!known) return;
+  std::string accepted;
+  for (const std::string& e : extensions) accepted += (accepted.empty() ? "" : ", ") + e;
+  throw InputError("output '" + path + "': this command writes " + what + ", but '" + ext.substr(0, 20) +
+                   "' is the extension of another format; nothing was written. Give a name ending " + accepted +
+                   " (or with no extension)");
+}
+
 void WriteAtomically(const std::string& path, const std::function<void(const std::string&)>& write) {
   if (path.empty()) throw InputError("output path is empty");
   if (path == "-") {

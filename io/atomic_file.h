@@ -39,6 +39,25 @@ inline void CheckOutputFolder(const std::string& path, const std::vector<std::st
   CheckOutputPath(path, inputs);
 }
 
+// The rule of a single-file output's name (every `-o FILE` of the CLI, and
+// Python's writers): an existing regular file is replaced, as cp replaces it
+// (its mode kept); a folder or device is refused by CheckOutputPath; and a name
+// whose extension is that of another format zwidth knows (.json, .csv, .h5,
+// .mat, .m, .py, .html, ...: kKnownOutputExtensions) than the ones the output is
+// written in (`extensions`, e.g. {".csv", ".txt", ".dat"}) is refused, so that
+// `boundary -o model.json` cannot write a CSV over a model. No extension, or
+// one zwidth does not know, is written in the output's format. `what` names the
+// output ("a boundary CSV"). Throws InputError naming the path, the extension
+// and the names accepted; "-" (standard output) passes.
+void CheckOutputKind(const std::string& path, const std::string& what, const std::vector<std::string>& extensions);
+// The extensions of a text table (CSV) output and of a log or response written as CSV or, by its extension, HDF5.
+inline const std::vector<std::string> kCsvExtensions = {".csv", ".txt", ".dat"};
+inline const std::vector<std::string> kCsvOrHdf5Extensions = {".csv", ".txt", ".dat", ".h5", ".hdf5", ".he5"};
+// The extensions CheckOutputKind knows as some format's (lower case).
+inline constexpr const char* kKnownOutputExtensions[] = {
+    ".json", ".csv", ".tsv", ".txt", ".dat", ".h5", ".hdf5", ".he5", ".mat", ".m", ".py", ".html", ".htm",
+    ".gp", ".svg", ".png", ".pdf", ".xml", ".yaml", ".yml", ".md"};
+
 // Checks `path` (CheckOutputPath), calls write(tmp_path) and renames tmp_path
 // onto the destination. tmp_path exists (empty) when write() is called. On any
 // exception the temporary file is removed and the exception propagates; an

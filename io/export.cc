@@ -289,8 +289,23 @@ bool FromString(const std::string& s, ExportFormat* f) {
   return false;
 }
 
+std::vector<std::string> ExportExtensions(ExportFormat f) {
+  switch (f) {
+    case ExportFormat::kJson:
+    case ExportFormat::kStateSpace: return {".json"};
+    case ExportFormat::kHdf5: return {".h5", ".hdf5", ".he5"};
+    case ExportFormat::kMatlab: return {".m"};
+    case ExportFormat::kPython: return {".py"};
+    case ExportFormat::kMat:
+    case ExportFormat::kMat73: return {".mat"};
+  }
+  return {};
+}
+
 void ExportModel(const ModelFile& mf, ExportFormat fmt, double T, const std::string& path,
                  const ident::FrequencyResponse* response) {
+  // A name of another format's extension (export --format python -o model.json) is refused.
+  CheckOutputKind(path, "the " + ToString(fmt) + " export", ExportExtensions(fmt));
   mf.plant.Validate();
   if (response && fmt != ExportFormat::kMat && fmt != ExportFormat::kMat73) {
     throw InputError("a measured response is exported only in the .mat formats (the formats mat and mat73), not " +

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "ident/welch.h"
 #include "io/model_json.h"
@@ -13,6 +14,10 @@ namespace zwidth::io {
 enum class ExportFormat { kJson, kHdf5, kMatlab, kPython, kStateSpace, kMat, kMat73 };
 std::string ToString(ExportFormat f);
 bool FromString(const std::string& s, ExportFormat* f);
+
+// The extensions of a file in `format` (io::CheckOutputKind): .json (json,
+// statespace), .h5/.hdf5/.he5, .m, .py, .mat (mat, mat73).
+std::vector<std::string> ExportExtensions(ExportFormat format);
 
 // period_s <= 0: no discrete model (MATLAB/Python define only G). response:
 // a measured frequency response to store beside the model (f, H, H_std,

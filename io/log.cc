@@ -275,14 +275,14 @@ void CheckLogSamples(double rate, const std::vector<double>& u, const std::vecto
 }
 
 void WriteLog(const std::string& path, double rate, const std::vector<double>& u,
-              const std::vector<double>& y) {
+              const std::vector<double>& y, bool linear) {
   CheckLogSamples(rate, u, y, path);
   // By extension: the file is about to be (re)written.
   const bool h5 = HasExtension(path, {".h5", ".hdf5", ".he5"});
   if (h5) {
     WriteHdf5Atomically(path, [&](const Hdf5Api& api, const std::string& tmp) { api.write_hdf5_log(tmp, rate, u, y); });
   } else {
-    WriteAtomically(path, [&](const std::string& tmp) { WriteCsvLog(tmp, rate, u, y); });
+    WriteAtomically(path, [&](const std::string& tmp) { WriteCsvLog(tmp, rate, u, y, linear); });
   }
 }
 

@@ -127,8 +127,11 @@ void CheckLogSamples(double sample_rate_hz, const std::vector<double>& input, co
                      const std::string& source);
 
 // Writers (atomic), after CheckLogSamples: never a file the readers refuse.
-// time may be empty: then t = k / sample_rate_hz.
+// time may be empty: then t = k / sample_rate_hz. linear: a linear axis's log
+// (force [N], position [m]); a text log's header then says so
+// ("t,force [N],position [m]", read back with LogSelect::input_column "force");
+// rotary: "t,torque,position".
 void WriteLog(const std::string& path, double sample_rate_hz,
-              const std::vector<double>& input, const std::vector<double>& output);
+              const std::vector<double>& input, const std::vector<double>& output, bool linear = false);
 
 }  // namespace zwidth::io

@@ -133,7 +133,8 @@ double TimeScale(const std::string& unit);
 LogInfo StreamCsv(const std::string& path, const LogSelect& sel, const LogSink& sink);
 LogInfo StreamMat(const std::string& path, const LogSelect& sel, const LogSink& sink);
 LogInfo StreamHdf5(const std::string& path, const LogSelect& sel, const LogSink& sink);
-void WriteCsvLog(const std::string& tmp, double rate, const std::vector<double>& u, const std::vector<double>& y);
+void WriteCsvLog(const std::string& tmp, double rate, const std::vector<double>& u, const std::vector<double>& y,
+                 bool linear = false);
 void WriteHdf5Log(const std::string& tmp, double rate, const std::vector<double>& u, const std::vector<double>& y);
 
 // A binary log parsed in a child process (io/isolated.h): `parse` runs there and its

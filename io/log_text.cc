@@ -655,10 +655,10 @@ LogInfo StreamCsv(const std::string& path, const LogSelect& sel, const LogSink& 
 }
 
 void WriteCsvLog(const std::string& tmp, double rate, const std::vector<double>& u,
-                 const std::vector<double>& y) {
+                 const std::vector<double>& y, bool linear) {
   std::FILE* f = std::fopen(tmp.c_str(), "wb");
   if (!f) throw InputError("cannot create '" + tmp + "'");
-  std::fputs("t,torque,position\n", f);
+  std::fputs(linear ? "t,force [N],position [m]\n" : "t,torque,position\n", f);
   std::string line;  // to_chars: no decimal comma under the host's locale (Python's locale.setlocale)
   for (size_t k = 0; k < u.size(); ++k) {
     line.clear();

@@ -45,7 +45,9 @@ ident::WelchOptions WelchFrom(int window_length, double overlap, const std::stri
 ident::FrequencyResponse Estimate(const std::vector<double>& u, const std::vector<double>& y,
                                   double sample_rate_hz, const ident::WelchOptions& o) {
   ident::WelchOptions w = o;  // window_length 0: the CLI's rule of the rate and length
-  if (w.window_length == 0) w.window_length = ident::DefaultWindowLength(sample_rate_hz, u.size());
+  const bool default_window = w.window_length == 0;
+  if (default_window) w.window_length = ident::DefaultWindowLength(sample_rate_hz, u.size());
+  analysis::CheckLogLength(u.size(), sample_rate_hz, w, default_window);  // the CLI's length rule
   py::gil_scoped_release release;
   // Pushed in one call: the estimator's result does not depend on how the
   // samples are chunked, so this equals the CLI's streaming pass.

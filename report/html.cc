@@ -191,7 +191,7 @@ void ZWidthSection(const analysis::RunAnalysis& a, std::ostringstream& h) {
       << "Z-width a wall is still stable for oscillations below the describing-function amplitude A* "
       << "(docs/friction.md; boundary.csv's A_star column):</p>\n<ul>\n";
     for (int d : st.delays) {
-      h << "<li>" << Html(analysis::FrictionSummaryLine(a.friction_amplitudes, d, a.friction_options)) << "</li>\n";
+      h << "<li>" << Html(analysis::FrictionSummaryLine(a.friction_amplitudes, d, a.friction_options, model::Units(a.options.linear))) << "</li>\n";
     }
     h << "</ul>\n";
   }

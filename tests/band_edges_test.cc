@@ -90,7 +90,7 @@ std::string Describe(const FitResult& r) {
 
 // The default window against a brute force over the powers of two: the one
 // nearest (in ratio) to 4.096 s of samples, then the longest that leaves 3
-// segments of 50 % overlap.
+// segments of 50 % overlap, but not below the one nearest 0.256 s.
 TEST(DefaultWindow, FollowsTheRateAndTheLength) {
   EXPECT_EQ(ident::DefaultWindowLength(1000, 30000), 4096);     // the paper's, on the shipped 30 s log
   EXPECT_EQ(ident::DefaultWindowLength(5000, 150000), 16384);   // 3.3 s at 5 kHz
@@ -100,8 +100,13 @@ TEST(DefaultWindow, FollowsTheRateAndTheLength) {
       for (int c = 16; c <= (1 << 24); c *= 2) {
         if (std::abs(std::log(c / (rate * 4.096))) < std::abs(std::log(nearest / (rate * 4.096)))) nearest = c;
       }
-      int want = 16;
-      for (int c = 16; c <= nearest; c *= 2) {
+      int shortest = 16;  // the power of two nearest 0.256 s, the default's floor
+      for (int c = 16; c <= (1 << 24); c *= 2) {
+        if (std::abs(std::log(c / (rate * 0.256))) < std::abs(std::log(shortest / (rate * 0.256)))) shortest = c;
+      }
+      EXPECT_EQ(ident::ShortestDefaultWindow(rate), shortest) << rate << " Hz";
+      int want = shortest;
+      for (int c = shortest; c <= nearest; c *= 2) {
         const size_t segments = n >= static_cast<size_t>(c) ? (n - c) / (c / 2) + 1 : 0;
         if (segments >= 3) want = c;
       }

@@ -148,5 +148,52 @@ expect seed-negative "--seed: must be a whole number.*got '-1'" "$T/s1.h5" -- "$
 expect seed-overflow "--seed: must be a whole number.*18446744073709551616" "$T/s2.h5" -- "$ZW" simulate --model "$M" --seed 18446744073709551616 --seconds 1 -o "$T/s2.h5"
 expect seed-fraction "--seed: must be a whole number.*got '1.5'" "$T/e1.txt" -- "$ZW" excite --seed 1.5 -o "$T/e1.txt"
 expect seed-boundary "--seed: must be a whole number" "$T/b1.csv" -- "$ZW" boundary "$M" --monte-carlo 10 --seed -2 -o "$T/b1.csv"
+# A log too short (issue 24): 39 ms at 1 kHz. One rule (analysis::CheckLogLength) for every
+# command that estimates: 3 segments of the shortest default window (256 samples at 1 kHz), so
+# 512 samples (0.512 s); refused with exit 2 before any fit or figure, nothing written.
+head -40 "$T/good.csv" > "$T/short.csv"
+SHORT="the log is too short: 39 samples \(0.039 s at 1000 Hz\).*256 samples.*at least 512 samples \(0.512 s\).*Record a longer log"
+expect short-estimate "$SHORT" "$T/sh1.csv" -- "$ZW" estimate "$T/short.csv" -o "$T/sh1.csv"
+expect short-fit "$SHORT" "$T/sh2.json" -- "$ZW" fit "$T/short.csv" -o "$T/sh2.json"
+expect short-run "$SHORT" "$T/sh3" -- "$ZW" run "$T/short.csv" -o "$T/sh3"
+grep -qi gnuplot "$T/stderr" && { echo "FAIL short-run: gnuplot on stderr"; fail=$((fail+1)); }
+expect short-window "39 samples \(0.039 s at 1000 Hz\), fewer than one window of 64 samples \(--window-length, 0.064 s\).*use --window-length 32 or less" "$T/sh4.csv" -- "$ZW" estimate "$T/short.csv" --window-length 64 -o "$T/sh4.csv"
+head -520 "$T/good.csv" > "$T/long_enough.csv"  # 519 samples >= 512: estimated
+if "$ZW" estimate "$T/long_enough.csv" -o "$T/sh5.csv" 2>"$T/stderr" && [ -s "$T/sh5.csv" ]; then
+  echo "ok   short-boundary: 519 samples are estimated"; pass=$((pass+1))
+else echo "FAIL short-boundary: 519 samples refused"; cat "$T/stderr"; fail=$((fail+1)); fi
+"$ZW" batch "$T/short.csv" -o "$T/sh6.csv" >"$T/stdout" 2>"$T/stderr"; rc=$?
+if [ $rc -ne 0 ] && grep -q "the log is too short: 39 samples" "$T/sh6.csv" "$T/stderr"; then
+  echo "ok   short-batch: exit $rc, the unit's row says the log is too short"; pass=$((pass+1))
+else echo "FAIL short-batch: exit $rc"; cat "$T/stderr" "$T/sh6.csv"; fail=$((fail+1)); fi
+# simulate follows the model's units (issue 24): a linear model's log says force [N], position [m],
+# and is read back by fit --units linear --input-column force; --units must agree with the model.
+sed 's/"delay_samples": 0/"delay_samples": 0, "units": "linear"/' "$M" > "$T/lin.json"
+expect simulate-units-disagree "--units linear, but .*table1.json is a rotary model" "$T/lin1.csv" -- "$ZW" simulate --model "$M" --units linear -o "$T/lin1.csv"
+expect simulate-units-word "--units.*'metric'|metric.*rotary.*linear" "$T/lin2.csv" -- "$ZW" simulate --model "$T/lin.json" --units metric -o "$T/lin2.csv"
+if "$ZW" simulate --model "$T/lin.json" --units linear --seconds 4 -o "$T/lin.csv" 2>"$T/stderr" \
+   && [ "$(head -1 "$T/lin.csv")" = "t,force [N],position [m]" ] \
+   && "$ZW" simulate --model "$M" --seconds 1 -o "$T/rot.csv" 2>/dev/null && [ "$(head -1 "$T/rot.csv")" = "t,torque,position" ] \
+   && "$ZW" fit "$T/lin.csv" --units linear --input-column force -o "$T/lin_fit.json" 2>"$T/stderr" && grep -q '"units": "linear"' "$T/lin_fit.json"; then
+  echo "ok   simulate-linear: header '$(head -1 "$T/lin.csv")', fitted back as a linear model"; pass=$((pass+1))
+else echo "FAIL simulate-linear: $(head -1 "$T/lin.csv" 2>/dev/null)"; cat "$T/stderr"; fail=$((fail+1)); fi
+# Output names (issue 24): a name of another format's extension is refused, nothing written (the
+# existing file kept byte for byte); a folder is refused; a same-kind file is replaced, as cp does.
+cp "$M" "$T/keep.json"
+"$ZW" boundary "$M" -o "$T/keep.json" >"$T/stdout" 2>"$T/stderr"; rc=$?
+if [ $rc -eq 2 ] && cmp -s "$M" "$T/keep.json" && grep -q "writes a boundary CSV, but '.json' is the extension of another format" "$T/stderr"; then
+  echo "ok   boundary-over-model: exit 2, the model kept: $(head -c 120 "$T/stderr")"; pass=$((pass+1))
+else echo "FAIL boundary-over-model: exit $rc"; cat "$T/stderr"; fail=$((fail+1)); fi
+expect simulate-json "writes a log.*'.json' is the extension of another format.*\.csv" "$T/x.json" -- "$ZW" simulate --model "$M" --seconds 1 -o "$T/x.json"
+expect export-ext "writes the python export, but '.json'.*ending \.py" "$T/m.json" -- "$ZW" export "$M" --format python -o "$T/m.json"
+expect boundary-summary-ext "writes a summary JSON, but '.csv'" "$T/bs.csv" -- "$ZW" boundary "$M" --summary "$T/bs.csv" -o "$T/bs_b.csv"
+mkdir -p "$T/adir"
+"$ZW" boundary "$M" -o "$T/adir" >"$T/stdout" 2>"$T/stderr"; rc=$?
+[ $rc -eq 2 ] && [ -z "$(ls -A "$T/adir")" ] && { echo "ok   boundary-into-folder: exit 2, $(head -c 100 "$T/stderr")"; pass=$((pass+1)); } ||
+  { echo "FAIL boundary-into-folder: exit $rc"; cat "$T/stderr"; fail=$((fail+1)); }
+echo old > "$T/again.csv"
+if "$ZW" boundary "$M" -o "$T/again.csv" 2>/dev/null >/dev/null && head -1 "$T/again.csv" | grep -q "," && "$ZW" boundary "$M" -o "$T/noext" 2>/dev/null >/dev/null && [ -s "$T/noext" ]; then
+  echo "ok   boundary-replaces-csv: an existing CSV is replaced, a name without extension written"; pass=$((pass+1))
+else echo "FAIL boundary-replaces-csv"; fail=$((fail+1)); fi
 echo "$pass passed, $fail failed"
 [ $fail -eq 0 ]

@@ -37,7 +37,7 @@ for c in $commands; do
   [ "$n" -ge 1 ] && ok "$c: --help shows $n example(s)" || bad "$c: --help shows no example"
 done
 
-# Every example runs, as an argument vector (no shell), with Table I from the source tree.
+# Every example runs, as an argument vector (no shell), with Table I from the folder its help names.
 cd "$T" || exit 1
 echo '{"objects":[{"name":"soft","K":1,"B":0.001},{"name":"hard","K":80,"B":0.001}]}' >scene.json
 # The pipeline's order (each example uses the files the ones before wrote), then any other
@@ -48,7 +48,12 @@ for c in $order; do
 done
 for c in $order $(for c in $commands; do [[ " $order " == *" $c "* ]] || echo "$c"; done); do
   while read -r line; do
-    read -ra argv <<<"${line//\/usr\/share\/zwidth\/phantom/$SRC/datasets/phantom}"
+    read -ra argv <<<"$line"
+    # Every path an example names (an argument with a '/') exists for this binary (issue 24).
+    for a in "${argv[@]}"; do
+      [[ $a == */* ]] || continue
+      [ -e "$a" ] && ok "example path exists: $a" || bad "example names $a, absent for $ZW"
+    done
     "$ZW" "${argv[@]:1}" >out.txt 2>err.txt; rc=$?
     # check exits 3 when an object is unstable: the example's scene has one.
     if [ $rc -eq 0 ] || { [ "$c" = check ] && [ $rc -eq 3 ]; }; then ok "example runs (exit $rc): $line"
@@ -105,5 +110,22 @@ else
       bad "man page: section ZWIDTH ${c^^} lacks $(echo $missing)"
   done
 fi
+# Every exit status the sources use is listed in --help and the man page's text (issue 24):
+# main()'s returns, ExitStatus{N} of the commands, and 128+N of the signal handlers.
+codes=$( { grep -ohE 'return [0-9]+;' "$SRC/apps/main.cc" | grep -oE '[0-9]+'
+           grep -ohE 'ExitStatus\{[0-9]+\}' "$SRC"/apps/*.cc | grep -oE '[0-9]+'
+           grep -ohE 'const int code = .*;' "$SRC"/apps/cmd_stability.cc | grep -oE '\? [0-9]+' | grep -oE '[0-9]+'
+           echo 0
+           grep -q '::raise(sig)' "$SRC/io/atomic_file.cc" && echo '128+N'; } | sort -u)
+[ "$(wc -w <<<"$codes")" -ge 5 ] || bad "found too few exit statuses in the sources: $(echo $codes)"
+help_status=$("$ZW" --help | awk '/^Exit status:/{on=1} on')
+man_status=$("$ZW" --help-man | awk '/^\*Exit status\*/{on=1} on')
+for c in $codes; do
+  for where in help man; do
+    text=$help_status; [ $where = man ] && text=$man_status
+    grep -qE -- "(^|[ :;])${c/+/\\+} " <<<"$text" && ok "exit status $c in --$where" ||
+      bad "exit status $c (used by the sources) not listed in zwidth's $where text"
+  done
+done
 echo "passed $pass, failed $fail"
 [ "$fail" -eq 0 ]

@@ -37,5 +37,18 @@ $PY -c 'import csv,sys; r=next(csv.DictReader(open(sys.argv[1]))); sys.exit(abs(
   ok "boundary CSV's A_star is the summary's" || bad "boundary CSV A_star"
 "$ZW" simulate --model "$M" -o "$T/a.csv" --seconds 2 2>/dev/null && "$ZW" simulate --model "$M" -o "$T/b.csv" --seconds 2 --coulomb 0 2>/dev/null &&
   cmp -s "$T/a.csv" "$T/b.csv" && ok "zero friction = the linear log" || bad "zero friction log"
+# Units (issue 24): check's friction note and boundary's A* lines in the model's units, rad and
+# N m/rad for Table I, m and N/m for the same numbers in a linear model (its "units").
+sed 's/"delay_samples": 0/"delay_samples": 0, "units": "linear"/' "$M" > "$T/lin.json"
+"$ZW" check "$T/s.json" --model "$T/lin.json" --delay 2 --coulomb 0.005 | grep -qE "friction holds it below 0\.109[0-9]* m( |$)" &&
+  "$ZW" check "$T/s.json" --model "$M" --delay 2 --coulomb 0.005 | grep -qE "friction holds it below 0\.109[0-9]* rad( |$)" &&
+  ok "check's friction note in the model's units (rad, m)" || bad "check's friction note units"
+"$ZW" boundary "$M" --delays 2 --b-points 5 --coulomb 0.005 -o "$T/bu.csv" > "$T/bu.out" 2>&1 &&
+  grep -qE "d = 2 friction: a wall at [0-9.]+ K_cr\(0\) = [0-9.e+-]+ N m/rad is stable below A\* = [0-9.e+-]+ rad \(" "$T/bu.out" &&
+  grep -qE "^friction \(Coulomb 0.005 N m\): the CSV's A_star column \[rad\]" "$T/bu.out" &&
+  "$ZW" boundary "$T/lin.json" --delays 2 --b-points 5 --coulomb 0.005 -o "$T/bl.csv" > "$T/bl.out" 2>&1 &&
+  grep -qE "d = 2 friction: a wall at [0-9.]+ K_cr\(0\) = [0-9.e+-]+ N/m is stable below A\* = [0-9.e+-]+ m \(" "$T/bl.out" &&
+  grep -qE "^friction \(Coulomb 0.005 N\): the CSV's A_star column \[m\]" "$T/bl.out" &&
+  ok "boundary's A* lines in the model's units" || { bad "boundary's A* units"; cat "$T/bu.out" "$T/bl.out"; }
 echo "$pass passed, $fail failed"
 [ $fail -eq 0 ]

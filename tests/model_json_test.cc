@@ -8,6 +8,7 @@
 #include <sys/stat.h>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "io/export.h"
 #include "io/model_json.h"
@@ -78,6 +79,36 @@ TEST(ModelJson, NegativeStandardErrorsAreRefusedAndRangesNameTheirUnits) {
   EXPECT_NE(refusal(R"({"m": 1e-3, "b": 5e300, "modes": []})").find("N m s/rad"), std::string::npos);
   EXPECT_NE(refusal(R"({"m": 1e-3, "b": 5e-3, "modes": [{"omega": -4, "c": 80, "v": 380, "d": 70}]})").find("rad/s"),
             std::string::npos);
+}
+
+// docs/usage.md names every top-level key the writer emits (issue 24: units,
+// friction, format_version and provenance were missing). A model with every
+// optional part set, written by WriteModelJson (which adds provenance); each
+// of its keys must appear in backquotes in the usage page's key table.
+TEST(ModelJson, UsageDocNamesEveryKeyTheWriterEmits) {
+  const ModelFile mf = ParseModelJson(
+      R"({"name": "n", "m": 1e-3, "b": 5e-3, "modes": [{"omega": 400, "c": 80, "v": 300, "d": 70}],
+          "delay_samples": 1, "units": "linear", "sample_period_s": 0.001,
+          "std": {"m": 1e-5, "b": 1e-4, "modes": [{"omega": 1, "c": 1, "v": 1, "d": 1}],
+                  "friction": {"coulomb_pos": 1e-4, "coulomb_neg": 1e-4, "offset": 1e-4}},
+          "friction": {"coulomb_pos": 0.008, "coulomb_neg": 0.006, "offset": 0}, "fit": {"quality": "good"}})",
+      "all.json");
+  ModelFile full = mf;
+  const int p = 2 + 4 * static_cast<int>(full.plant.modes.size());
+  full.log_covariance.assign(static_cast<size_t>(p * p), 0.0);
+  for (int i = 0; i < p; ++i) full.log_covariance[static_cast<size_t>(i * p + i)] = 1e-4;
+  TempDir dir;
+  const std::string path = (dir.path() / "all.json").string();
+  WriteModelJson(path, full);
+  std::ifstream in(path);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  std::ifstream doc_in(std::string(ZWIDTH_SOURCE_DIR) + "/docs/usage.md");
+  ASSERT_TRUE(doc_in) << "docs/usage.md not found under " << ZWIDTH_SOURCE_DIR;
+  const std::string doc((std::istreambuf_iterator<char>(doc_in)), std::istreambuf_iterator<char>());
+  EXPECT_GE(j.size(), 12u) << j.dump();  // every optional key was written
+  for (const auto& [key, value] : j.items()) {
+    EXPECT_NE(doc.find("| `" + key + "`"), std::string::npos) << "docs/usage.md: no row for model key '" << key << "'";
+  }
 }
 
 TEST(ModelJson, FrictionRoundTripsAndIsChecked) {

@@ -98,3 +98,21 @@ def test_whole_record_of_two_runs_uses_every_sample(two_runs):
 def test_paths_of_another_type_raise_a_type_error():
     with pytest.raises(TypeError):
         zwidth.estimate_logs([1, 2])
+
+
+def test_a_log_too_short_is_refused_by_the_one_rule(two_runs, tmp_path):
+    """39 ms at 1 kHz: estimate, fit and run refuse it as the CLI does (analysis::CheckLogLength):
+    3 segments of the shortest default window, 256 samples at 1 kHz, need 512 samples."""
+    log = zwidth.read_log(two_runs[0])
+    short = zwidth.Log(log.u[:39], log.y[:39], 1000.0)
+    want = r"too short: 39 samples \(0.039 s at 1000 Hz\).*at least 512 samples \(0.512 s\)"
+    with pytest.raises(zwidth.InputError, match=want):
+        zwidth.estimate(short)
+    with pytest.raises(zwidth.InputError, match=want):
+        zwidth.fit(short)
+    path = tmp_path / "short.csv"
+    short.save(str(path))
+    with pytest.raises(zwidth.InputError, match=want):
+        zwidth.run(str(path), str(tmp_path / "out"))
+    assert not (tmp_path / "out" / "report.html").exists()
+    zwidth.estimate(zwidth.Log(log.u[:512], log.y[:512], 1000.0))  # the shortest accepted
