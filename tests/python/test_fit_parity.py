@@ -1,6 +1,6 @@
 """zwidth.fit is `zwidth fit` (issue #24): on a log with Coulomb friction both go through
 analysis::FitToModelFile, so the Python model equals the CLI's model JSON number for number, with
-the same verdict and reason codes and the friction fitted."""
+the same verdict and reason codes and the friction fitted; and Ceres/glog print nothing."""
 import json, warnings
 
 import pytest
@@ -91,3 +91,13 @@ def test_a_log_in_memory_fits_friction_as_its_file(friction_log):
     assert from_log.model.friction is not None
     assert from_log.model.b == from_file.model.b
     assert from_log.model.friction == from_file.model.friction
+
+
+def test_fit_prints_nothing(friction_log, capfd):
+    capfd.readouterr()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        zwidth.fit(friction_log)
+        zwidth.fit(zwidth.estimate(friction_log), friction="none")
+    out, err = capfd.readouterr()
+    assert out == "" and err == "", (out, err)
