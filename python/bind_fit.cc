@@ -63,8 +63,11 @@ PyFitResult FitAsCli(const ident::FrequencyResponse& frf, const fit::FitOptions&
   return out;
 }
 
-// units=None: rotary; else 'rotary' or 'linear' (io::ParseUnitsWord, as --units).
-bool LinearFrom(const std::optional<std::string>& units) { return units && io::ParseUnitsWord(*units, "units"); }
+// units: 'rotary' or 'linear' (io::ParseUnitsWord, as --units); None: not given.
+std::optional<bool> UnitsFrom(const std::optional<std::string>& units) {
+  if (!units) return std::nullopt;
+  return io::ParseUnitsWord(*units, "units");
+}
 
 // zwidth.fit of a FrequencyResponse, or of a Log's (`log`, whose samples the
 // friction fit reads again): the friction fit's input by the CLI's rule
@@ -72,7 +75,7 @@ bool LinearFrom(const std::optional<std::string>& units) { return units && io::P
 PyFitResult FitResponse(const ident::FrequencyResponse& frf, const fit::FitOptions& o, const std::string& friction,
                         const std::optional<std::string>& units, const std::string& name, const PyLog* log) {
   const fit::FrictionModel fm = analysis::FrictionModelNamed(friction);
-  const bool linear = LinearFrom(units);
+  const bool linear = UnitsFrom(units).value_or(false);  // no header to read: rotary unless given
   std::optional<analysis::FrictionInput> in;
   std::string warning;
   if (log) {
@@ -99,7 +102,7 @@ PyFitResult FitLogs(const py::object& paths, const analysis::LogsEstimateOptions
   const std::vector<std::string> logs = PathsFrom(paths);
   if (logs.empty()) throw InputError("data: no log given: pass a log file's path (or several)");
   const fit::FrictionModel fm = analysis::FrictionModelNamed(friction);
-  const bool linear = LinearFrom(units);
+  const std::optional<bool> units_given = UnitsFrom(units);
   analysis::LogsEstimateOptions eo = estimate;
   eo.for_fit = true;
   std::string warning;
@@ -116,6 +119,8 @@ PyFitResult FitLogs(const py::object& paths, const analysis::LogsEstimateOptions
       if (line.rfind("warning: ", 0) == 0) warnings.push_back(io::WithKeywords(line.substr(9)));
     });
   }
+  // The headers' units unless given (the CLI's rule), refused before the fit as `zwidth fit`.
+  const bool linear = io::LinearUnitsOf(units_given, est.infos, "ModelFile::linear");
   return FitAsCli(est.response.frf, o, name, linear, in, std::move(warnings));
 }
 
@@ -376,7 +381,8 @@ friction fitted when the log shows it), 'coulomb' (always fitted) or 'none'
 (the linear fit; friction only detected), as `zwidth fit --friction`; it
 needs one time-domain log (a Log or a log file's path), so a response alone
 warns that friction was not checked ('coulomb' raises InputError). units:
-'rotary' or 'linear' (the model's labels, as --units); None: rotary. The
+'rotary' or 'linear' (the model's labels, as --units); None: what a log
+file's header says (N m, rad: rotary; N, m: linear), else rotary. The
 fit is `zwidth fit`'s (analysis::FitToModelFile): the same verdict, reasons,
 friction and numbers, and nothing printed.)doc", kCLocale);
   // zwidth.fit of a Log (its samples read again by the friction fit) and of log files.
