@@ -2,6 +2,7 @@
 #include <iostream>
 
 #include "apps/common.h"
+#include "analysis/compare.h"
 #include "analysis/table2.h"
 #include "apps/fit_support.h"
 #include "io/atomic_file.h"
@@ -109,7 +110,9 @@ void AddFitCommands(CLI::App& app) {
     std::string text;
     nlohmann::json j = nlohmann::json::object();
     if (!c->reference.empty()) {
-      io::ModelFile r = ReadReference(c->reference);
+      bool table1 = false;
+      io::ModelFile r = ReadReference(c->reference, &table1);
+      analysis::CheckSameUnits(m.linear, r, c->model, table1 ? "Table I (--reference table1)" : c->reference);
       app::ConvertDelayToPeriod(&r, T, "the reference");
       j = CompareModels(m, r, c->delays, T, &text);
     }

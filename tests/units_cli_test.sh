@@ -29,5 +29,14 @@ expect "run of a header that mixes rotary and linear" "mixes rotary and linear" 
   "$ZW" run "$T/mixed.csv" $SEL --no-figures -o "$T/bad_run"
 "$ZW" run "$T/lin.csv" $SEL --no-figures -o "$T/run" > "$T/out" 2>&1
 check "run of the linear header: model.json linear, the table in kg" 'grep -q "\"units\": \"linear\"" "$T/run/model.json" && grep -qE "^m .* kg$" "$T/out"'
+expect "compare a linear model with Table I" "is linear \(kg, N s/m\).*Table I.*is rotary \(kg m\^2, N m s/rad\).*compare models of one kind" "" -- \
+  "$ZW" compare "$T/lin.json" --reference table1
+check "compare refused: nothing on stdout" '[ ! -s "$T/stdout" ]'
+expect "compare a rotary model with a linear reference" "is rotary.*is linear" "" -- \
+  "$ZW" compare "$T/plain.json" --reference "$T/lin.json"
+"$ZW" compare "$T/lin.json" --reference "$T/lin.json" > "$T/out" 2>&1
+check "compare of two linear models: compared" 'grep -q "N s/m" "$T/out"'
+expect "run --reference table1 on a linear axis" "the fitted model is linear.*table1 is rotary" "$T/ref_run" -- \
+  "$ZW" run "$T/lin.csv" $SEL --reference table1 --no-figures -o "$T/ref_run"
 echo "$pass passed, $fail failed"
 [ $fail = 0 ]
