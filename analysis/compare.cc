@@ -10,6 +10,7 @@
 #include "model/units.h"
 #include "io/stability_files.h"
 #include "model/c_locale.h"
+#include "model/error.h"
 
 namespace zwidth::analysis {
 namespace {
@@ -94,6 +95,19 @@ std::string ParameterTable(const io::ModelFile& mf, bool linear) {
   return os.str();
 }
 
+void CheckSameUnits(bool model_linear, const io::ModelFile& reference, const std::string& model_name,
+                    const std::string& reference_name) {
+  if (model_linear == reference.linear) return;
+  auto kind = [](bool linear) {
+    const model::UnitLabels& u = model::Units(linear);
+    return std::string(u.word) + " (" + u.m + ", " + u.b + ")";
+  };
+  throw InputError(model_name + " is " + kind(model_linear) + ", " + reference_name + " is " +
+                   kind(reference.linear) + ": compare models of one kind (a linear axis with a linear reference "
+                   "model, a rotary one with a rotary reference such as Table I; a model file's \"units\" says "
+                   "which, and ModelFile::linear gives a fit's)");
+}
+
 DelayStability SummarizeDelays(const io::ModelFile& mf, double T, const std::vector<int>& delays) {
   DelayStability r;
   r.has_std = !mf.log_covariance.empty();
@@ -118,6 +132,7 @@ ModelComparison CompareModels(const io::ModelFile& model, const io::ModelFile& r
     throw std::invalid_argument("CompareModels: one summary per delay expected");
   }
   linear = linear || model.linear;  // the model file's units, or the caller's
+  CheckSameUnits(linear, ref, "the model", "the reference");
   const ScopedCLocale c_locale;  // printf's %g writes '.' whatever the caller's locale
   std::ostringstream os;
   nlohmann::json j;

@@ -28,12 +28,19 @@ struct DelayStability {
 // The paper's loop (no filter, no hand) at each delay, on one sampled plant.
 DelayStability SummarizeDelays(const io::ModelFile& mf, double period_s, const std::vector<int>& delays);
 
+// A comparison of a rotary model with a linear one compares kg m^2 with kg:
+// InputError naming both (model_name, reference_name), their units and what
+// to do. model_linear: the model's units as the caller reads them.
+void CheckSameUnits(bool model_linear, const io::ModelFile& reference, const std::string& model_name,
+                    const std::string& reference_name);
+
 struct ModelComparison {
   nlohmann::json json;  // {"parameters": [...], "stability": [...]}
   std::string text;     // the same as a printable table
 };
 // model_stability and reference_summaries: the paper's loop at `delays`, in
-// order (model_stability.summaries.size() == delays.size()).
+// order (model_stability.summaries.size() == delays.size()). Refuses models
+// of different units (CheckSameUnits; linear || model.linear is the model's).
 ModelComparison CompareModels(const io::ModelFile& model, const io::ModelFile& reference,
                               const std::vector<int>& delays, const DelayStability& model_stability,
                               const std::vector<stability::DelaySummary>& reference_summaries,

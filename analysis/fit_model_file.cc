@@ -123,7 +123,14 @@ std::optional<FrictionInput> FrictionInputFor(const std::vector<std::string>& lo
     }
     return std::nullopt;
   }
-  FrictionInput in{logs[0], select, {}};
+  FrictionInput in{logs[0], select, {}, std::nullopt};
+  in.options.model = model;
+  in.options.welch = welch;
+  return in;
+}
+
+FrictionInput FrictionInputFor(io::Log log, const ident::WelchOptions& welch, fit::FrictionModel model) {
+  FrictionInput in{log.info.source, {}, {}, std::move(log)};
   in.options.model = model;
   in.options.welch = welch;
   return in;
@@ -143,7 +150,9 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
   const bool broken = !r.reasons.empty() && (r.reasons.front().code == "sign_reversed" ||
                                              r.reasons.front().code == "columns_swapped");
   if (friction && r.status == fit::FitStatus::kConverged && !broken) {
-    const io::Log log = io::ReadLog(friction->path, friction->select);
+    std::optional<io::Log> read;
+    if (!friction->log) read = io::ReadLog(friction->path, friction->select);
+    const io::Log& log = friction->log ? *friction->log : *read;
     fit::FrictionFitOptions fo = friction->options;
     if (fo.welch.window_length == 0) fo.welch.window_length = frf.window_length;  // the linear fit's estimate
     try {

@@ -24,6 +24,8 @@ struct FrictionInput {
   std::string path;
   io::LogSelect select;
   fit::FrictionFitOptions options;  // welch.window_length 0: the fitted response's window
+  // A log in memory (Python's zwidth.Log): read instead of `path`.
+  std::optional<io::Log> log;
 };
 
 // The word of FrictionFitOptions::model ("none", "auto", "coulomb"); an
@@ -40,6 +42,8 @@ fit::FrictionModel FrictionModelNamed(const std::string& word);
 std::optional<FrictionInput> FrictionInputFor(const std::vector<std::string>& logs, bool frf_file,
                                               const io::LogSelect& select, const ident::WelchOptions& welch,
                                               fit::FrictionModel model, std::string* warning);
+// The same rule for one log in memory (Python's zwidth.Log): always an input.
+FrictionInput FrictionInputFor(io::Log log, const ident::WelchOptions& welch, fit::FrictionModel model);
 
 // How the caller shows the library's texts, which name option fields.
 struct FitMessages {

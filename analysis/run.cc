@@ -219,6 +219,10 @@ RunAnalysis Analyse(RunInput input, const RunOptions& o) {
   if (input.fit.status != fit::FitStatus::kConverged) throw ComputationError(input.fit.message);
   Laps laps;
   input.model.linear = o.linear;  // the model file keeps the run's units
+  if (input.reference) {  // before the Z-width: a reference of the other kind is refused
+    CheckSameUnits(o.linear, *input.reference, "the fitted model",
+                   "the reference " + (input.reference_name.empty() ? std::string("model") : input.reference_name));
+  }
   input.response.frf.used_by_fit = input.fit.band.used;
   const double T = input.response.frf.period_s();
   if (o.figures && !(o.report_filter_hz < 0.5 / T)) {  // before the Z-width, not at the figures

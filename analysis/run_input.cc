@@ -33,6 +33,7 @@ RunInput EstimateAndFit(RunInput in, const EstimateFitOptions& o, const std::vec
   in.response = std::move(est.response);
   in.total_samples = est.total_samples;
   in.whole_record = eo.whole_record;
+  const bool linear = io::LinearUnitsOf(o.linear, est.infos, "ModelFile::linear");
   stage("estimate (read + Welch)");
   // The reference's delay is counted in its own period: in the log's (or refused).
   if (in.reference) {
@@ -58,6 +59,7 @@ RunInput EstimateAndFit(RunInput in, const EstimateFitOptions& o, const std::vec
     }
     in.model = FitToModelFile(in.response.frf, o.fit, in.source, m.fit, &in.fit, friction ? &*friction : nullptr,
                               &in.friction_fit);
+    in.model.linear = linear;
   }  // joined
   if (ref_error) std::rethrow_exception(ref_error);
   in.reference_stability = std::move(ref);
@@ -71,6 +73,7 @@ RunAnalysis EstimateFitAndAnalyse(RunInput in, const EstimateFitOptions& estimat
   std::string why;  // before anything is read
   if (!options.IsValid(&why)) throw InputError(why);
   in = EstimateAndFit(std::move(in), estimate_fit, options.delays, messages, ms);
+  options.linear = in.model.linear;  // the caller's units, or the logs' headers'
   if (loop) options.loop = loop(in.response.frf.period_s());
   return Analyse(std::move(in), options);
 }

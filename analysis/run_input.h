@@ -25,6 +25,10 @@ struct EstimateFitOptions {
   // FrictionFitOptions::model of the friction fit (FrictionInputFor: one log),
   // as `fit`'s; std::nullopt: friction not looked at.
   std::optional<fit::FrictionModel> friction = fit::FrictionModel::kAuto;
+  // ModelFile::linear as the caller gives it (--units, units=); std::nullopt:
+  // what the logs' headers say, else rotary (io::LinearUnitsOf, which refuses
+  // a header that mixes the two or contradicts the caller).
+  std::optional<bool> linear;
 };
 
 // What the caller shows as the run goes (each may be empty): the estimate's
@@ -40,8 +44,9 @@ struct RunMessages {
 // `in` holds logs, source and the reference (when any); returns it with the
 // response, the fit (and the friction fit's result), the model and the
 // reference's Z-width. *ms: the time of the two stages. Throws as
-// FrictionInputFor (before reading), EstimateFromLogs and FitToModelFile; a
-// friction not checked (several logs, auto) is a messages.fit.warning.
+// FrictionInputFor (before reading), EstimateFromLogs, io::LinearUnitsOf
+// (before the fit; the model's units) and FitToModelFile; a friction not
+// checked (several logs, auto) is a messages.fit.warning.
 RunInput EstimateAndFit(RunInput in, const EstimateFitOptions& options, const std::vector<int>& delays,
                         const RunMessages& messages = {}, double* ms = nullptr);
 
@@ -50,7 +55,8 @@ using LoopForPeriod = std::function<stability::LoopOptions(double period_s)>;
 
 // What `run` computes for one device, below the files: the options checked
 // (before anything is read), EstimateAndFit, the loop at the log's period
-// (`loop`; options.loop as it is when empty) and Analyse. The one pipeline of
+// (`loop`; options.loop as it is when empty) and Analyse (options.linear: the
+// model's, EstimateFitOptions::linear or the headers'). The one pipeline of
 // `run` (report::RunToFolder, Python's zwidth.run) and of each unit of
 // `batch` (analysis::RunBatch): whether friction is fitted is the one rule of
 // EstimateAndFit (EstimateFitOptions::friction, FrictionInputFor). *ms: the

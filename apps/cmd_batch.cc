@@ -205,6 +205,7 @@ void Batch(BatchFlags& b, const CLI::App* cmd) {
   // fit and friction options; a unit's manifest columns are its log flags.
   o.estimate_fit = {f.est.Options(true), f.fit.o};
   o.estimate_fit.friction = analysis::FrictionModelNamed(f.friction);
+  if (!f.units.empty()) o.estimate_fit.linear = o.run.linear;  // else each log's header says (io::LinearUnitsOf)
   o.loop = RunLoop(f);
   o.reference = ref.reference;
   o.reference_name = ref.reference_name;

@@ -2,6 +2,7 @@
 #include <iostream>
 
 #include "apps/common.h"
+#include "analysis/compare.h"
 #include "analysis/table2.h"
 #include "apps/fit_support.h"
 #include "io/atomic_file.h"
@@ -17,7 +18,7 @@ namespace zwidth::app {
 void AddFitCommands(CLI::App& app) {
   struct Flags {
     std::vector<std::string> inputs;
-    std::string out, init, units = "rotary", friction = "auto";
+    std::string out, init, units, friction = "auto";  // units "": the log header's, else rotary
     EstimateFlags est;
     FitFlags fit;
   };
@@ -39,7 +40,8 @@ void AddFitCommands(CLI::App& app) {
     io::CheckOutputKind(f->out, "a model JSON", {".json"});
     f->fit.Resolve(f->est.welch.fmin_hz, f->est.welch.fmax_hz);
     const fit::FrictionModel friction_model = analysis::FrictionModelNamed(f->friction);
-    const bool linear = LinearUnits(f->units);
+    const std::optional<bool> units_given =
+        f->units.empty() ? std::nullopt : std::optional<bool>(LinearUnits(f->units));
     const std::string source = JoinPaths(f->inputs);
     if (!f->init.empty()) f->fit.o.init = io::ReadModelJsonFor(f->init, "fit --init").plant;
     StageTimer timer(false);
@@ -57,9 +59,16 @@ void AddFitCommands(CLI::App& app) {
         analysis::FrictionInputFor(f->inputs, frf_file, f->est.select, f->est.Resolve(), friction_model, &friction_warning);
     if (!friction_warning.empty()) std::fprintf(stderr, "warning: %s\n", WithFlags(friction_warning).c_str());
     std::string frf_note;
-    const ident::FrequencyResponse frf = frf_file
-        ? io::ReadFrequencyResponse(f->inputs[0], f->est.select.sample_rate_hz, &frf_note)
-        : EstimateFromLogs(f->inputs, f->est, true).response.frf;
+    std::vector<io::LogInfo> infos;  // a saved response: no header to read units from
+    ident::FrequencyResponse frf;
+    if (frf_file) {
+      frf = io::ReadFrequencyResponse(f->inputs[0], f->est.select.sample_rate_hz, &frf_note);
+    } else {
+      analysis::LogsEstimate est = EstimateFromLogs(f->inputs, f->est, true);
+      frf = std::move(est.response.frf);
+      infos = std::move(est.infos);
+    }
+    const bool linear = io::LinearUnitsOf(units_given, infos, "ModelFile::linear");  // before the fit
     if (!frf_note.empty()) std::fprintf(stderr, "note: %s\n", io::PrintableLines(frf_note).c_str());
     fit::FitResult r;
     fit::FrictionFitResult ff;
@@ -102,7 +111,9 @@ void AddFitCommands(CLI::App& app) {
     std::string text;
     nlohmann::json j = nlohmann::json::object();
     if (!c->reference.empty()) {
-      io::ModelFile r = ReadReference(c->reference);
+      bool table1 = false;
+      io::ModelFile r = ReadReference(c->reference, &table1);
+      analysis::CheckSameUnits(m.linear, r, c->model, table1 ? "Table I (--reference table1)" : c->reference);
       app::ConvertDelayToPeriod(&r, T, "the reference");
       j = CompareModels(m, r, c->delays, T, &text);
     }

@@ -40,7 +40,7 @@ analysis::RunMessages RunMessagesOfCli() {
 analysis::RunOptions ResolveRunOptions(RunFlags* f, analysis::RunInput* in) {
   f->fit.Resolve(f->est.welch.fmin_hz, f->est.welch.fmax_hz);
   analysis::RunOptions o;
-  o.linear = LinearUnits(f->units);
+  if (!f->units.empty()) o.linear = LinearUnits(f->units);  // the word checked before anything is read
   o.delays = f->delays;
   o.grid = f->grid;
   o.report_filter_hz = f->report_filter_hz;
@@ -70,6 +70,7 @@ void Run(RunFlags& f) {
   analysis::RunOptions o = ResolveRunOptions(&f, &in);
   analysis::EstimateFitOptions eo{f.est.Options(true), f.fit.o};
   eo.friction = analysis::FrictionModelNamed(f.friction);
+  if (!f.units.empty()) eo.linear = o.linear;  // else the logs' headers say (io::LinearUnitsOf)
   // Everything is built in a temporary sibling folder and moved into place
   // at the end (io::OutputFolder): a failure or a signal leaves nothing, and
   // two runs into one folder cannot mix.
@@ -94,7 +95,7 @@ void Run(RunFlags& f) {
   for (const analysis::RunStage& s : a.stages) if (s.name.rfind("figure", 0) == 0) PrintStage(s.name, s.ms);
   for (size_t i = 1; i < rep.stages.size(); ++i) PrintStage(rep.stages[i].name, rep.stages[i].ms);
   folder.Commit();
-  const std::string params = analysis::ParameterTable(a.input.model, o.linear);
+  const std::string params = analysis::ParameterTable(a.input.model, a.options.linear);
   const std::string cmp = a.comparison ? a.comparison->text : "";
   std::printf("fit quality: %s\n%s%s\n%s", fit::ToString(a.input.fit.quality).c_str(),
               io::PrintableLines(params).c_str(), FrictionLine(a.input.friction_fit).c_str(),

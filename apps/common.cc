@@ -99,7 +99,9 @@ void AddEstimateFlags(CLI::App* cmd, EstimateFlags* f) {
 }
 
 void AddUnitsFlag(CLI::App* cmd, std::string* units) {
-  cmd->add_option("--units", *units, "labels: rotary (kg m^2, N m s/rad) | linear (kg, N s/m)")->capture_default_str();
+  cmd->add_option("--units", *units,
+                  "labels: rotary (kg m^2, N m s/rad) | linear (kg, N s/m); default: what the log's header says "
+                  "(N m, rad: rotary; N, m: linear), else rotary");
 }
 
 CLI::Option* AddSeedOption(CLI::App* cmd, std::uint64_t* seed, const std::string& help) {

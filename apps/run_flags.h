@@ -18,7 +18,7 @@ namespace zwidth::app {
 
 struct RunFlags {
   std::vector<std::string> logs;
-  std::string outdir, reference, units = "rotary";
+  std::string outdir, reference, units;  // units "": the logs' headers', else rotary
   std::string friction = "auto";  // --friction (FrictionFitOptions::model) of run and batch
   std::vector<int> delays = {2, 4, 8};
   EstimateFlags est;

@@ -229,6 +229,33 @@ LogInfo StreamLog(const std::string& path, const LogSelect& select, const LogSin
   return check_output(std::move(info));
 }
 
+bool LinearUnitsOf(std::optional<bool> given, const std::vector<LogInfo>& infos, const std::string& option) {
+  auto word = [](bool linear) { return std::string(linear ? "linear" : "rotary"); };
+  const LogInfo* said = nullptr;  // the first log whose header says an axis
+  for (const LogInfo& info : infos) {
+    if (info.header_units == HeaderUnits::kMixed) {
+      throw InputError(info.source + ": the header mixes rotary and linear units (" + info.header_units_text +
+                       "): a model is of one axis; correct the header, or give each column's unit with "
+                       "LogSelect::input_unit and LogSelect::output_unit");
+    }
+    if (info.header_units == HeaderUnits::kNone) continue;
+    const bool linear = info.header_units == HeaderUnits::kLinear;
+    if (given && *given != linear) {
+      throw InputError(info.source + ": the header says " + word(linear) + " units (" + info.header_units_text +
+                       ") but " + option + " " + word(*given) + " was given: pass " + option + " " + word(linear) +
+                       " (or none: the header's), or correct the header");
+    }
+    if (said && (said->header_units == HeaderUnits::kLinear) != linear) {
+      throw InputError(info.source + ": the header says " + word(linear) + " units (" + info.header_units_text +
+                       ") but " + said->source + "'s says " + word(!linear) + " (" + said->header_units_text +
+                       "): the runs of one device have one axis; fit them apart, or correct the header");
+    }
+    if (!said) said = &info;
+  }
+  if (given) return *given;
+  return said && said->header_units == HeaderUnits::kLinear;
+}
+
 void LogFingerprint::Add(const double* input, const double* output, size_t n) {
   auto add = [n](const double* v, std::uint64_t* h) {
     const unsigned char* b = reinterpret_cast<const unsigned char*>(v);

@@ -16,6 +16,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 #include "model/sample_period.h"
@@ -62,6 +63,13 @@ struct LogSelect {
   double max_interval_deviation = 0.01;
 };
 
+// The axis a text log's header gives its input and output columns (a unit
+// of io/log_units.h's table found in the header: "force [N]", "pos_mm", a
+// units row; not one given by LogSelect::input_unit / output_unit): rotary
+// (N m, rad, deg, ...), linear (N, m, mm, ...), both (the two columns
+// disagree), or none said.
+enum class HeaderUnits { kNone, kRotary, kLinear, kMixed };
+
 struct LogInfo {
   std::string source;
   size_t num_samples = 0;
@@ -71,7 +79,18 @@ struct LogInfo {
   // (comment): t, torque, position; columns 1, 2, 3".
   std::string layout;
   std::vector<std::string> warnings;  // e.g. the time column's jitter under --rate
+  HeaderUnits header_units = HeaderUnits::kNone;
+  // What the header said, e.g. "input 'force [N]' in N, output 'x [m]' in m"; "" for kNone.
+  std::string header_units_text;
 };
+
+// Whether a fit of logs read with these infos is of a linear axis: the
+// caller's choice (`given`: ModelFile::linear from --units / units=) when
+// made, else what the headers say, else rotary. Throws InputError, naming the
+// log and `option` (the field that gives the choice), for a header whose
+// columns mix rotary and linear units, logs whose headers disagree, or a
+// header that contradicts `given`.
+bool LinearUnitsOf(std::optional<bool> given, const std::vector<LogInfo>& infos, const std::string& option);
 
 enum class LogFormat { kCsv, kHdf5, kMat };
 // By content: the HDF5 signature (also MATLAB v7.3, whose 512-byte user block

@@ -12,6 +12,7 @@
 #include <optional>
 #include <memory>
 #include <sstream>
+#include <tuple>
 
 #include <sys/stat.h>
 
@@ -540,35 +541,53 @@ struct ChunkedSink {
 struct ColumnUnits {
   internal::ColumnUnit input, output;
   std::string layout;
+  HeaderUnits header_units = HeaderUnits::kNone;  // what the header (not a flag) says of the axis
+  std::string header_units_text;
 };
 
 internal::ColumnUnit ColumnUnitOf(const std::string& given, const CsvHeader& h, const CsvColumns& cols, int c,
                                   internal::ColumnRole role, const LogSelect& sel, const std::string& where,
-                                  const char* flag) {
+                                  const char* flag, bool* from_header) {
   const double cpr = sel.counts_per_rev, cpm = sel.counts_per_m;
   const bool scaled = (role == internal::ColumnRole::kInput ? sel.input_scale : sel.output_scale) != 1.0;
+  *from_header = false;
   if (!given.empty()) return internal::ParseColumnUnit(given, role, cpr, cpm, false, flag, where + " (" + flag + ")");
   if (!h.units.empty() && !h.units[c].empty()) {
+    *from_header = true;
     return internal::ParseColumnUnit(h.units[c], role, cpr, cpm, scaled, flag, where + " (units row)");
   }
   if (!cols.names.empty()) {
-    if (auto u = internal::UnitOfColumnName(cols.names[c], role, cpr, cpm, scaled, flag, where)) return *u;
+    if (auto u = internal::UnitOfColumnName(cols.names[c], role, cpr, cpm, scaled, flag, where)) {
+      *from_header = true;
+      return *u;
+    }
   }
   return {"", role == internal::ColumnRole::kInput ? "N m" : "rad", 1.0};
 }
 
 ColumnUnits ResolveColumnUnits(const LogSelect& sel, const CsvHeader& h, const CsvColumns& cols, const std::string& path) {
   ColumnUnits u;
+  bool input_header = false, output_header = false;
   u.input = ColumnUnitOf(sel.input_unit, h, cols, cols.input, internal::ColumnRole::kInput, sel,
-                         path + ": input " + cols.Name(cols.input), "LogSelect::input_unit");
+                         path + ": input " + cols.Name(cols.input), "LogSelect::input_unit", &input_header);
   u.output = ColumnUnitOf(sel.output_unit, h, cols, cols.output, internal::ColumnRole::kOutput, sel,
-                          path + ": output " + cols.Name(cols.output), "LogSelect::output_unit");
+                          path + ": output " + cols.Name(cols.output), "LogSelect::output_unit", &output_header);
   for (const auto* x : {&u.input, &u.output}) {
     if (x->written.empty()) continue;
     char b[120];
     std::snprintf(b, sizeof b, "; %s unit '%s' read: x %.6g to %s", x == &u.input ? "input" : "output",
                   x->written.substr(0, 24).c_str(), x->scale, x->si.c_str());
     u.layout += b;
+  }
+  // The axis the header says: N m and rad are rotary, N and m linear.
+  for (const auto& [x, header, role] : {std::tuple{&u.input, input_header, "input"},
+                                        std::tuple{&u.output, output_header, "output"}}) {
+    if (!header || !x->known) continue;
+    const HeaderUnits kind = x->si == "N" || x->si == "m" ? HeaderUnits::kLinear : HeaderUnits::kRotary;
+    u.header_units = u.header_units == HeaderUnits::kNone || u.header_units == kind ? kind : HeaderUnits::kMixed;
+    const int c = x == &u.input ? cols.input : cols.output;
+    u.header_units_text += std::string(u.header_units_text.empty() ? "" : ", ") + role + " " + cols.Name(c) +
+                           " in " + x->written.substr(0, 24) + " (" + (kind == HeaderUnits::kLinear ? "linear" : "rotary") + ")";
   }
   return u;
 }
@@ -650,6 +669,8 @@ LogInfo StreamCsv(const std::string& path, const LogSelect& sel, const LogSink& 
   info.source = path;
   info.num_samples = out.rows;
   info.layout = cols.layout;
+  info.header_units = units.header_units;
+  info.header_units_text = units.header_units_text;
   ResolveRate(path, sel, times, ct, out.rows, ct >= 0 ? col_name(ct) : std::string(), &info);
   return info;
 }

@@ -85,7 +85,7 @@ ColumnUnit ParseColumnUnit(const std::string& written, ColumnRole role, double c
                      KnownList(role) + "): convert the column, or pass " + flag + " si with " +
                      (role == ColumnRole::kInput ? "LogSelect::input_scale" : "LogSelect::output_scale") + " to SI");
   }
-  if (!u->counts) return {unit, u->si, u->scale};
+  if (!u->counts) return {unit, u->si, u->scale, true};
   if (scale_given && cpr == 0 && cpm == 0) return {unit + ", converted by the scale given", "rad", 1.0};
   if (cpr > 0 && cpm > 0) throw InputError(where + ": give LogSelect::counts_per_rev or LogSelect::counts_per_m, not both");
   if (cpr > 0) return {unit, "rad", 2 * std::numbers::pi / cpr};

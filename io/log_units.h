@@ -16,6 +16,9 @@ struct ColumnUnit {
   std::string written;  // as the file or the flag writes it, e.g. "mNm"
   std::string si;       // what it is converted to: "N m", "N", "rad", "m"
   double scale = 1.0;   // SI value = scale * file value
+  // A unit of zwidth's table (N m, N, deg, mm, ...; not si, counts or one the
+  // scale converts): `si` then says the axis, rotary (N m, rad) or linear (N, m).
+  bool known = false;
 };
 
 // The unit a header name carries: a bracketed last word ("[mNm]", "(deg)")

@@ -113,6 +113,7 @@ const std::vector<OptionName>& OptionNames() {
       {"RobustOptions::fmin_hz", "--fmin", "fmin"},
       {"RobustOptions::fmax_hz", "--fmax", "fmax"},
       {"FrictionFitOptions::model", "--friction", "friction"},
+      {"ModelFile::linear", "--units", "units"},
       {"Table2Options::coulomb_levels", "--coulomb-levels", ""},
       {"Table2Options::encoder_step", "--encoder-step", ""},
       {"Table2Options::relay_amplitude", "--amplitude", ""},

@@ -29,6 +29,7 @@
 
 #include "io/model_json.h"
 #include "model/c_locale.h"
+#include "model/sample_period.h"
 #include "stability/haptic_loop.h"
 
 namespace zwidth::python {
@@ -54,6 +55,15 @@ struct CLocaleGuard {
   locale_t old_;
 };
 inline constexpr py::call_guard<CLocaleGuard> kCLocale{};
+
+// zwidth.Log: a log in memory, torque input u, position output y, uniformly
+// sampled (bind_ident.cc; zwidth.fit reads it again for the friction fit).
+struct PyLog {
+  std::string source;
+  double sample_rate_hz = 0.0;
+  std::vector<double> u, y;
+  double period_s() const { return model::SamplePeriod(sample_rate_hz); }
+};
 
 // A C-contiguous double array view of any array-like (lists, scalars, ints).
 using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;

@@ -2,8 +2,11 @@
 //
 #include <algorithm>
 
+#include "analysis/fit_model_file.h"
+#include "analysis/logs_estimate.h"
 #include "fit/fit.h"
 #include "io/fit_file.h"
+#include "io/atomic_file.h"
 #include "io/option_names.h"
 #include "model/error.h"
 #include "python/bind_common.h"
@@ -17,24 +20,108 @@ struct PyFitResult {
   io::ModelFile model;  // the fitted plant with its std and sample period
 };
 
-PyFitResult RunFit(const ident::FrequencyResponse& frf, const fit::FitOptions& o, const std::string& name) {
-  PyFitResult out;
-  {
-    py::gil_scoped_release release;
-    TimedCpp([&] { out.result = fit::FitModel(frf, o); });
-  }  // the library's messages get the keywords in the module's InputError translator
-  fit::FitResult& r = out.result;
-  for (std::string& w : r.warnings) w = io::WithKeywords(w);
-  for (fit::QualityReason& q : r.reasons) {
+// The fit's texts in the module's keywords (io::WithKeywords).
+void InKeywords(fit::FitResult* r) {
+  for (std::string& w : r->warnings) w = io::WithKeywords(w);
+  for (fit::QualityReason& q : r->reasons) {
     q.message = io::WithKeywords(q.message);
     q.advice = io::WithKeywords(q.advice);
   }
-  r.order_choice = io::WithKeywords(r.order_choice);
-  r.delay_choice = io::WithKeywords(r.delay_choice);
-  // The model as `zwidth fit` stores it (io::FittedModelFile), named by the caller.
-  out.model = io::FittedModelFile(r, frf, o, name);
+  r->order_choice = io::WithKeywords(r->order_choice);
+  r->delay_choice = io::WithKeywords(r->delay_choice);
+}
+
+// The fit as `zwidth fit` makes it, by the same library function
+// (analysis::FitToModelFile: Ceres and glog quiet, the sign / swapped-columns
+// diagnosis, the friction fit of `friction`, the model file), every text in
+// the keywords; the warnings are raised as UserWarning after the call. A fit
+// that does not converge is returned with its status (the CLI exits 1).
+PyFitResult FitAsCli(const ident::FrequencyResponse& frf, const fit::FitOptions& o, const std::string& name,
+                     bool linear, const std::optional<analysis::FrictionInput>& friction,
+                     std::vector<std::string> warnings) {
+  PyFitResult out;
+  fit::FrictionFitResult ff;
+  analysis::FitMessages messages{.words = io::WithKeywords,
+                                 .warning = [&](const std::string& w) { warnings.push_back(io::WithKeywords(w)); }};
+  {
+    py::gil_scoped_release release;
+    ScopedCLocale c;
+    TimedCpp([&] {
+      try {
+        out.model = analysis::FitToModelFile(frf, o, name, messages, &out.result, friction ? &*friction : nullptr, &ff);
+      } catch (const ComputationError&) {
+        if (out.result.status == fit::FitStatus::kConverged || out.result.status == fit::FitStatus::kNotRun) throw;
+        out.model = io::FittedModelFile(out.result, frf, o, name);  // returned with its status, as before
+      }
+    });
+  }
+  InKeywords(&out.result);
   out.model.plant.name = name;
+  out.model.linear = linear;
+  const py::object warn = py::module_::import("warnings").attr("warn");
+  for (const std::string& w : warnings) warn(w, py::module_::import("builtins").attr("UserWarning"), 3);
   return out;
+}
+
+// units: 'rotary' or 'linear' (io::ParseUnitsWord, as --units); None: not given.
+std::optional<bool> UnitsFrom(const std::optional<std::string>& units) {
+  if (!units) return std::nullopt;
+  return io::ParseUnitsWord(*units, "units");
+}
+
+// zwidth.fit of a FrequencyResponse, or of a Log's (`log`, whose samples the
+// friction fit reads again): the friction fit's input by the CLI's rule
+// (analysis::FrictionInputFor; a response alone is a saved response's case).
+PyFitResult FitResponse(const ident::FrequencyResponse& frf, const fit::FitOptions& o, const std::string& friction,
+                        const std::optional<std::string>& units, const std::string& name, const PyLog* log) {
+  const fit::FrictionModel fm = analysis::FrictionModelNamed(friction);
+  const bool linear = UnitsFrom(units).value_or(false);  // no header to read: rotary unless given
+  std::optional<analysis::FrictionInput> in;
+  std::string warning;
+  if (log) {
+    io::Log l;
+    l.info.source = log->source;
+    l.info.sample_rate_hz = log->sample_rate_hz;
+    l.info.num_samples = log->u.size();
+    l.input = log->u;
+    l.output = log->y;
+    in = analysis::FrictionInputFor(std::move(l), ident::WelchOptions{.window_length = 0}, fm);
+  } else {
+    in = analysis::FrictionInputFor({}, true, {}, {}, fm, &warning);
+  }
+  std::vector<std::string> warnings;
+  if (!warning.empty()) warnings.push_back(io::WithKeywords(warning));
+  return FitAsCli(frf, o, name, linear, in, std::move(warnings));
+}
+
+// zwidth.fit of log files: `zwidth fit LOG...`'s steps, each the library's
+// (FrictionInputFor before anything is read, EstimateFromLogs for a fit,
+// FitToModelFile).
+PyFitResult FitLogs(const py::object& paths, const analysis::LogsEstimateOptions& estimate, const fit::FitOptions& o,
+                    const std::string& friction, const std::optional<std::string>& units, const std::string& name) {
+  const std::vector<std::string> logs = PathsFrom(paths);
+  if (logs.empty()) throw InputError("data: no log given: pass a log file's path (or several)");
+  const fit::FrictionModel fm = analysis::FrictionModelNamed(friction);
+  const std::optional<bool> units_given = UnitsFrom(units);
+  analysis::LogsEstimateOptions eo = estimate;
+  eo.for_fit = true;
+  std::string warning;
+  const std::optional<analysis::FrictionInput> in =
+      analysis::FrictionInputFor(logs, false, eo.select, eo.welch, fm, &warning);
+  std::vector<std::string> warnings;
+  if (!warning.empty()) warnings.push_back(io::WithKeywords(warning));
+  io::ForgetNotedInputs();  // each call is its own command (the provenance's inputs)
+  analysis::LogsEstimate est;
+  {
+    py::gil_scoped_release release;
+    ScopedCLocale c;
+    est = analysis::EstimateFromLogs(logs, eo, [&](const std::string& line) {
+      if (line.rfind("warning: ", 0) == 0) warnings.push_back(io::WithKeywords(line.substr(9)));
+    });
+  }
+  // The headers' units unless given (the CLI's rule), refused before the fit as `zwidth fit`.
+  const bool linear = io::LinearUnitsOf(units_given, est.infos, "ModelFile::linear");
+  return FitAsCli(est.response.frf, o, name, linear, in, std::move(warnings));
 }
 
 fit::FitOptions OptionsFrom(const py::object& modes, int max_modes, const py::object& delay_samples,
@@ -259,22 +346,25 @@ auto FitArgs() {
         py::arg("function_tolerance") = d.function_tolerance);
 }
 
-// zwidth.fit: FitOptions from keywords (OptionsFrom), then RunFit.
+// zwidth.fit: FitOptions from keywords (OptionsFrom), then FitResponse.
 void BindFitFunction(py::module_& m) {
   DefWith(m, "fit",
         [](const ident::FrequencyResponse& frf, const py::object& modes, int max_modes, const py::object& delay_samples,
            int max_auto_delay, bool allow_short, double fmin, double fmax, double min_input_power_ratio,
            double min_coherence, std::optional<io::ModelFile> init, int max_starts, int max_iterations, double min_damping_ratio,
            double max_pole_damping_ratio, double max_zero_damping_ratio, double max_frequency_fraction,
-           double relative_std_floor, double function_tolerance, const std::string& name) {
+           double relative_std_floor, double function_tolerance, const std::string& friction,
+           const std::optional<std::string>& units, const std::string& name) {
           const fit::FitOptions o =
               OptionsFrom(modes, max_modes, delay_samples, max_auto_delay, allow_short, fmin, fmax,
                           min_input_power_ratio, min_coherence, std::move(init), max_starts, max_iterations,
                           min_damping_ratio, max_pole_damping_ratio, max_zero_damping_ratio,
                           max_frequency_fraction, relative_std_floor, function_tolerance);
-          return RunFit(frf, o, name);
+          return FitResponse(frf, o, friction, units, name, nullptr);
         },
-        std::tuple_cat(std::make_tuple(py::arg("frf")), FitArgs(), std::make_tuple(py::arg("name") = "")),
+        std::tuple_cat(std::make_tuple(py::arg("frf")), FitArgs(),
+                       std::make_tuple(py::arg("friction") = "auto", py::arg("units") = py::none(),
+                                       py::arg("name") = "")),
 
         R"doc(Fits eq. (1) with `modes` sections to a FrequencyResponse as `zwidth fit`
 does (Ceres; residual against the exact ZOH response weighted by the per-bin
@@ -286,7 +376,27 @@ fmax] Hz where the input has power (min_input_power_ratio) and the coherence
 InputError unless allow_short=True (then judged 'poor'). init: a Model tried
 first. A fit that does not converge is returned with its status (check
 .converged); check .quality ('good'/'poor') and .quality_reasons before
-using the numbers; bad options raise InputError.)doc", kCLocale);
+using the numbers; bad options raise InputError. friction: 'auto' (Coulomb
+friction fitted when the log shows it), 'coulomb' (always fitted) or 'none'
+(the linear fit; friction only detected), as `zwidth fit --friction`; it
+needs one time-domain log (a Log or a log file's path), so a response alone
+warns that friction was not checked ('coulomb' raises InputError). units:
+'rotary' or 'linear' (the model's labels, as --units); None: what a log
+file's header says (N m, rad: rotary; N, m: linear), else rotary. The
+fit is `zwidth fit`'s (analysis::FitToModelFile): the same verdict, reasons,
+friction and numbers, and nothing printed.)doc", kCLocale);
+  // zwidth.fit of a Log (its samples read again by the friction fit) and of log files.
+  m.def("_fit_response",
+        [](const ident::FrequencyResponse& frf, const fit::FitOptions& o, const std::string& friction,
+           const std::optional<std::string>& units, const std::string& name, const PyLog& log) {
+          return FitResponse(frf, o, friction, units, name, &log);
+        },
+        py::arg("frf"), py::arg("fit"), py::arg("friction"), py::arg("units"), py::arg("name"), py::arg("log"),
+        "fit(log, ...)'s core: the response estimated from the Log, the Log for the friction fit.", kCLocale);
+  m.def("_fit_logs", &FitLogs, py::arg("paths"), py::arg("estimate"), py::arg("fit"), py::arg("friction"),
+        py::arg("units"), py::arg("name"),
+        "fit(path, ...)'s core: `zwidth fit LOG...` with the options made by _estimate_logs_options and "
+        "_fit_options.", kCLocale);
 }
 
 }  // namespace

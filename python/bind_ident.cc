@@ -21,14 +21,6 @@
 namespace zwidth::python {
 namespace {
 
-// A log in memory: torque input u, position output y, uniformly sampled.
-struct PyLog {
-  std::string source;
-  double sample_rate_hz = 0.0;
-  std::vector<double> u, y;
-  double period_s() const { return model::SamplePeriod(sample_rate_hz); }
-};
-
 // The Welch keywords as options: the library's one parser (ident::ParseWelchOptions,
 // as the CLI's EstimateFlags::Resolve); window_length 0 = ident::DefaultWindowLength.
 ident::WelchOptions WelchFrom(int window_length, double overlap, const std::string& window,

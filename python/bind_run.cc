@@ -41,7 +41,7 @@ void BindRun(py::module_& m) {
   m.def("_run",
         [](const py::object& logs, const py::object& out_path, const analysis::LogsEstimateOptions& estimate,
            const fit::FitOptions& fit, bool force, bool figures, bool png, const std::optional<std::string>& reference,
-           const std::vector<int>& delays, const std::string& units, std::optional<double> velocity_filter_hz,
+           const std::vector<int>& delays, const std::optional<std::string>& units, std::optional<double> velocity_filter_hz,
            std::optional<std::tuple<double, double, double>> hand, std::optional<double> b_step, int b_points,
            double report_filter_hz, const std::string& friction, bool table2, const std::string& command_line) {
           const std::string out_dir = PathFrom(out_path, "out_dir");
@@ -49,7 +49,7 @@ void BindRun(py::module_& m) {
           job.input.logs = PathsFrom(logs);
           if (job.input.logs.empty()) throw InputError("logs: no log given: pass a log file's path (or several)");
           for (const std::string& p : job.input.logs) job.input.source += (job.input.source.empty() ? "" : " + ") + p;
-          job.options.linear = io::ParseUnitsWord(units, "units");
+          if (units) job.options.linear = io::ParseUnitsWord(*units, "units");  // None: the logs' headers
           job.options.delays = delays;
           job.options.figures = figures;
           job.options.report_filter_hz = Number(py::float_(report_filter_hz), "report_filter_hz");  // NaN refused, as the CLI
@@ -58,6 +58,7 @@ void BindRun(py::module_& m) {
           if (table2) job.options.table2 = analysis::Table2Options{};  // `run --table2`'s defaults
           job.estimate_fit = {estimate, fit};
           job.estimate_fit.friction = analysis::FrictionModelNamed(friction);  // before anything is read, as the CLI
+          if (units) job.estimate_fit.linear = job.options.linear;
           job.loop = [=](double period_s) { return LoopFrom(velocity_filter_hz, hand, period_s); };
           job.report = {.draw_figures = figures, .png = png, .fit_report = "", .command_line = command_line};
           std::string why;  // before anything is read or written, as the CLI
@@ -94,7 +95,7 @@ void BindRun(py::module_& m) {
         },
         py::arg("logs"), py::arg("out_dir"), py::arg("estimate"), py::arg("fit"), py::arg("force") = false,
         py::arg("figures") = d.figures, py::arg("png") = false, py::arg("reference") = py::none(),
-        py::arg("delays") = d.delays, py::arg("units") = "rotary", py::arg("velocity_filter_hz") = py::none(),
+        py::arg("delays") = d.delays, py::arg("units") = py::none(), py::arg("velocity_filter_hz") = py::none(),
         py::arg("hand") = py::none(), py::arg("b_step") = py::none(), py::arg("b_points") = d.grid.b_points,
         py::arg("report_filter_hz") = d.report_filter_hz, py::arg("friction") = "auto", py::arg("table2") = false,
         py::arg("command_line") = "",

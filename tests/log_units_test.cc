@@ -200,5 +200,81 @@ TEST_F(LogUnits, PlainNamesStaySi) {
   ExpectSi(ReadLog(dir_.Write("p2.csv", "t,motor_torque,pos_cmd\n" + Rows(s_, 1, 1)), sel), s_);
 }
 
+// The header's units say the axis (io::HeaderUnits): N m and rad rotary, N
+// and m linear; a flag's unit, a plain name or "si" say nothing.
+TEST_F(LogUnits, TheHeaderSaysTheAxis) {
+  struct Case {
+    const char* header;
+    HeaderUnits units;
+    double fu, fy;
+  };
+  const Case cases[] = {
+      {"t,torque [N m],position [rad]", HeaderUnits::kRotary, 1, 1},
+      {"t,torque [Nm],position [deg]", HeaderUnits::kRotary, 1, kDeg},
+      {"t,torque [N],position [m]", HeaderUnits::kLinear, 1, 1},
+      {"t,torque [mN],position [mm]", HeaderUnits::kLinear, 1e3, 1e3},
+      {"t,torque [N],position", HeaderUnits::kLinear, 1, 1},   // one column says it
+      {"t,torque [N m],position [m]", HeaderUnits::kMixed, 1, 1},
+      {"t,torque,position", HeaderUnits::kNone, 1, 1},
+      {"t,torque [si],position [si]", HeaderUnits::kNone, 1, 1},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.header);
+    const Log log = ReadLog(dir_.Write("h.csv", std::string(c.header) + "\n" + Rows(s_, c.fu, c.fy)));
+    EXPECT_EQ(log.info.header_units, c.units);
+    EXPECT_EQ(log.info.header_units_text.empty(), c.units == HeaderUnits::kNone) << log.info.header_units_text;
+  }
+  // A units row says it too; a unit given by the caller is the caller's, not the header's.
+  EXPECT_EQ(ReadLog(dir_.Write("r.csv", "t;force;x\ns;N;mm\n" + Rows(s_, 1, 1e3, ";")),
+                    [] { LogSelect s; s.input_column = "force"; s.output_column = "x"; return s; }())
+                .info.header_units,
+            HeaderUnits::kLinear);
+  LogSelect given;
+  given.input_unit = "N";
+  given.output_unit = "m";
+  EXPECT_EQ(ReadLog(dir_.Write("g.csv", "t,torque,position\n" + Rows(s_, 1, 1)), given).info.header_units,
+            HeaderUnits::kNone);
+}
+
+// LinearUnitsOf: the caller's choice, else the headers', else rotary; a header
+// that mixes, contradicts the caller, or disagrees with another run is refused.
+TEST_F(LogUnits, TheModelsUnitsFollowTheHeaderUnlessGiven) {
+  auto info = [](HeaderUnits u, const std::string& source) {
+    LogInfo i;
+    i.source = source;
+    i.header_units = u;
+    i.header_units_text = u == HeaderUnits::kNone ? "" : "input column 'f' in N (linear)";
+    return i;
+  };
+  const LogInfo lin = info(HeaderUnits::kLinear, "lin.csv"), rot = info(HeaderUnits::kRotary, "rot.csv"),
+                none = info(HeaderUnits::kNone, "none.h5"), mixed = info(HeaderUnits::kMixed, "mixed.csv");
+  EXPECT_TRUE(LinearUnitsOf(std::nullopt, {lin}, "ModelFile::linear"));
+  EXPECT_FALSE(LinearUnitsOf(std::nullopt, {rot}, "ModelFile::linear"));
+  EXPECT_FALSE(LinearUnitsOf(std::nullopt, {none}, "ModelFile::linear"));
+  EXPECT_FALSE(LinearUnitsOf(std::nullopt, {}, "ModelFile::linear"));
+  EXPECT_TRUE(LinearUnitsOf(true, {none}, "ModelFile::linear"));
+  EXPECT_TRUE(LinearUnitsOf(true, {lin, none}, "ModelFile::linear"));
+  EXPECT_TRUE(LinearUnitsOf(std::nullopt, {none, lin}, "ModelFile::linear"));
+  auto refusal = [](std::optional<bool> given, const std::vector<LogInfo>& infos) {
+    try {
+      LinearUnitsOf(given, infos, "ModelFile::linear");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    ADD_FAILURE() << "accepted";
+    return std::string();
+  };
+  std::string why = refusal(false, {lin});
+  EXPECT_NE(why.find("lin.csv: the header says linear units"), std::string::npos) << why;
+  EXPECT_NE(why.find("ModelFile::linear rotary was given"), std::string::npos) << why;
+  why = refusal(std::nullopt, {mixed});
+  EXPECT_NE(why.find("mixed.csv: the header mixes rotary and linear"), std::string::npos) << why;
+  why = refusal(true, {mixed});
+  EXPECT_NE(why.find("mixes"), std::string::npos) << why;
+  why = refusal(std::nullopt, {lin, rot});
+  EXPECT_NE(why.find("rot.csv: the header says rotary"), std::string::npos) << why;
+  EXPECT_NE(why.find("lin.csv's says linear"), std::string::npos) << why;
+}
+
 }  // namespace
 }  // namespace zwidth::io

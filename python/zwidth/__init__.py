@@ -163,20 +163,49 @@ from a log file (read_log's keywords select its columns). """ + _signatures.over
 _fit = _zwidth.fit
 
 
+def _paths(data):
+    """[path, ...] of a log file's path or a list of them; None for anything else."""
+    if _path(data) is not None:
+        return [_path(data)]
+    if isinstance(data, (list, tuple)) and data and all(_path(p) is not None for p in data):
+        return [_path(p) for p in data]
+    return None
+
+
 def fit(data, *args, **kwargs):
     # kwargs: fit's own, then (for a Log or a path) estimate's.
     fit_names = set(_fit_signature.parameters) - {"estimate_options"}
     est = {k: kwargs.pop(k) for k in list(kwargs) if k not in fit_names}
-    if isinstance(data, Log) or _path(data) is not None:
-        data = estimate(data, **est)
-    elif est:
-        raise TypeError(f"fit() got unexpected keyword arguments {sorted(est)} (estimate's keywords are "
-                        "for a Log or a path)")
-    if not isinstance(data, FrequencyResponse):
-        raise TypeError(f"fit(data): data must be a FrequencyResponse, a Log or a log file's path, "
-                        f"not {type(data).__name__}")
-    _signatures.check_numbers(_FIT_NUMBERS, (data,) + args, kwargs)
-    res = _fit(data, *args, **kwargs)
+    paths = _paths(data)
+    if paths is None and not isinstance(data, Log):
+        if est:
+            raise TypeError(f"fit() got unexpected keyword arguments {sorted(est)} (estimate's keywords are "
+                            "for a Log or a path)")
+        if not isinstance(data, FrequencyResponse):
+            raise TypeError(f"fit(data): data must be a FrequencyResponse, a Log or a log file's path, "
+                            f"not {type(data).__name__}")
+        _signatures.check_numbers(_FIT_NUMBERS, (data,) + args, kwargs)
+        res = _fit(data, *args, **kwargs)
+    else:
+        _signatures.check_numbers(_FIT_NUMBERS, (data,) + args, kwargs)
+        kw = dict(_fit_plain.__signature__.bind(data, *args, **kwargs).arguments)
+        kw.pop("frf")
+        own = {k: kw.pop(k) for k in ("friction", "units", "name") if k in kw}
+        own = (own.get("friction", "auto"), own.get("units"), own.get("name", ""))
+        if paths is not None:
+            # `zwidth fit LOG...`: estimate_logs' keywords, and fmin/fmax bound the estimate
+            # too (FitFlags::Resolve).
+            unknown = sorted(set(est) - _names(_zwidth._estimate_logs_options))
+            if unknown:
+                raise TypeError(f"fit() got unexpected keyword arguments {unknown} (a log file's path takes "
+                                "estimate_logs' keywords)")
+            _signatures.check_numbers((None, _signatures.number_names(_zwidth._estimate_logs_options)[1]), (), est)
+            for k in ("fmin", "fmax"):
+                if k in kw:
+                    est[k] = kw[k]
+            res = _zwidth._fit_logs(paths, _zwidth._estimate_logs_options(**est), _zwidth._fit_options(**kw), *own)
+        else:
+            res = _zwidth._fit_response(estimate(data, **est), _zwidth._fit_options(**kw), *own, data)
     if res.quality != "good":
         warnings.warn(FitQualityWarning(res), stacklevel=2)
     return res
@@ -197,8 +226,11 @@ _fit_signature = _fit_with_estimate_signature()
 fit.__signature__ = _fit_signature
 fit.__doc__ = _fit_plain.__doc__ + """
 
-data may also be a Log or a log file's path: it is estimated first, with estimate's
-keywords (window_length=..., input_column=...) passed through estimate_options.
+data may also be a Log (estimated first with estimate's keywords, window_length=...,
+passed through estimate_options) or a log file's path or a list of them (as `zwidth fit
+LOG...`: estimate_logs' keywords, input_column=..., whole_record=...; fmin/fmax bound the
+estimate too). The friction fit reads the Log's or the file's samples again (with a Log:
+Welch's default settings at the response's window).
 A poor fit (quality != 'good') raises the warning FitQualityWarning with its reasons."""
 
 
