@@ -316,6 +316,15 @@ io::BatchTable BatchTableOf(const std::vector<std::optional<Cells>>& rows) {
   return t;
 }
 
+std::string UnitInputHash(const io::BatchEntry& unit, const BatchOptions& options) {
+  // The friction model resolved (a default a caller's key need not spell out;
+  // tables of batches that fitted no friction are computed again).
+  std::string key = options.options_key + "\nzwidth " + build_info::kVersion + "\nfriction " +
+                    (options.estimate_fit.friction ? fit::ToString(*options.estimate_fit.friction) : "not looked at");
+  for (const auto& [flag, value] : unit.flags) key += "\n--" + flag + "=" + value;
+  return io::HashInputs({unit.path}, key);
+}
+
 RunAnalysis AnalyseUnit(const io::BatchEntry& unit, const BatchOptions& options, const BatchUnitOptions& unit_options) {
   RunInput in;
   in.logs = {unit.path};
@@ -369,12 +378,7 @@ BatchResult RunBatchWith(const std::vector<io::BatchEntry>& units, const BatchOp
   };
   auto one = [&](size_t i) {
     const io::BatchEntry& unit = units[i];
-    // The friction model resolved (a default a caller's key need not spell out;
-    // tables of batches that fitted no friction are computed again).
-    std::string key = options.options_key + "\nzwidth " + build_info::kVersion + "\nfriction " +
-                      (options.estimate_fit.friction ? fit::ToString(*options.estimate_fit.friction) : "not looked at");
-    for (const auto& [flag, value] : unit.flags) key += "\n--" + flag + "=" + value;
-    const std::string hash = io::HashInputs({unit.path}, key);
+    const std::string hash = UnitInputHash(unit, options);
     if (auto it = previous.find(unit.serial); it != previous.end() && !hash.empty()) {
       auto h = it->second->find("input_hash");
       if (h != it->second->end() && h->second == hash) {

@@ -87,6 +87,12 @@ struct BatchOptions {
   bool IsValid(std::string* why) const;
 };
 
+// The unit's input_hash (FNV-1a, io::HashInputs): its log's bytes with the
+// options key, the zwidth version, the friction model and the unit's own
+// flags. A previous row with this hash is taken instead of computing the unit
+// (resume); "" when the log cannot be read (the unit is computed, its error a row).
+std::string UnitInputHash(const io::BatchEntry& unit, const BatchOptions& options);
+
 // One unit's analysis from its log (logs = {unit.path}), as RunBatch computes
 // it: EstimateFitAndAnalyse (analysis/run_input.h), the pipeline of `run`,
 // with the batch's options (the unit's own over them), quiet. Throws

@@ -19,6 +19,7 @@
 
 #include "analysis/batch.h"
 #include "analysis/population.h"
+#include "apps/batch_command.h"
 #include "apps/common.h"
 #include "apps/run_flags.h"
 #include "io/atomic_file.h"
@@ -127,15 +128,18 @@ std::string Clock(double s) {
   return b;
 }
 
-void Batch(BatchFlags& b, const CLI::App* cmd) {
+// The request of flags as parsed (BatchRequest): everything checked and read
+// before any unit is computed.
+std::shared_ptr<BatchRequest> Prepare(BatchFlags& b, const CLI::App* cmd) {
   RunFlags& f = b.run;
   if (b.logs.empty() == b.manifest.empty()) {
     throw InputError("batch takes logs (paths or quoted globs) or --manifest units.csv, not both and not neither");
   }
+  auto req = std::make_shared<BatchRequest>();
   analysis::RunInput ref;  // the reference, read once
-  analysis::BatchOptions o;
+  analysis::BatchOptions& o = req->options;
   // --reference DESIGN.json: the design's model is the reference, its tolerances the specs.
-  std::optional<io::Design> design;
+  std::optional<io::Design>& design = req->design;
   if (!f.reference.empty() && io::IsDesignFile(f.reference)) {
     design = io::ReadDesign(f.reference);
     f.reference.clear();
@@ -151,9 +155,9 @@ void Batch(BatchFlags& b, const CLI::App* cmd) {
     o.specs = analysis::DesignSpecs(*design, analysis::ReferenceStabilityOf(dm, T, o.run.delays));
   }
   for (const std::string& s : b.specs) o.specs.push_back(analysis::ParseBatchSpec(s, o.run.delays));
-  const std::vector<io::BatchEntry> units = b.manifest.empty() ? io::EntriesFromArguments(b.logs) : io::ReadManifest(b.manifest);
+  req->units = b.manifest.empty() ? io::EntriesFromArguments(b.logs) : io::ReadManifest(b.manifest);
   std::vector<std::string> inputs;
-  for (const io::BatchEntry& e : units) {
+  for (const io::BatchEntry& e : req->units) {
     UnitSelect(f.est.select, e);  // every column checked before any work
     if (!b.unit_folders.empty()) CheckFolderName(e);
     inputs.push_back(e.path);
@@ -178,15 +182,54 @@ void Batch(BatchFlags& b, const CLI::App* cmd) {
     if (!b.population_options.IsValid(&why)) throw InputError(why);
   }
   if (b.jobs < 0) throw InputError("--jobs " + std::to_string(b.jobs) + ": must be >= 1 (0: the cores available)");
-  // Units at once: at most the cores (affinity, cgroup quota); each unit's own
-  // work then on its thread alone, the fit's plugin included (it reads
-  // ZWIDTH_NUM_THREADS on each call).
+  // Units at once: at most the cores (affinity, cgroup quota).
   const int cores = NumThreads();
   o.threads = b.jobs > 0 ? std::min(b.jobs, cores) : cores;
-  if (b.jobs > cores) std::fprintf(stderr, "note: --jobs %d: %d core(s) available, %d units at once\n", b.jobs, cores, o.threads);
-  if (o.threads > 1) setenv("ZWIDTH_NUM_THREADS", "1", 1);
   o.options_key = OptionsKey(cmd);
-  if (!b.restart) o.previous = PreviousTable(b.table);
+  // Each unit is run's pipeline (analysis::AnalyseUnit) with run's estimate,
+  // fit and friction options; a unit's manifest columns are its log flags.
+  o.estimate_fit = {f.est.Options(true), f.fit.o};
+  o.estimate_fit.friction = analysis::FrictionModelNamed(f.friction);
+  if (!f.units.empty()) o.estimate_fit.linear = o.run.linear;  // else each log's header says (io::LinearUnitsOf)
+  o.loop = RunLoop(f);
+  o.reference = ref.reference;
+  o.reference_name = ref.reference_name;
+  o.reference_is_table1 = ref.reference_is_table1;
+  o.words = WithFlags;  // the table and the unit folders show the CLI's flags
+  req->unit_options = [select = f.est.select](const io::BatchEntry& e, analysis::EstimateFitOptions* eo) {
+    eo->estimate.select = UnitSelect(select, e);
+  };
+  // A unit's files name its own log (and what the batch read before its units: a manifest, a
+  // reference), not the logs other threads read meanwhile.
+  if (!b.unit_folders.empty()) {
+    req->unit_done = [batch_inputs = io::NotedInputs(), folders = b.unit_folders](const io::BatchEntry& e,
+                                                                                  const analysis::RunAnalysis& a) {
+      std::vector<std::string> inputs = batch_inputs;
+      inputs.push_back(e.path);
+      io::ProvenanceInputsScope scope(std::move(inputs));
+      io::OutputFolder folder((std::filesystem::path(folders) / e.serial).string(), true);
+      report::WriteRunReport(a, folder, {.draw_figures = false, .fit_report = FitReport(a.input.fit), .command_line = CommandLine()});
+      folder.Commit();
+    };
+  }
+  req->table = b.table;
+  req->population = b.population;
+  req->fleet_report = b.fleet_report;
+  req->population_options = b.population_options;
+  req->restart = b.restart;
+  req->jobs = b.jobs;
+  return req;
+}
+
+void Batch(BatchFlags& b, const CLI::App* cmd) {
+  const std::shared_ptr<BatchRequest> req = Prepare(b, cmd);
+  analysis::BatchOptions& o = req->options;
+  const int cores = NumThreads();
+  if (b.jobs > cores) std::fprintf(stderr, "note: --jobs %d: %d core(s) available, %d units at once\n", b.jobs, cores, o.threads);
+  // Each unit's own work on its thread alone, the fit's plugin included (it
+  // reads ZWIDTH_NUM_THREADS on each call).
+  if (o.threads > 1) setenv("ZWIDTH_NUM_THREADS", "1", 1);
+  o.previous = PreviousBatchTable(*req);
 
   const bool terminal = isatty(STDERR_FILENO) == 1;
   auto last_save = std::chrono::steady_clock::now();
@@ -201,44 +244,9 @@ void Batch(BatchFlags& b, const CLI::App* cmd) {
       last_save = std::chrono::steady_clock::now();
     }
   };
-  // Each unit is run's pipeline (analysis::AnalyseUnit) with run's estimate,
-  // fit and friction options; a unit's manifest columns are its log flags.
-  o.estimate_fit = {f.est.Options(true), f.fit.o};
-  o.estimate_fit.friction = analysis::FrictionModelNamed(f.friction);
-  if (!f.units.empty()) o.estimate_fit.linear = o.run.linear;  // else each log's header says (io::LinearUnitsOf)
-  o.loop = RunLoop(f);
-  o.reference = ref.reference;
-  o.reference_name = ref.reference_name;
-  o.reference_is_table1 = ref.reference_is_table1;
-  o.words = WithFlags;  // the table and the unit folders show the CLI's flags
-  auto unit_options = [&](const io::BatchEntry& e, analysis::EstimateFitOptions* eo) {
-    eo->estimate.select = UnitSelect(f.est.select, e);
-  };
-  analysis::BatchUnitDone unit_done;
-  // A unit's files name its own log (and what the batch read before its units: a manifest, a
-  // reference), not the logs other threads read meanwhile.
-  const std::vector<std::string> batch_inputs = io::NotedInputs();
-  if (!b.unit_folders.empty()) {
-    unit_done = [&](const io::BatchEntry& e, const analysis::RunAnalysis& a) {
-      std::vector<std::string> inputs = batch_inputs;
-      inputs.push_back(e.path);
-      io::ProvenanceInputsScope scope(std::move(inputs));
-      io::OutputFolder folder((std::filesystem::path(b.unit_folders) / e.serial).string(), true);
-      report::WriteRunReport(a, folder, {.draw_figures = false, .fit_report = FitReport(a.input.fit), .command_line = CommandLine()});
-      folder.Commit();
-    };
-  }
   const auto start = std::chrono::steady_clock::now();
-  const analysis::BatchResult r = analysis::RunBatch(units, o, unit_options, unit_done, on_progress);
-  // The population of this batch's units: outliers into the table, its statistics on request.
-  io::BatchTable table = r.table;
-  const analysis::Population pop = analysis::AnalysePopulation(table, b.population_options);
-  analysis::AddOutlierColumns(pop, &table);
-  io::WriteBatchTable(b.table, table);
-  if (!b.population.empty()) io::WriteBatchTable(b.population, analysis::PopulationTable(pop));
-  if (!b.fleet_report.empty()) {
-    io::WriteTextAtomically(b.fleet_report, report::FleetHtml(table, pop, design ? &*design : nullptr, o, CommandLine()));
-  }
+  const analysis::BatchResult r = analysis::RunBatch(req->units, o, req->unit_options, req->unit_done, on_progress);
+  FinishBatch(*req, r);
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (terminal) std::fprintf(stderr, "\n");
   std::fprintf(stderr, "batch: %zu units, %zu ok, %zu failed, %zu resumed, %zu computed in %.3f s (%.3g units/s on %d thread%s) -> %s\n",
@@ -248,10 +256,8 @@ void Batch(BatchFlags& b, const CLI::App* cmd) {
   if (r.progress.failed > 0) throw ExitStatus{4};
 }
 
-}  // namespace
-
-void AddBatchCommand(CLI::App& app) {
-  auto b = std::make_shared<BatchFlags>();
+// The command's declarations (its flags into *b).
+CLI::App* DeclareBatch(CLI::App& app, const std::shared_ptr<BatchFlags>& b) {
   CLI::App* cmd = app.add_subcommand("batch", "run's estimate, fit and Z-width for many units into one table; resumes");
   cmd->add_option("logs", b->logs, "one log per unit: paths or quoted globs ('line/*.h5'), the serial is the path");
   cmd->add_option("--manifest", b->manifest,
@@ -278,6 +284,54 @@ void AddBatchCommand(CLI::App& app) {
   cmd->get_option("--reference")
       ->description("compare with table1 or a model JSON, or judge every unit against a design: DESIGN.json "
                     "({\"format\": \"zwidth-design\", \"model\": ..., \"tolerances\": [...]}, docs/fleet.md)");
+  return cmd;
+}
+
+}  // namespace
+
+io::BatchTable PreviousBatchTable(const BatchRequest& request) {
+  return request.restart ? io::BatchTable{} : PreviousTable(request.table);
+}
+
+io::BatchTable FinishBatch(const BatchRequest& request, const analysis::BatchResult& result) {
+  // The population of this batch's units: outliers into the table, its statistics on request.
+  io::BatchTable table = result.table;
+  const analysis::Population pop = analysis::AnalysePopulation(table, request.population_options);
+  analysis::AddOutlierColumns(pop, &table);
+  io::WriteBatchTable(request.table, table);
+  if (!request.population.empty()) io::WriteBatchTable(request.population, analysis::PopulationTable(pop));
+  if (!request.fleet_report.empty()) {
+    io::WriteTextAtomically(request.fleet_report, report::FleetHtml(table, pop, request.design ? &*request.design : nullptr,
+                                                                    request.options, CommandLine()));
+  }
+  return table;
+}
+
+std::shared_ptr<const BatchRequest> ParseBatchRequest(const std::vector<std::string>& args) {
+  CLI::App app{"zwidth"};
+  app.require_subcommand(1);
+  auto b = std::make_shared<BatchFlags>();
+  CLI::App* cmd = DeclareBatch(app, b);
+  GuardNumericFlags(&app);
+  std::shared_ptr<const BatchRequest> req;
+  cmd->callback([&] { req = Prepare(*b, cmd); });
+  std::vector<std::string> argv_text = {"zwidth", "batch"};
+  argv_text.insert(argv_text.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& a : argv_text) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  try {
+    CheckListFlags(app, static_cast<int>(argv_text.size()), argv.data());
+    app.parse(static_cast<int>(argv_text.size()), argv.data());
+  } catch (const CLI::ParseError& e) {
+    throw InputError(std::string("batch: ") + (e.get_name() == "CallForHelp" ? "--help is for the command line" : e.what()));
+  }
+  return req;
+}
+
+void AddBatchCommand(CLI::App& app) {
+  auto b = std::make_shared<BatchFlags>();
+  CLI::App* cmd = DeclareBatch(app, b);
   cmd->callback([b, cmd] { Batch(*b, cmd); });
 }
 

@@ -3,13 +3,14 @@
 
   1. N separate `zwidth run --no-figures` processes, one after the other and two at a time;
   2. `zwidth batch --jobs 1` and `--jobs 2` (threads in one process);
-  3. zwidth.batch (python/zwidth/_batch.py) on 2 threads and on a dask.distributed LocalCluster
-     of 2 worker processes (1 thread each), the cluster's start timed apart;
+  3. zwidth.batch (python/zwidth/_batch.py, units computed in-process: python/bind_batch.cc) on 2
+     threads and on a dask.distributed LocalCluster of 2 worker processes (1 thread each), the
+     cluster's start timed apart (the module is the one built beside ZWIDTH_EXE: build/python);
 
 over the same N units, with the CPU time per unit (user + system of every process involved: on a
 shared machine steadier than the wall time) and peak RSS per process (os.wait4's ru_maxrss: each `run`, each `batch`,
-the `zwidth batch` of one unit that zwidth.batch starts per unit; for the cluster, each worker
-process's own peak, Python and dask included).
+this Python process for the threads; for the cluster, each worker process's own peak, Python and
+dask included).
 
 Units: Table I simulated by `zwidth simulate` (white-noise torque, seeds 1..N, SECONDS s at 1 kHz),
 the end-of-line recipe's flags (docs/fleet.md): --modes 2 --window-length 512 --delays 2,4.
@@ -19,12 +20,11 @@ the threaded, cluster and batch tables are equal byte for byte, and the median K
 against the design's (Table I's own, `zwidth boundary --summary`).
 
 Usage: python3 bench/fleet_throughput.py ZWIDTH_EXE [UNITS=30] [SECONDS=4]
-(from the source tree; needs python3-distributed and cloudpickle for the cluster rows, skipped
+(from the source tree; needs python3-distributed for the cluster rows, skipped
 without them). Prints a Markdown table; docs/fleet.md holds a measured one. Load on the machine
 (os.getloadavg) is printed before and after: on a shared machine read the figures as upper bounds.
 """
 import csv
-import importlib.util
 import json
 import math
 import os
@@ -127,46 +127,44 @@ def main():
         error = run_error(os.path.join(t, "batch1.csv"), logs, t)
         kmax = statistics.median(float(r["d2_K_cr_max"]) for r in csv.DictReader(open(os.path.join(t, "batch1.csv"))))
 
-        spec = importlib.util.spec_from_file_location("zwidth_batch_bench", os.path.join(src, "python/zwidth/_batch.py"))
-        zb = importlib.util.module_from_spec(spec)
-        sys.modules[spec.name] = zb
-        spec.loader.exec_module(zb)
-        # What zwidth.batch starts per unit: one `zwidth batch --jobs 1` of one unit.
-        _, unit_peak, _, _ = spawn([zw, "batch", logs[0], "-o", os.path.join(t, "one.csv"), "--jobs", "1", *FLAGS])
+        # The built module beside the executable (build/bin/zwidth -> build/python): its units are
+        # computed in this process (python/bind_batch.cc); the cluster's workers import it too.
+        pydir = os.path.join(os.path.dirname(os.path.dirname(zw)), "python")
+        sys.path.insert(0, pydir)
+        os.environ["PYTHONPATH"] = os.pathsep.join([pydir, os.environ.get("PYTHONPATH", "")]).rstrip(os.pathsep)
+        import zwidth._batch as zb
         threaded = os.path.join(t, "threads.csv")
         t0, c0 = time.perf_counter(), cpu(resource.getrusage(resource.RUSAGE_CHILDREN)) + cpu(resource.getrusage(resource.RUSAGE_SELF))
-        zb.batch(logs, output=threaded, zwidth=zw, threads=2, **KW)
+        zb.batch(logs, output=threaded, threads=2, **KW)
         wall = time.perf_counter() - t0
         used = cpu(resource.getrusage(resource.RUSAGE_CHILDREN)) + cpu(resource.getrusage(resource.RUSAGE_SELF)) - c0
         self_peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
         tables["zwidth.batch threads=2"] = open(threaded, "rb").read()
-        rows.append(("`zwidth.batch`, 2 threads (a `zwidth batch` process per unit, then the merge)", n, wall, n / wall, used,
-                     f"{self_peak:.0f} (this Python) + {unit_peak:.0f} per unit process"))
+        rows.append(("`zwidth.batch`, 2 threads (units in this Python process)", n, wall, n / wall, used,
+                     f"{self_peak:.0f} (this Python)"))
         try:
-            import cloudpickle
             from dask.distributed import Client, LocalCluster
         except ImportError as e:
             lines.append(f"cluster: skipped ({e})")
         else:
-            cloudpickle.register_pickle_by_value(zb)
             t0 = time.perf_counter()
             with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
                     Client(cluster) as client:
                 start = time.perf_counter() - t0
                 clustered = os.path.join(t, "cluster.csv")
                 t0 = time.perf_counter()
-                zb.batch(logs, output=clustered, zwidth=zw, client=client, **KW)
+                zb.batch(logs, output=clustered, client=client, **KW)
                 wall = time.perf_counter() - t0
 
-                def peak():  # the worker process's own (Python, dask, the task's threads); its zwidth
-                    import resource as r  # children are as unit_peak (their ru_maxrss here would count
-                    me, kids = r.getrusage(r.RUSAGE_SELF), r.getrusage(r.RUSAGE_CHILDREN)  # the worker's pages at fork)
-                    return me.ru_maxrss / 1024.0, me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
+                def peak():  # the worker process's own: Python, dask, zwidth and the units it computed
+                    import resource as r
+                    me = r.getrusage(r.RUSAGE_SELF)
+                    return me.ru_maxrss / 1024.0, me.ru_utime + me.ru_stime
                 worker = list(client.run(peak).values())
                 used = sum(c for _, c in worker)  # the workers' whole lives: their start and import included
             tables["zwidth.batch on the cluster"] = open(clustered, "rb").read()
             rows.append((f"`zwidth.batch`, LocalCluster of 2 workers (+ {start:.1f} s to start it)", n, wall, n / wall,
-                         used, " and ".join(f"{w:.0f}" for w, _ in worker) + f" (each worker) + {unit_peak:.0f} per unit process"))
+                         used, " and ".join(f"{w:.0f}" for w, _ in worker) + " (each worker)"))
         lines.append(f"load after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
 
     print(f"Units: Table I simulated {seconds} s at 1 kHz (seeds 1..{n}), flags {' '.join(FLAGS)}\n")

@@ -78,6 +78,10 @@ void RaiseCancelled() {
 
 }  // namespace zwidth::python
 
+namespace zwidth::python {
+void BindBatch(py::module_& m);  // zwidth.batch's units in this process (bind_batch.cc)
+}  // namespace zwidth::python
+
 PYBIND11_MODULE(_zwidth, m) {
   namespace py = pybind11;
   using namespace zwidth::python;
@@ -130,4 +134,5 @@ PYBIND11_MODULE(_zwidth, m) {
   BindFit(m);
   BindStability(m);
   BindRun(m);
+  BindBatch(m);
 }

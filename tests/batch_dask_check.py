@@ -3,9 +3,9 @@ worker processes, and `zwidth batch` itself: the same table, byte for byte, with
 row; then a resume through Python computes nothing.
 
 Logs: `zwidth simulate` of Table I (8 s, seeds 1..3) and a corrupt text log.
-The module is the built package's (its tables are read and written by the compiled extension's
-io::ReadBatchTable / io::WriteBatchTable), pickled by value for the workers
-(cloudpickle.register_pickle_by_value), which need only the zwidth executable.
+The module is the built package's: each unit is computed in the process that runs it (the
+extension's batch engine, python/bind_batch.cc); the workers import zwidth from PYTHONPATH and
+start no executable (zwidth batch runs only to make the reference table).
 Usage: batch_dask_check.py ZWIDTH SRC BUILD/python
 """
 import os
@@ -26,6 +26,15 @@ def check(ok, what):
 def read(path):
     with open(path, "rb") as f:
         return f.read()
+
+
+def forbid_processes():
+    """Run on each worker: starting any process (a zwidth executable) raises from then on."""
+    import subprocess as sp
+
+    def refuse(*a, **k):
+        raise RuntimeError("a worker started a process")
+    sp.Popen = refuse
 
 
 def main():
@@ -57,23 +66,24 @@ def main():
 
         t0 = time.monotonic()
         threaded = os.path.join(t, "threads.csv")
-        df = zb.batch(logs, output=threaded, zwidth=zw, threads=2, **flags)
+        df = zb.batch(logs, output=threaded, threads=2, **flags)
         t_threads = time.monotonic() - t0
         check(read(threaded) == read(cli), "zwidth.batch on threads: the table of zwidth batch, byte for byte")
         rows = df.to_dict("records") if hasattr(df, "to_dict") else df
         status = {r["serial"]: r["status"] for r in rows}
         check(status[bad] == "input_error" and sum(v == "ok" for v in status.values()) == 3, f"statuses {status}")
 
-        import cloudpickle
         from dask.distributed import Client, LocalCluster
-        cloudpickle.register_pickle_by_value(zb)
+        # The spawned workers import zwidth as any worker would: from their PYTHONPATH.
+        os.environ["PYTHONPATH"] = os.pathsep.join([pydir, os.environ.get("PYTHONPATH", "")]).rstrip(os.pathsep)
         t0 = time.monotonic()
         with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
                 Client(cluster) as client:
             t_start = time.monotonic() - t0
+            client.run(forbid_processes)  # a unit that started a process would fail its row
             t0 = time.monotonic()
             clustered = os.path.join(t, "cluster.csv")
-            zb.batch(logs, output=clustered, zwidth=zw, client=client, **flags)
+            zb.batch(logs, output=clustered, client=client, **flags)
             t_cluster = time.monotonic() - t0
             pids = set(client.run(os.getpid).values())
         check(len(pids) == 2 and os.getpid() not in pids, f"two worker processes ({len(pids)})")
@@ -81,13 +91,13 @@ def main():
 
         # Resume through Python: nothing to run, the table unchanged.
         t0 = time.monotonic()
-        zb.batch(logs, output=clustered, zwidth=zw, **flags)
+        zb.batch(logs, output=clustered, **flags)
         check(read(clustered) == read(cli), "a resumed zwidth.batch leaves the table as it was")
         print(f"4 units: threads {t_threads:.2f} s, cluster {t_cluster:.2f} s (+ {t_start:.2f} s to start it), "
               f"resume {time.monotonic() - t0:.2f} s")
 
         try:
-            zb.batch(logs, output=os.path.join(t, "x.csv"), zwidth=zw, delays="two")
+            zb.batch(logs, output=os.path.join(t, "x.csv"), delays="two")
             check(False, "a bad flag raises BatchError")
         except zb.BatchError as e:
             check("--delays" in str(e), f"a bad flag raises BatchError: {str(e)[:100]}")

@@ -3,8 +3,8 @@
 
     python3 batch_of_logs.py TABLE.csv LOG [LOG ...]
 
-Runs `zwidth batch` through zwidth.batch (each log its own process, on the
-machine's cores; the executable from $ZWIDTH_EXE or PATH) and prints, per log,
+Runs `zwidth batch` through zwidth.batch (each log computed in this process, on
+the machine's cores; no executable needed) and prints, per log,
 its status and K_CR at B = 0 for the loop delay 2. TABLE.csv is the batch's
 table; run again with more logs, the ones already in it are not computed again.
 """

@@ -1,21 +1,21 @@
 """zwidth.batch: `zwidth batch` from Python, on threads or on a dask.distributed cluster.
 
-Each unit is one ``zwidth batch`` process (an argument vector, never a shell)
-that writes that unit's row; the rows are then merged by ``zwidth batch`` itself
-over all the units, which finds every unit done with the same inputs and options
-(its resume) and writes the table in its own column order. So the table is the
-command's, whatever ran the units: threads here, or the workers of a
-``dask.distributed.Client`` (``client.map``; dask is the scheduler, zwidth does
-not bring one). The workers need the zwidth executable and read the logs at the
-paths given (a shared file system, or localhost).
+The request is `zwidth batch`'s: the keywords are its flags (the library's option table,
+io/option_names.cc, else the keyword with dashes), parsed by the command's own declarations in
+the compiled module (app::ParseBatchRequest), so a bad flag is refused as the command refuses it
+and a unit's input hash is the command's. Each unit is then computed in this process (or in a
+worker's) by the batch engine, analysis::RunBatch on that unit, with the GIL released: its row of
+text cells, its error as a row. Threads here, or the workers of a ``dask.distributed.Client``
+(``client.map``; dask is the scheduler, zwidth does not bring one), run units side by side; a
+worker needs only ``import zwidth`` and the logs at the paths given (a shared file system, or
+localhost). The batch's end is the command's too (app::FinishBatch): every unit resumed from its
+row, the population's outlier columns, the table written by io::WriteBatchTable.
 """
 
 import csv
 import io
 import os
-import shutil
-import subprocess
-import tempfile
+import uuid
 from concurrent.futures import ThreadPoolExecutor
 
 
@@ -24,14 +24,19 @@ class BatchError(RuntimeError):
 
 
 def _flag_args(flags):
-    """{'delays': [2, 4], 'window_length': 1024, 'allow_short': True} -> ['--delays', '2,4', ...]."""
+    """{'delays': [2, 4], 'window_length': 1024, 'allow_short': True, 'spec': ['m<=1', 'b<=2']}
+    -> ['--delays', '2,4', '--window-length', '1024', '--allow-short', '--spec', 'm<=1', '--spec', 'b<=2']."""
+    from . import _zwidth
     args = []
     for name, value in flags.items():
-        flag = "--" + name.replace("_", "-")
+        flag = _zwidth._batch_flag(name)
         if value is True:
             args.append(flag)
         elif value is False or value is None:
             continue
+        elif flag == "--spec" and isinstance(value, (list, tuple)):  # repeatable, one spec each
+            for v in value:
+                args += [flag, str(v)]
         elif isinstance(value, (list, tuple)):
             args += [flag, ",".join(str(v) for v in value)]
         else:
@@ -39,28 +44,10 @@ def _flag_args(flags):
     return args
 
 
-def _run(exe, args):
-    p = subprocess.run([exe, "batch", *args], capture_output=True, text=True)
-    if p.returncode not in (0, 4):  # 4: some unit failed, its row says why
-        raise BatchError(p.stderr.strip() or f"zwidth batch exited {p.returncode}")
-    return p
-
-
-def _unit_row(exe, unit, args):
-    """One unit in its own `zwidth batch` (--jobs 1): its table's text. Runs on a thread or a dask worker."""
-    with tempfile.TemporaryDirectory(prefix="zwidth_unit_") as d:
-        table = os.path.join(d, "row.csv")
-        if isinstance(unit, dict):  # a manifest row: serial, path and log flags
-            manifest = os.path.join(d, "unit.csv")
-            with open(manifest, "w", newline="") as f:
-                w = csv.writer(f)
-                w.writerow(list(unit))
-                w.writerow(list(unit.values()))
-            _run(exe, ["--manifest", manifest, "-o", table, "--jobs", "1", *args])
-        else:
-            _run(exe, [unit, "-o", table, "--jobs", "1", *args])
-        with open(table, newline="") as f:
-            return f.read()
+def _unit_row(args, batch_id, index, serial, serial_thread=True):
+    """Unit `index` of the batch computed here (a thread or a dask worker): its row, a dict of text cells."""
+    from . import _zwidth
+    return _zwidth._batch_unit(args, batch_id, index, serial, serial_thread)
 
 
 def _table_text(path):
@@ -69,73 +56,47 @@ def _table_text(path):
     return _zwidth._read_batch_table(os.fspath(path))
 
 
-def _manifest_units(manifest):
-    folder = os.path.dirname(os.path.abspath(manifest))
-    with open(manifest, newline="") as f:
-        rows = list(csv.DictReader(f))
-    for r in rows:  # as zwidth reads it: a relative path from the manifest's folder
-        if "path" in r and r["path"] and not os.path.isabs(r["path"]):
-            r["path"] = os.path.join(folder, r["path"])
-    return rows
-
-
-def batch(logs=None, *, output, manifest=None, client=None, threads=None, zwidth=None, **flags):
+def batch(logs=None, *, output, manifest=None, client=None, threads=None, **flags):
     """Runs `zwidth batch` over `logs` (paths or globs) or a `manifest` CSV into the table `output`
-    (CSV, or HDF5 when it ends .h5/.hdf5, as the command writes it).
+    (CSV, or HDF5 when it ends .h5/.hdf5, as the command writes it), each unit in this process
+    (or on the client's workers) through the library.
 
-    flags: run's flags as keywords (delays=[2, 4], window_length=1024, reference="table1", ...).
-    client: a dask.distributed.Client; the units then run as its tasks. Else on `threads`
-    threads (default: the cores; each unit is a process, so the GIL is not held).
-    zwidth: the executable (default: $ZWIDTH_EXE, else `zwidth` on PATH).
+    flags: the command's flags as keywords (delays=[2, 4], window_length=1024, reference="table1",
+    spec=["m<=2e-4"], population="pop.csv", restart=True, ...).
+    client: a dask.distributed.Client; the units then run as its tasks (the workers import zwidth).
+    Else on `threads` threads (default: the cores); a unit releases the GIL while it computes.
     Returns the table: a pandas DataFrame when pandas imports, else a list of dicts of text cells.
     A unit that fails is a row with status and error; a bad request raises BatchError.
     An existing `output` of an earlier batch is resumed (its units with the same inputs are not run).
     """
-    exe = zwidth or os.environ.get("ZWIDTH_EXE") or shutil.which("zwidth")
-    if not exe:
-        raise BatchError("no zwidth executable: pass zwidth='/path/to/zwidth' or set ZWIDTH_EXE")
+    from . import _zwidth
     if (logs is None) == (manifest is None):
         raise BatchError("batch takes logs (paths or globs) or manifest=units.csv, not both and not neither")
-    args = _flag_args(flags)
-    if isinstance(logs, str):
+    if isinstance(logs, (str, os.PathLike)):
         logs = [logs]
-    whole = ["--manifest", manifest] if manifest else list(logs)
-    # The units as zwidth names them (a glob expanded in name order, as zwidth does).
-    if manifest:
-        units = _manifest_units(manifest)
-    else:
-        import glob as _glob
-        units = []
-        for a in logs:
-            units += sorted(_glob.glob(a)) if any(c in a for c in "*?[") else [a]
-    # Resume: units in an earlier table are left to zwidth's merge, which takes a row whose
-    # inputs hash the same and computes again (on this machine) one whose log or options changed.
-    done, earlier = set(), None
-    if os.path.exists(output):
-        earlier = _table_text(output)
-        done = {r["serial"] for r in csv.DictReader(io.StringIO(earlier))}
-    todo = [u for u in units if (u["serial"] if isinstance(u, dict) else u) not in done]
+    if "jobs" in flags:
+        raise BatchError("jobs: zwidth.batch runs units on threads=N or a dask client=, not --jobs")
+    args = ["--manifest", os.fspath(manifest)] if manifest else [os.fspath(a) for a in logs]
+    args += ["--output", os.fspath(output), *_flag_args(flags)]
+    batch_id = uuid.uuid4().hex  # a worker parses this request once
+    try:
+        units = _zwidth._batch_units(args, batch_id)  # (serial, the previous table's row or None)
+    except _zwidth.InputError as e:
+        raise BatchError(str(e)) from None
+    rows = [row for _, row in units]  # a unit resumed from the table at `output`: its row; else None
+    todo = [i for i, row in enumerate(rows) if row is None]
+    serials = [units[i][0] for i in todo]
     if client is not None:
-        texts = client.gather(client.map(_unit_row, [exe] * len(todo), todo, [args] * len(todo), pure=False))
+        n = len(todo)
+        done = client.gather(client.map(_unit_row, [args] * n, [batch_id] * n, todo, serials, pure=False))
     else:
-        with ThreadPoolExecutor(max_workers=threads or os.cpu_count() or 1) as pool:
-            texts = list(pool.map(lambda u: _unit_row(exe, u, args), todo))
-    # The rows, with those of the earlier table, as the table zwidth resumes from.
-    rows, columns = [], []
-    sources = [earlier] if done else []
-    for text in sources + texts:
-        for r in csv.DictReader(io.StringIO(text)):
-            rows.append(r)
-            columns += [c for c in r if c not in columns]
-    merged = io.StringIO()
-    w = csv.DictWriter(merged, fieldnames=columns, restval="", lineterminator="\n")
-    w.writeheader()
-    w.writerows(rows)
-    # Written by the library (io::WriteBatchTable: HDF5 or CSV by its rule, atomically).
-    from . import _zwidth
-    _zwidth._write_batch_table(os.fspath(output), merged.getvalue())
-    _run(exe, [*whole, "-o", output, *args])  # every unit resumed: zwidth writes the table
-    text = _table_text(output)
+        workers = min(max(len(todo), 1), threads or os.cpu_count() or 1)
+        serial_thread = workers > 1  # each unit's own work on its thread alone, as `zwidth batch --jobs`
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            done = list(pool.map(lambda k: _unit_row(args, batch_id, todo[k], serials[k], serial_thread), range(len(todo))))
+    for i, row in zip(todo, done):
+        rows[i] = row
+    text = _zwidth._batch_finish(args, batch_id, rows)
     try:
         import pandas
         return pandas.read_csv(io.StringIO(text), dtype={"serial": str, "input_hash": str, "logs": str})

@@ -48,3 +48,19 @@ def german():
         pytest.skip("no de_DE.UTF-8 locale (scripts/setup generates it)")
     yield
     locale.setlocale(locale.LC_ALL, old)
+
+
+@pytest.fixture(scope="session")
+def batch_logs(exe, src, tmp_path_factory):
+    """zwidth.batch's units: `zwidth simulate` of Table I (4 s, seeds 1..5) and last a broken text log."""
+    d = tmp_path_factory.mktemp("batch_units")
+    logs = []
+    for s in (1, 2, 3, 4, 5):
+        p = str(d / f"u{s}.csv")
+        subprocess.run([exe, "simulate", "--model", os.path.join(src, "datasets/phantom/table1.json"), "-o", p,
+                        "--seconds", "4", "--seed", str(s)], check=True, capture_output=True)
+        logs.append(p)
+    bad = str(d / "bad.csv")
+    with open(bad, "w") as f:
+        f.write("t,torque,position\n0,1,2\n0.001,x,y\n")
+    return logs + [bad]

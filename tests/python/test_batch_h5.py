@@ -3,7 +3,6 @@ same units (through h5py, an independent reader, when it is installed), and a re
 Python resumes from the .h5 without running a unit."""
 import csv
 import math
-import os
 import subprocess
 
 import pytest
@@ -15,18 +14,8 @@ FLAGS = dict(delays=[2], b_points=20, window_length=512)
 
 
 @pytest.fixture(scope="module")
-def units(exe, src, tmp_path_factory):
-    d = tmp_path_factory.mktemp("units")
-    logs = []
-    for s in (1, 2):
-        p = str(d / f"u{s}.csv")
-        subprocess.run([exe, "simulate", "--model", os.path.join(src, "datasets/phantom/table1.json"), "-o", p,
-                        "--seconds", "4", "--seed", str(s)], check=True, capture_output=True)
-        logs.append(p)
-    bad = str(d / "bad.csv")
-    with open(bad, "w") as f:
-        f.write("t,torque,position\n0,1,2\n0.001,x,y\n")
-    return logs + [bad]
+def units(batch_logs):
+    return batch_logs[:2] + batch_logs[-1:]
 
 
 def test_python_batch_writes_the_commands_table_as_hdf5_and_resumes_from_it(units, exe, tmp_path, monkeypatch):
@@ -34,7 +23,7 @@ def test_python_batch_writes_the_commands_table_as_hdf5_and_resumes_from_it(unit
     rc = subprocess.run([exe, "batch", *units, "-o", str(cli), *_batch._flag_args(FLAGS)], capture_output=True).returncode
     assert rc == 4  # the corrupt log's row
     out = str(tmp_path / "py.h5")
-    df = zwidth.batch(units, output=out, zwidth=exe, threads=2, **FLAGS)
+    df = zwidth.batch(units, output=out, threads=2, **FLAGS)
     with open(out, "rb") as f:
         assert f.read(8) == b"\x89HDF\r\n\x1a\n"
     # The library's reader gives the command's CSV, byte for byte.
@@ -53,5 +42,5 @@ def test_python_batch_writes_the_commands_table_as_hdf5_and_resumes_from_it(unit
         assert math.isnan(float(m[2])) and rows[2]["m"] == ""
     # Resume through Python: every unit is in the .h5 table, none runs again.
     monkeypatch.setattr(_batch, "_unit_row", lambda *a: pytest.fail("a unit ran again"))
-    zwidth.batch(units, output=out, zwidth=exe, **FLAGS)
+    zwidth.batch(units, output=out, **FLAGS)
     assert zwidth._zwidth._read_batch_table(out) == cli.read_text()
