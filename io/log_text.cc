@@ -500,7 +500,12 @@ CsvColumns SelectColumns(const LogSelect& sel, const CsvHeader& header, size_t n
   auto find_col = [&](const std::string& spec, bool required, const char* flag) {
     return FindColumn(spec, required, flag, c.names, ncols, path, c.layout);
   };
-  c.input = find_col(sel.input_column, true, "LogSelect::input_column");
+  // The default input is 'torque', or on a linear axis 'force' (what
+  // `zwidth simulate` writes for a linear model: "force [N]").
+  const bool default_input = sel.input_column == LogSelect{}.input_column;
+  c.input = default_input ? find_col(sel.input_column, false, "LogSelect::input_column") : -1;
+  if (c.input < 0 && default_input) c.input = find_col("force", false, "LogSelect::input_column");
+  if (c.input < 0) c.input = find_col(sel.input_column, true, "LogSelect::input_column");
   c.output = find_col(sel.output_column, true, "LogSelect::output_column");
   const bool rate_given = sel.sample_rate_hz > 0.0;
   c.time = sel.time_column == "none" ? -1 : find_col(sel.time_column, !rate_given, "LogSelect::time_column");

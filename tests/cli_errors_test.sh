@@ -23,7 +23,7 @@ expect() {
 expect nan-row "non-finite.*line 5001" "$T/o1.csv" -- "$ZW" estimate "$T/nan.csv" -o "$T/o1.csv"
 awk -F, 'NR==100{$1="0.05"}1' OFS=, "$T/good.csv" > "$T/back.csv"
 expect time-backwards "not strictly increasing at line 100" "$T/o2.csv" -- "$ZW" estimate "$T/back.csv" -o "$T/o2.csv"
-sed '1s/torque/force/' "$T/good.csv" > "$T/nocol.csv"
+sed '1s/torque/current/' "$T/good.csv" > "$T/nocol.csv"
 expect missing-column "no column 'torque'" "$T/o3.csv" -- "$ZW" estimate "$T/nocol.csv" -o "$T/o3.csv"
 : > "$T/empty.csv"
 expect empty-file "empty file" "$T/o4.csv" -- "$ZW" estimate "$T/empty.csv" -o "$T/o4.csv"

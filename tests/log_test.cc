@@ -154,18 +154,18 @@ TEST_F(LogFormats, BomQuotedNamesAnyCaseAndScales) {
 
 TEST_F(LogFormats, MissingColumnSaysDelimiterAndHeader) {
   const Signals s = MakeSignals();
-  const std::string p = Write("f.csv", "t;force;position\n" + Rows(s, ";", "\n"));
+  const std::string p = Write("f.csv", "t;current;position\n" + Rows(s, ";", "\n"));
   const std::string m = Refusal(p, {});
   EXPECT_NE(m.find("no column 'torque'"), std::string::npos) << m;
   EXPECT_NE(m.find("';'-separated"), std::string::npos) << m;
-  EXPECT_NE(m.find("header at line 1: t, force, position"), std::string::npos) << m;
+  EXPECT_NE(m.find("header at line 1: t, current, position"), std::string::npos) << m;
   EXPECT_NE(m.find("LogSelect::input_column"), std::string::npos) << m;
 }
 
 // The 610 kB CR-only file: no message may echo more than one line.
 TEST_F(LogFormats, LongCrOnlyFileIsNotEchoed) {
   const Signals s = MakeSignals(20000);
-  const std::string p = Write("g.csv", "t,force,position\r" + Rows(s, ",", "\r"));
+  const std::string p = Write("g.csv", "t,current,position\r" + Rows(s, ",", "\r"));
   ASSERT_GT(fs::file_size(p), 600000u);
   Refusal(p, {});
   // A binary-looking single line: refused, shown truncated.

@@ -236,6 +236,18 @@ TEST_F(LogUnits, TheHeaderSaysTheAxis) {
             HeaderUnits::kNone);
 }
 
+// The default input column is 'torque', else 'force': the header `zwidth
+// simulate` writes for a linear model ("t,force [N],position [m]") is read
+// without a flag, in its units; a log with both takes 'torque'.
+TEST_F(LogUnits, ADefaultReadsAForceColumn) {
+  const Log log = ReadLog(dir_.Write("f.csv", "t,force [mN],position [mm]\n" + Rows(s_, 1e3, 1e3)));
+  ExpectSi(log, s_);
+  EXPECT_EQ(log.info.header_units, HeaderUnits::kLinear);
+  std::string four;
+  for (size_t k = 0; k < s_.u.size(); ++k) four += Num(s_.t[k]) + ",0," + Num(s_.u[k]) + "," + Num(s_.y[k]) + "\n";
+  ExpectSi(ReadLog(dir_.Write("b.csv", "t,force,torque,position\n" + four)), s_);
+}
+
 // LinearUnitsOf: the caller's choice, else the headers', else rotary; a header
 // that mixes, contradicts the caller, or disagrees with another run is refused.
 TEST_F(LogUnits, TheModelsUnitsFollowTheHeaderUnlessGiven) {

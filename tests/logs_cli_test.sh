@@ -108,7 +108,7 @@ fi
 # Refusals.
 $PY -c "print('t,torque,position'); [print(f'{k},{(k*7)%11},{k%5}') for k in range(5000)]" > "$T/ms.csv"
 expect time-in-ms "implies a sample rate of 1 Hz.*--time-unit ms" "$T/e1.csv" -- "$ZW" estimate "$T/ms.csv" -o "$T/e1.csv"
-sed '1s/torque/force/' "$T/semi.txt" > "$T/nocol.txt"
+sed '1s/torque/current/' "$T/semi.txt" > "$T/nocol.txt"
 expect no-column "no column 'torque'.*';'-separated.*header at line 3 \(comment\)" "$T/e2.csv" -- "$ZW" estimate "$T/nocol.txt" -o "$T/e2.csv"
 expect compare-needs-reference "--reference table1" "" -- "$ZW" compare "$M"
 expect units-word "--units 'metric'" "$T/e3.json" -- "$ZW" fit "$T/good.csv" --units metric -o "$T/e3.json"

@@ -38,5 +38,10 @@ expect "compare a rotary model with a linear reference" "is rotary.*is linear" "
 check "compare of two linear models: compared" 'grep -q "N s/m" "$T/out"'
 expect "run --reference table1 on a linear axis" "the fitted model is linear.*table1 is rotary" "$T/ref_run" -- \
   "$ZW" run "$T/lin.csv" $SEL --reference table1 --no-figures -o "$T/ref_run"
+# A linear model's own simulated log ("t,force [N],position [m]") fits without a flag: linear.
+sed 's/"delay_samples": 0}/"delay_samples": 0, "units": "linear"}/' "$T/axis.json" > "$T/axis_lin.json"
+"$ZW" simulate --model "$T/axis_lin.json" --torque-rms 20 --bandwidth-hz 200 --encoder-step 1e-6 --seed 8 -o "$T/sim_lin.csv" >/dev/null 2>&1
+"$ZW" fit "$T/sim_lin.csv" --modes 1 -o "$T/sim_lin_fit.json" > "$T/out" 2>&1
+check "fit of simulate's linear log, no flags: read, linear" 'grep -q "\"units\": \"linear\"" "$T/sim_lin_fit.json" && grep -qE "^b .* N s/m$" "$T/out"'
 echo "$pass passed, $fail failed"
 [ $fail = 0 ]
