@@ -155,6 +155,7 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
     const io::Log& log = friction->log ? *friction->log : *read;
     fit::FrictionFitOptions fo = friction->options;
     if (fo.welch.window_length == 0) fo.welch.window_length = frf.window_length;  // the linear fit's estimate
+    fo.linear = messages.linear;
     try {
       ff = fit::FitLibrary().fit_friction_quiet(log.input, log.output, log.info.sample_rate_hz, r, o, fo);
     } catch (const InputError& e) {  // e.g. too few usable samples: auto goes on linear-only
@@ -169,6 +170,7 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
   if (messages.warning) for (const std::string& w : r.warnings) messages.warning(w);
   if (r.status != fit::FitStatus::kConverged) throw ComputationError(r.message);
   io::ModelFile mf = io::FittedModelFile(r, frf, o, source);
+  mf.linear = messages.linear;
   if (ff.status == fit::FrictionFitStatus::kFitted) {
     mf.friction = ff.friction;
     mf.friction_std = ff.friction_std;

@@ -52,6 +52,9 @@ struct FitMessages {
   // Each of the fit's warnings as the library writes it (naming fields), when
   // the fit ends; dropped when empty.
   std::function<void(const std::string&)> warning;
+  // The axis's units (io::LinearUnitsOf): the file's "units" and the units
+  // the friction fit's message names.
+  bool linear = false;
   std::string Words(const std::string& s) const { return words ? words(s) : s; }
 };
 

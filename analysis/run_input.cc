@@ -57,9 +57,10 @@ RunInput EstimateAndFit(RunInput in, const EstimateFitOptions& o, const std::vec
         // No thread to be had: Analyse computes the reference after the fit.
       }
     }
-    in.model = FitToModelFile(in.response.frf, o.fit, in.source, m.fit, &in.fit, friction ? &*friction : nullptr,
+    FitMessages fm = m.fit;
+    fm.linear = linear;
+    in.model = FitToModelFile(in.response.frf, o.fit, in.source, fm, &in.fit, friction ? &*friction : nullptr,
                               &in.friction_fit);
-    in.model.linear = linear;
   }  // joined
   if (ref_error) std::rethrow_exception(ref_error);
   in.reference_stability = std::move(ref);

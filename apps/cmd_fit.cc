@@ -72,8 +72,7 @@ void AddFitCommands(CLI::App& app) {
     if (!frf_note.empty()) std::fprintf(stderr, "note: %s\n", io::PrintableLines(frf_note).c_str());
     fit::FitResult r;
     fit::FrictionFitResult ff;
-    io::ModelFile mf = FitToModelFile(frf, f->fit.o, source, &r, fin ? &*fin : nullptr, &ff);
-    mf.linear = linear;
+    io::ModelFile mf = FitToModelFile(frf, f->fit.o, source, linear, &r, fin ? &*fin : nullptr, &ff);
     io::WriteModelJson(f->out, mf);
     std::printf("%s", io::PrintableLines(ParameterTable(mf, linear)).c_str());
     std::printf("%s (%.1f ms)\n", r.BriefReport().c_str(), timer.Lap("fit"));

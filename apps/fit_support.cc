@@ -113,11 +113,11 @@ std::string FrictionLine(const fit::FrictionFitResult& ff) {
 
 
 io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::FitOptions& o,
-                             const std::string& source, fit::FitResult* out, const FrictionInput* friction,
+                             const std::string& source, bool linear, fit::FitResult* out, const FrictionInput* friction,
                              fit::FrictionFitResult* friction_out) {
   analysis::FitMessages messages{.words = WithFlags, .warning = [](const std::string& w) {
     std::fprintf(stderr, "warning: %s\n", io::Printable(WithFlags(w)).c_str());
-  }};
+  }, .linear = linear};
   return analysis::FitToModelFile(frf, o, source, messages, out, friction, friction_out);
 }
 

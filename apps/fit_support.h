@@ -58,7 +58,7 @@ std::string FrictionLine(const fit::FrictionFitResult& ff);
 // analysis::FitToModelFile in the CLI's words (its flags), the fit's warnings
 // on stderr.
 io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::FitOptions& o,
-                             const std::string& source, fit::FitResult* result = nullptr,
+                             const std::string& source, bool linear, fit::FitResult* result = nullptr,
                              const FrictionInput* friction = nullptr, fit::FrictionFitResult* friction_result = nullptr);
 
 // "parameter value std unit" table; linear: kg and N s/m labels.

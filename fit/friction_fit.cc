@@ -13,6 +13,7 @@
 #include <Eigen/Dense>
 
 #include "ident/fft.h"
+#include "model/units.h"
 #include "model/error.h"
 #include "model/state_space.h"
 
@@ -774,14 +775,19 @@ FrictionFitResult FitFriction(const std::vector<double>& input, const std::vecto
   r.fit = best->refit;
   ChooseB(seed.plant.b, best->id, &r.fit);  // the seed's linear-only b: the one on every excited bin
   r.status = FrictionFitStatus::kFitted;
-  r.message = Num("Coulomb friction %.4g +- %.2g", best->id.fc, best->id.fc_std) +
-              Num(" (offset %.3g +- %.2g)", best->id.offset, best->id.offset_std) +
-              Num(" fitted in %.0f rounds; b %.4g", r.iterations, best->plant.b) +
-              Num(" (the linear-only fit's %.4g); ", r.linear_b) + "friction opposing the " +
+  // The b reported is the one chosen (ChooseB), in the model's units.
+  const model::UnitLabels& u = model::Units(o.linear);
+  r.message = Num("Coulomb friction %.4g +- %.2g ", best->id.fc, best->id.fc_std) + u.input +
+              Num(" (offset %.3g +- %.2g ", best->id.offset, best->id.offset_std) + u.input + ")" +
+              Num(" fitted in %.0f rounds; b %.4g", r.iterations, r.fit.plant.b) +
+              Num(" +- %.2g ", r.fit.std_errors.b) + u.b + Num(" (the linear-only fit's %.4g); ", r.linear_b) +
+              "friction opposing the " +
               (best->topology == FrictionTopology::kCollocated ? "encoder's (collocated) velocity" : "rigid body's velocity") +
-              Num(" (its first round's IDIM residual %.3g rad against %.3g for the other topology)",
-                  best->topology == FrictionTopology::kCollocated ? r.collocated_residual_rms : r.rigid_body_residual_rms,
-                  best->topology == FrictionTopology::kCollocated ? r.rigid_body_residual_rms : r.collocated_residual_rms);
+              Num(" (its first round's IDIM residual %.3g ", best->topology == FrictionTopology::kCollocated
+                                                                  ? r.collocated_residual_rms : r.rigid_body_residual_rms) +
+              u.position + Num(" rms against %.3g for the other topology)",
+                               best->topology == FrictionTopology::kCollocated ? r.rigid_body_residual_rms
+                                                                                 : r.collocated_residual_rms);
   return r;
 }
 

@@ -112,6 +112,7 @@ struct FrictionFitOptions {
   int iterations = 6;          // IDIM + refit rounds, in [1, 20] (converged by 4-5 on the tests' logs)
   double detection_z = 5.0;    // F_c / std(F_c) above which friction is detected, > 0
   ident::WelchOptions welch;   // the refit's estimate (use the linear fit's)
+  bool linear = false;         // the units its message names (model/units.h): a linear axis's N, m
 
   bool IsValid(std::string* why) const;
 };

@@ -42,7 +42,8 @@ PyFitResult FitAsCli(const ident::FrequencyResponse& frf, const fit::FitOptions&
   PyFitResult out;
   fit::FrictionFitResult ff;
   analysis::FitMessages messages{.words = io::WithKeywords,
-                                 .warning = [&](const std::string& w) { warnings.push_back(io::WithKeywords(w)); }};
+                                 .warning = [&](const std::string& w) { warnings.push_back(io::WithKeywords(w)); },
+                                 .linear = linear};
   {
     py::gil_scoped_release release;
     ScopedCLocale c;
