@@ -543,7 +543,10 @@ Sliding SimulatedIdim(FrictionTopology topology, const Motion& mo, const std::ve
   // 12 % friction, 40960 counts, 10 s logs: F_c 10 and 9.6 std off the truth
   // with std 0.1 % on 2 seeds of 12, where a Jacobian gave 5-8x the std).
   if (!have_jacobian) jacobian();
-  const bool fixed_point = merit(F, x) <= 1e-3 && x.allFinite();
+  // At the bound F_c = 0 with G's F_c below it (a device without friction) the
+  // fixed point is the projected one: only b's residual counts.
+  const Eigen::Vector2d F_projected(F(0), x(1) <= fc_floor && F(1) < 0.0 ? 0.0 : F(1));
+  const bool fixed_point = merit(F_projected, x) <= 1e-3 && x.allFinite();
   *id = r.id;
   id->fixed_point = fixed_point;
   id->b = x(0);
