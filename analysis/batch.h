@@ -135,7 +135,7 @@ struct BatchResult {
 //   verdict, verdict_reasons, p_min (with specs),
 //   input_hash, sample_rate_hz, fit_quality, fit_reasons (codes, ';'), warnings (' | '),
 //   m, m_std, b, b_std, delay_samples, modes,
-//   friction_status (fitted | not detected | failed: fit.friction.status; empty when not looked at),
+//   friction_status (fitted | not detected | not identified: fit.friction.status; empty when not looked at),
 //   friction_topology (rigid body | collocated, when fitted),
 //   F_c, F_c_std, friction_offset, friction_offset_std (the model's friction: F_c its Coulomb level,
 //   coulomb_pos = coulomb_neg; 0 without std when none was found; empty when not looked at),

@@ -162,7 +162,7 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
       if (friction->options.model == fit::FrictionModel::kCoulomb) throw;
       r.warnings.push_back(std::string("friction not checked: ") + e.what());
     }
-    if (ff.status == fit::FrictionFitStatus::kFailed) throw ComputationError(ff.message);
+    // kNotIdentified: ff.fit is the linear fit, its warning says why (no error: the linear model stands).
     if (ff.status != fit::FrictionFitStatus::kNotRun) r = ff.fit;
   }
   if (out) *out = r;

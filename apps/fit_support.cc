@@ -104,6 +104,7 @@ void AddTable2Flags(CLI::App* cmd, bool* on, analysis::Table2Options* t2) {
 
 std::string FrictionLine(const fit::FrictionFitResult& ff) {
   if (ff.status == fit::FrictionFitStatus::kFitted) return "friction: " + ff.message + "\n";
+  if (ff.status == fit::FrictionFitStatus::kNotIdentified) return "friction: not identified; the fit is linear (see the warning)\n";
   if (ff.status != fit::FrictionFitStatus::kNotDetected || ff.detected) return "";
   char s[200];
   std::snprintf(s, sizeof s, "friction: none detected (F_c %.3g +- %.2g); the fit is linear\n", ff.detection_coulomb,

@@ -101,7 +101,7 @@ std::string ToString(FrictionFitStatus s) {
     case FrictionFitStatus::kNotRun: return "not run";
     case FrictionFitStatus::kFitted: return "fitted";
     case FrictionFitStatus::kNotDetected: return "not detected";
-    case FrictionFitStatus::kFailed: return "failed";
+    case FrictionFitStatus::kNotIdentified: return "not identified";
   }
   return "?";
 }

@@ -121,7 +121,14 @@ enum class FrictionFitStatus {
   kNotRun,       // sentinel
   kFitted,       // friction fitted: `fit` is the linear part, `friction` its Coulomb level
   kNotDetected,  // no significant friction (or model kNone): `fit` is the linear fit
-  kFailed,       // the refit did not converge (see message): `fit` is the linear fit
+  // Friction asked for or detected, but not identified from this log (the
+  // message says why and what to record instead): too few usable rows for the
+  // band, a refit that did not converge, a fixed point not found, or values
+  // the log does not determine (b or F_c within 1 / 2 std of 0, a non-finite
+  // value or std, an offset beyond 10 x the torque rms). `fit` is the linear
+  // fit, with a warning, and the `friction` reason when detected; `friction`
+  // holds the rejected estimate for the record, never to be used.
+  kNotIdentified,
 };
 std::string ToString(FrictionFitStatus s);
 
@@ -139,7 +146,7 @@ struct FrictionFitResult {
   int decimation = 1;
   int iterations = 0;
   double linear_b = 0.0, linear_b_std = 0.0;  // the linear-only fit's b
-  // The topology kept (kFitted, kFailed), and each topology's IDIM residual
+  // The topology kept (kFitted, kNotIdentified), and each topology's IDIM residual
   // after the first round, which chose it (the weighted frequency-domain
   // rows' rms; inf when its first refit was tried and failed: the other's is
   // tried only when the chosen one's fails).
@@ -152,8 +159,8 @@ struct FrictionFitResult {
 
 // One log (input torque, encoder position, uniformly sampled). `linear` is
 // FitModel's converged result on this log's response with `fit_options`.
-// Throws InputError for invalid options or a log too short for the band
-// (fewer than 200 rows).
+// Throws InputError for invalid options; a log too short for the band (fewer
+// than 200 time-domain rows or 100 frequency bins) is kNotIdentified.
 FrictionFitResult FitFriction(const std::vector<double>& input, const std::vector<double>& output,
                               double sample_rate_hz, const FitResult& linear, const FitOptions& fit_options,
                               const FrictionFitOptions& options);
