@@ -233,17 +233,20 @@ RunAnalysis Analyse(RunInput input, const RunOptions& o) {
   }
   // The model's Z-width per delay, computed once for the summary, the
   // comparison, the boundary rows and the figures.
-  RunAnalysis a(AnalysePlantStability(input.model, T, o.delays, o.loop, o.grid));
+  // With Coulomb friction in the model, A* along the boundary (default
+  // options on the run's loop; no encoder step is known here).
+  PlantStabilityOptions po;
+  po.delays = o.delays;
+  po.loops = {o.loop};
+  po.grid = o.grid;
+  po.friction = input.model.friction;
+  RunAnalysis a(AnalysePlantStability(input.model, T, po));
   a.input = std::move(input);
   a.options = o;
   a.period_s = T;
-  a.stages.push_back({"boundary", laps.Lap()});
-  if (a.input.model.friction && a.input.model.friction->MeanCoulomb() > 0.0) {
-    a.friction_amplitudes = FrictionAmplitudes(a.stability.sampled.plant(), T, o.loop, a.stability.rows,
-                                               *a.input.model.friction, a.friction_options);
-    SetFrictionColumns(a.friction_amplitudes, &a.stability.rows);
-    a.stages.push_back({"friction amplitude", laps.Lap()});
-  }
+  const double ms = laps.Lap(), friction_ms = a.stability.friction_amplitude_ms;
+  a.stages.push_back({"boundary", ms - friction_ms});
+  if (!a.stability.friction_amplitudes.empty()) a.stages.push_back({"friction amplitude", friction_ms});
   std::vector<stability::ZWidth> ref_zs;  // the reference on the paper's loop, per delay
   if (a.input.reference) {
     const io::ModelFile& ref = *a.input.reference;

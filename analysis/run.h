@@ -106,15 +106,13 @@ struct RunAnalysis {
   RunInput input;                              // response.frf.used_by_fit set from the fit's band
   RunOptions options;
   double period_s = 0.0;                       // the log's sample period [s]
-  PlantStability stability;                    // the model on the run's loop
+  // The model on the run's loop; with Coulomb friction in the model
+  // (input.model.friction) also A* along the boundary
+  // (stability.friction_amplitudes, default options, no encoder step).
+  PlantStability stability;
   std::optional<ModelComparison> comparison;   // with input.reference
   std::optional<FigureData> figures;           // when options.figures
   std::vector<RunStage> stages;                // stage times, in order ("figure data" last)
-  // When the model has Coulomb friction (input.model.friction): A* along the
-  // boundary (FrictionAmplitudes with default options on the run's loop; no
-  // encoder step is known here), also in stability.rows' friction columns.
-  std::vector<FrictionAmplitudeRow> friction_amplitudes;
-  FrictionAmplitudeOptions friction_options;
   std::optional<Table2Comparison> table2;      // with options.table2
 };
 

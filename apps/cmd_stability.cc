@@ -8,6 +8,7 @@
 
 #include "apps/common.h"
 #include "analysis/friction_amplitude.h"
+#include "analysis/plant_stability.h"
 #include "analysis/scene_check.h"
 #include "apps/friction_flags.h"
 #include "apps/loop_flags.h"
@@ -27,119 +28,26 @@
 namespace zwidth::app {
 namespace {
 
-nlohmann::json LoopJson(const std::vector<stability::LoopOptions>& loops) {
-  nlohmann::json j = {{"filter_b", loops[0].filter_b}, {"filter_a", loops[0].filter_a},
-                      {"hands", nlohmann::json::array()}};
-  for (const auto& l : loops) {
-    if (!l.hand.IsNone()) j["hands"].push_back({{"M", l.hand.M}, {"B", l.hand.B}, {"K", l.hand.K}});
-  }
-  return j;
-}
-
 void CheckDelay(int d, const char* flag) {
   if (const std::string why = io::LoopDelaysProblem({d}, flag); !why.empty()) throw InputError(why);
 }
 
-// The boundary table of every delay: one loop per hand, the region stable for
-// every hand, the first hand's summaries, passivity and (one hand) the std.
-struct BoundaryTable {
-  std::vector<stability::DelaySummary> sums;                // the first hand's, per delay
-  std::vector<std::vector<stability::DelaySummary>> hsums;  // [delay][hand]
-  std::vector<stability::Passivity> pas;                    // per delay
-  std::vector<double> grid;                                 // the B values
-  std::vector<io::BoundaryRow> rows;                        // [delay][B]
-  std::vector<stability::SummaryStd> stds;                  // per delay (nan without a covariance)
-  bool has_cov = false;
-  int disagree = 0;                                         // rows where margin() differs
-};
-
-BoundaryTable ComputeBoundaryTable(const io::ModelFile& mf, double T, const std::vector<int>& delays,
-                                 const std::vector<stability::LoopOptions>& loops,
-                                 const stability::BGridOptions& grid_options) {
-  std::vector<stability::ZWidth> zs;  // the first hand's loop per delay
-  std::vector<std::vector<stability::ZWidth>> zh(delays.size());  // [delay][hand]
-  std::vector<std::vector<stability::DelaySummary>> hsums(delays.size());
-  std::vector<stability::DelaySummary> sums;
-  std::vector<stability::Passivity> pas;
-  double largest = 0.0;
-  std::vector<stability::SampledPlant> sampled;  // one per hand, shared by every delay
-  for (const stability::LoopOptions& l : loops) sampled.emplace_back(mf.plant, T, l.hand);
-  for (size_t i = 0; i < delays.size(); ++i) {
-    const int d = delays[i];
-    for (size_t h = 0; h < loops.size(); ++h) {
-      const stability::LoopOptions& l = loops[h];
-      zh[i].emplace_back(sampled[h], d, l);
-      hsums[i].push_back(zh[i].back().Summarize());
-      if (std::isfinite(hsums[i].back().B_max)) largest = std::max(largest, hsums[i].back().B_max);
-    }
-    zs.push_back(zh[i][0]);
-    sums.push_back(hsums[i][0]);
-    pas.emplace_back(mf.plant.b, T, zs.back().total_delay(), loops[0]);
-  }
-  const std::vector<double> grid = stability::MakeBGrid(grid_options, largest, mf.plant.m / T,
-                                                        static_cast<int>(delays.size()));
-  // The delta method and Monte Carlo for one loop (with its filter and hand).
-  const bool has_cov = !mf.log_covariance.empty() && loops.size() == 1;
-  if (!mf.log_covariance.empty() && !has_cov) {
-    std::fprintf(stderr, "note: the std columns are not computed with several hands\n");
-  }
-  std::vector<io::BoundaryRow> rows;
-  rows.reserve(grid.size() * zs.size());
-  int disagree = 0;
-  std::vector<stability::SummaryStd> stds(zs.size());
-  std::unique_ptr<stability::PerturbedPlants> perturbed;  // shared by every delay
-  if (has_cov) {
-    stability::CheckLogCovariance(mf.plant, mf.log_covariance);
-    perturbed = std::make_unique<stability::PerturbedPlants>(stability::SamplePerturbedPlants(mf.plant, T, loops[0].hand));
-  }
-  for (size_t i = 0; i < zs.size(); ++i) {
-    std::vector<stability::CriticalPoint> pts;
-    for (double B : grid) {
-      stability::ZWidth::Row zr = zs[i].RowAt(B);
-      io::BoundaryRow r{delays[i], zr.point, std::move(zr.intervals)};
-      for (size_t h = 1; h < zh[i].size(); ++h) {  // the region stable for every hand
-        r.intervals = stability::IntersectIntervals(r.intervals, zh[i][h].StableIntervals(B));
-        const stability::CriticalPoint c = zh[i][h].At(B);
-        if (c.K_cr < r.point.K_cr) r.point = c;
-      }
-      r.K_passive = pas[i].KHi(B);
-      if (!r.point.AgreesWithMargin()) ++disagree;
-      pts.push_back(r.point);
-      rows.push_back(std::move(r));
-    }
-    if (has_cov) {
-      const std::vector<double> sd = stability::KcrStd(*perturbed, mf.log_covariance, delays[i], pts, loops[0]);
-      for (size_t k = 0; k < grid.size(); ++k) rows[i * grid.size() + k].K_cr_std = sd[k];
-      stds[i] = stability::SummaryStdDelta(*perturbed, mf.log_covariance, delays[i], sums[i], loops[0]);
-    }
-  }
-  BoundaryTable t;
-  t.sums = std::move(sums);
-  t.hsums = std::move(hsums);
-  t.pas = std::move(pas);
-  t.grid = grid;
-  t.rows = std::move(rows);
-  t.stds = std::move(stds);
-  t.has_cov = has_cov;
-  t.disagree = disagree;
-  return t;
-}
-
 // The summary table, per-hand lines, passivity and the margin() count on stdout.
-void PrintBoundarySummary(const BoundaryTable& t, const io::ModelFile& mf, const std::vector<int>& delays,
-                          const std::vector<stability::LoopOptions>& loops) {
+void PrintBoundarySummary(const analysis::PlantStability& t, const io::ModelFile& mf) {
+  const std::vector<int>& delays = t.delays;
+  const std::vector<stability::LoopOptions>& loops = t.loops;
   std::printf("delay: the loop's; the Z-width is computed for it plus the model's input delay:");
   for (size_t i = 0; i < delays.size(); ++i) {
     std::printf("%s %s", i ? ";" : "", io::DelayText(delays[i], mf.plant.delay_samples).c_str());
   }
   std::printf("\n%-6s %12s %10s %10s %12s %10s %10s %12s %12s\n", "delay", "K_cr(B=0)", "f(B=0)", "B_t",
               "K_cr^max", "f_before", "f_after", "B_max_0", "B_max");
-  for (size_t i = 0; i < t.sums.size(); ++i) {
-    const auto& s = t.sums[i];
+  for (size_t i = 0; i < t.summaries.size(); ++i) {
+    const auto& s = t.summaries[i];
     std::printf("%-6d %12.6g %10.5g %10.6g %12.6g %10.5g %10.5g %12.6g %12.6g\n", delays[i],
                 s.K_cr_at_zero_B, s.f_at_zero_B_hz, s.B_t, s.K_cr_max, s.f_before_hz, s.f_after_hz,
                 s.B_max_from_zero, s.B_max);
-    if (t.has_cov) {
+    if (t.has_std) {
       std::printf("  std   %12.3g %10s %10.3g %12.3g %10s %10s %12s %12.3g\n", t.stds[i].K_cr_at_zero_B, "",
                   t.stds[i].B_t, t.stds[i].K_cr_max, "", "", "", t.stds[i].B_max);
     }
@@ -155,64 +63,23 @@ void PrintBoundarySummary(const BoundaryTable& t, const io::ModelFile& mf, const
   }
   std::printf("B_max_0: where the interval from K = 0+ closes; B_max: the largest B with some stable K > 0\n");
   if (loops.size() > 1) {
-    for (size_t i = 0; i < t.sums.size(); ++i) {
+    for (size_t i = 0; i < t.summaries.size(); ++i) {
       for (size_t h = 0; h < loops.size(); ++h) {
-        const auto& s = t.hsums[i][h];
+        const auto& s = t.loop_summaries[i][h];
         std::printf("  d = %d, hand M %g B %g K %g: K_cr(0) %.6g, K_cr^max %.6g, B_max %.6g\n", delays[i],
                     loops[h].hand.M, loops[h].hand.B, loops[h].hand.K, s.K_cr_at_zero_B, s.K_cr_max, s.B_max);
       }
     }
     std::printf("the boundary CSV holds the region stable for every hand (intersection of the intervals)\n");
   }
-  for (size_t i = 0; i < t.sums.size(); ++i) {
-    const stability::PassiveInterval p0 = t.pas[i].At(0.0);
+  for (size_t i = 0; i < t.summaries.size(); ++i) {
+    const stability::PassiveInterval p0 = t.passivity[i].At(0.0);
     std::printf("d = %d passivity (Colgate-Schenkel, b = %g): K_P(0) = %.6g; passive up to B = %.6g\n",
-                delays[i], mf.plant.b, p0.K_hi, io::PassiveBMax(t.pas[i], mf.plant.b));
+                delays[i], mf.plant.b, p0.K_hi, io::PassiveBMax(t.passivity[i], mf.plant.b));
   }
   std::printf("%d of %zu B values: the margin() reading of eq. (4) differs from the exact K_CR "
               "(mostly B past B_max_0, where margin() stays positive but K -> 0+ is unstable)\n",
-              t.disagree, t.rows.size());
-}
-
-// The summary JSON; with monte_carlo > 0 also the Monte Carlo std per delay
-// (printed beside the delta method's).
-nlohmann::json BoundarySummaryJson(const BoundaryTable& t, const io::ModelFile& mf, double T,
-                                   const std::vector<int>& delays,
-                                   const std::vector<stability::LoopOptions>& loops, int monte_carlo,
-                                   std::uint64_t seed) {
-  nlohmann::json js;
-  js["period_s"] = T;
-  js["model"] = mf.plant.name;
-  js["B_max_meaning"] = "B_max: the largest B at which some K > 0 is stable (reopened bands included); "
-                        "B_max_from_zero: the B where the interval from K = 0+ closes (the paper's B_max)";
-  js["delays"] = nlohmann::json::array();
-  for (size_t i = 0; i < t.sums.size(); ++i) {
-    nlohmann::json e = io::SummaryToJson(t.sums[i], t.has_cov ? &t.stds[i] : nullptr);
-    io::AddDelays(&e, delays[i], mf.plant.delay_samples);
-    e["passivity"] = io::PassivitySummaryJson(t.pas[i], mf.plant.b);
-    if (loops.size() > 1) {
-      e["per_hand"] = nlohmann::json::array();
-      for (size_t h = 0; h < loops.size(); ++h) {
-        nlohmann::json eh = io::SummaryToJson(t.hsums[i][h]);
-        eh["hand"] = {{"M", loops[h].hand.M}, {"B", loops[h].hand.B}, {"K", loops[h].hand.K}};
-        e["per_hand"].push_back(eh);
-      }
-    }
-    if (monte_carlo > 0) {
-      std::fprintf(stderr, "Monte Carlo, d = %d: %d samples...\n", delays[i], monte_carlo);
-      const stability::MonteCarloResult mc = stability::SummaryMonteCarlo(
-          mf.plant, mf.log_covariance, T, delays[i], monte_carlo, seed, loops[0]);
-      e["monte_carlo"] = io::MonteCarloJson(mc, seed);
-      std::printf("d = %d  std by delta method / Monte Carlo (%d samples): K_cr(0) %.4g / %.4g, B_t %.4g / %.4g, "
-                  "K_cr^max %.4g / %.4g, B_max %.4g / %.4g\n",
-                  delays[i], mc.samples, t.stds[i].K_cr_at_zero_B, mc.std.K_cr_at_zero_B, t.stds[i].B_t,
-                  mc.std.B_t, t.stds[i].K_cr_max, mc.std.K_cr_max, t.stds[i].B_max, mc.std.B_max);
-    }
-    js["delays"].push_back(e);
-  }
-  js["margin_disagreements"] = t.disagree;
-  js["loop"] = LoopJson(loops);
-  return js;
+              t.margin_disagreements, t.rows.size());
 }
 
 // zwidth boundary: the stable K intervals per B, K_CR(B) and the summary per delay.
@@ -263,40 +130,49 @@ void AddBoundaryCommand(CLI::App& app) {
     }
     io::ModelFile mf = io::ReadModelJsonFor(bf->model, "boundary");  // not const: --period may convert its delay
     const double T = ResolvePeriod(bf->period, &mf);
-    if (const std::string why = io::LoopDelaysProblem(bf->delays, "--delays"); !why.empty()) throw InputError(why);
+    analysis::PlantStabilityOptions o;
+    o.delays = bf->delays;
+    o.loops = ResolveLoops(bf->loop, T);
+    o.grid = bf->grid;
+    o.monte_carlo = bf->monte_carlo;
+    o.seed = bf->seed;
+    o.friction = ResolveFriction(bf->friction, mf);
+    o.amplitude = bf->amplitude;
+    o.on_monte_carlo = [](int d, int n) { std::fprintf(stderr, "Monte Carlo, d = %d: %d samples...\n", d, n); };
     std::string why;
-    if (!bf->grid.IsValid(&why)) throw InputError(why);
-    if (bf->monte_carlo < 0) throw InputError("--monte-carlo must be >= 0");
-    if (bf->monte_carlo > 0 && mf.log_covariance.empty()) {
-      throw InputError("--monte-carlo needs a model with a \"covariance\" (a model written by zwidth fit)");
+    if (!o.IsValid(&why)) throw InputError(WithFlags(why));
+    if (!mf.log_covariance.empty() && o.loops.size() > 1) {
+      std::fprintf(stderr, "note: the std columns are not computed with several hands\n");
     }
-    const std::vector<stability::LoopOptions> loops = ResolveLoops(bf->loop, T);
-    if (bf->monte_carlo > 0 && loops.size() > 1) throw InputError("--monte-carlo takes at most one --hand");
-    const model::Friction friction = ResolveFriction(bf->friction, mf);
-    if (!bf->amplitude.IsValid(&why)) throw InputError(why);
-    BoundaryTable t = ComputeBoundaryTable(mf, T, bf->delays, loops, bf->grid);
-    // With friction: A* at k x K_cr(B) on every row (the first hand's loop).
-    std::vector<analysis::FrictionAmplitudeRow> amps;
-    if (friction.MeanCoulomb() > 0.0) {
-      amps = analysis::FrictionAmplitudes(mf.plant, T, loops[0], t.rows, friction, bf->amplitude);
-      analysis::SetFrictionColumns(amps, &t.rows);
-    }
-    // The summary (and its Monte Carlo) before any file: a failure leaves nothing written.
-    nlohmann::json js = BoundarySummaryJson(t, mf, T, bf->delays, loops, bf->monte_carlo, bf->seed);
-    for (size_t i = 0; i < bf->delays.size() && !amps.empty(); ++i) {
-      js["delays"][i]["friction"] = analysis::FrictionSummaryJson(amps, bf->delays[i], friction, bf->amplitude);
-    }
+    const analysis::PlantStability t = [&] {
+      try {
+        return analysis::AnalysePlantStability(mf, T, o);
+      } catch (const InputError& e) {
+        throw InputError(WithFlags(e.what()));
+      }
+    }();
+    // The summary before any file: a failure leaves nothing written.
+    nlohmann::json js = analysis::PlantStabilityJson(t);
     js["provenance"] = io::ProvenanceJson();
     io::WriteBoundaryCsv(bf->out, t.rows);
     if (!bf->summary.empty()) io::WriteTextAtomically(bf->summary, js.dump(2) + "\n");
-    PrintBoundarySummary(t, mf, bf->delays, loops);
-    for (size_t i = 0; i < bf->delays.size() && !amps.empty(); ++i) {
-      std::printf("%s\n", analysis::FrictionSummaryLine(amps, bf->delays[i], bf->amplitude, model::Units(mf.linear)).c_str());
+    for (size_t i = 0; i < t.monte_carlo.size(); ++i) {
+      const stability::MonteCarloResult& mc = t.monte_carlo[i];
+      const stability::SummaryStd& sd = t.stds[i];
+      std::printf("d = %d  std by delta method / Monte Carlo (%d samples): K_cr(0) %.4g / %.4g, B_t %.4g / %.4g, "
+                  "K_cr^max %.4g / %.4g, B_max %.4g / %.4g\n",
+                  t.delays[i], mc.samples, sd.K_cr_at_zero_B, mc.std.K_cr_at_zero_B, sd.B_t, mc.std.B_t, sd.K_cr_max,
+                  mc.std.K_cr_max, sd.B_max, mc.std.B_max);
+    }
+    PrintBoundarySummary(t, mf);
+    const std::vector<analysis::FrictionAmplitudeRow>& amps = t.friction_amplitudes;
+    for (size_t i = 0; i < t.delays.size() && !amps.empty(); ++i) {
+      std::printf("%s\n", analysis::FrictionSummaryLine(amps, t.delays[i], t.friction_options, model::Units(mf.linear)).c_str());
     }
     if (!amps.empty()) {
       std::printf("friction (Coulomb %g %s): the CSV's A_star column [%s] at %d B values per delay (docs/friction.md)\n",
-                  friction.MeanCoulomb(), model::Units(mf.linear).input, model::Units(mf.linear).position,
-                  bf->amplitude.rows_per_delay);
+                  t.friction.MeanCoulomb(), model::Units(mf.linear).input, model::Units(mf.linear).position,
+                  t.friction_options.rows_per_delay);
     }
   });
 }

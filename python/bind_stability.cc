@@ -2,7 +2,9 @@
 // zwidth.check (the scene check of `zwidth check`).
 #include <cmath>
 #include <limits>
+#include <optional>
 
+#include "analysis/plant_stability.h"
 #include "analysis/scene_check.h"
 #include "io/stability_files.h"
 #include "model/error.h"
@@ -388,7 +390,7 @@ void DefZWidthSummary(py::class_<PyZWidth>& cls) {
            "taken as 0+). K and B must be finite and >= 0 (InputError naming the first that is not).", kCLocale)
       .def("summary",
            [](const PyZWidth& z, const py::object& monte_carlo, uint64_t seed) {
-             // One entry of the CLI's summary JSON "delays" list (apps/cmd_stability.cc, boundary --summary).
+             // One entry of the CLI's summary JSON "delays" list (analysis::DelaySummaryJson, boundary --summary).
              const int mc = Integer(monte_carlo, "monte_carlo");
              if (mc < 0) throw InputError("monte_carlo = " + std::to_string(mc) + ": must be >= 0");
              if (mc > 0 && z.model.log_covariance.empty()) {
@@ -404,16 +406,14 @@ void DefZWidthSummary(py::class_<PyZWidth>& cls) {
                  sd = stability::SummaryStdDelta(z.model.plant, z.model.log_covariance, z.z->period_s(),
                                                  z.delay_samples, s, {}, z.loop);
                }
-               e = io::SummaryToJson(s, has_cov ? &sd : nullptr);
-               io::AddDelays(&e, z.delay_samples, z.model.plant.delay_samples);  // loop, model, total: as the CLI
                const stability::Passivity pa(z.model.plant.b, z.z->period_s(), z.z->total_delay(), z.loop);
-               e["passivity"] = io::PassivitySummaryJson(pa, z.model.plant.b);
+               std::optional<stability::MonteCarloResult> mcr;
                if (mc > 0) {
-                 e["monte_carlo"] = io::MonteCarloJson(
-                     stability::SummaryMonteCarlo(z.model.plant, z.model.log_covariance, z.z->period_s(),
-                                                  z.delay_samples, mc, seed, z.loop),
-                     seed);
+                 mcr = stability::SummaryMonteCarlo(z.model.plant, z.model.log_covariance, z.z->period_s(),
+                                                    z.delay_samples, mc, seed, z.loop);
                }
+               e = analysis::DelaySummaryJson(s, has_cov ? &sd : nullptr, z.delay_samples, z.model.plant, pa,
+                                              mcr ? &*mcr : nullptr, seed);
              }
              return JsonToPython(e);
            },

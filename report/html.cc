@@ -185,13 +185,13 @@ void ZWidthSection(const analysis::RunAnalysis& a, std::ostringstream& h) {
     << "&plusmn; one std by the delta method from the fit's parameter covariance"
     << (st.has_std ? "" : " (not available: the fit has no covariance)")
     << ". boundary.csv lists every stable K interval per B.</p>\n";
-  if (!a.friction_amplitudes.empty()) {
+  if (!st.friction_amplitudes.empty()) {
     h << "<p>Friction (Coulomb " << a.input.model.friction->MeanCoulomb() << " " << model::Units(a.options.linear).input
       << " at the motor): outside the linear "
       << "Z-width a wall is still stable for oscillations below the describing-function amplitude A* "
       << "(docs/friction.md; boundary.csv's A_star column):</p>\n<ul>\n";
     for (int d : st.delays) {
-      h << "<li>" << Html(analysis::FrictionSummaryLine(a.friction_amplitudes, d, a.friction_options, model::Units(a.options.linear))) << "</li>\n";
+      h << "<li>" << Html(analysis::FrictionSummaryLine(st.friction_amplitudes, d, st.friction_options, model::Units(a.options.linear))) << "</li>\n";
     }
     h << "</ul>\n";
   }

@@ -32,9 +32,9 @@ std::string SummaryJson(const analysis::RunAnalysis& a) {
   for (size_t i = 0; i < st.delays.size(); ++i) {
     nlohmann::json e = io::SummaryToJson(st.summaries[i], st.has_std ? &st.stds[i] : nullptr);
     io::AddDelays(&e, st.delays[i], in.model.plant.delay_samples);
-    if (!a.friction_amplitudes.empty()) {
-      e["friction"] = analysis::FrictionSummaryJson(a.friction_amplitudes, st.delays[i], *in.model.friction,
-                                                    a.friction_options);
+    if (!st.friction_amplitudes.empty()) {
+      e["friction"] = analysis::FrictionSummaryJson(st.friction_amplitudes, st.delays[i], st.friction,
+                                                    st.friction_options);
     }
     summary["boundary"].push_back(e);
   }
