@@ -124,7 +124,8 @@ enum class FrictionFitStatus {
   // Friction asked for or detected, but not identified from this log (the
   // message says why and what to record instead): too few usable rows for the
   // band, a refit that did not converge, a fixed point not found, or values
-  // the log does not determine (b or F_c within 1 / 2 std of 0, a non-finite
+  // the log does not determine (b within 1 std of 0; with FrictionModel::kAuto
+  // F_c within 2 std of 0, which kCoulomb reports as fitted; a non-finite
   // value or std, an offset beyond 10 x the torque rms). `fit` is the linear
   // fit, with a warning, and the `friction` reason when detected; `friction`
   // holds the rejected estimate for the record, never to be used.

@@ -16,6 +16,7 @@
 
 #include "analysis/batch.h"
 #include "apps/batch_command.h"
+#include "io/atomic_file.h"
 #include "io/batch_table.h"
 #include "io/option_names.h"
 #include "model/error.h"
@@ -78,6 +79,7 @@ void BindBatch(py::module_& m) {
         py::arg("keyword"), "The `zwidth batch` flag of a keyword.", kCLocale);
   m.def("_batch_units",
         [](const std::vector<std::string>& args, const std::string& batch_id) {
+          io::ForgetNotedInputs();  // each call is its own command (the provenance's inputs)
           std::shared_ptr<const app::BatchRequest> r;
           std::vector<std::optional<Cells>> resumed;
           {
@@ -114,6 +116,7 @@ void BindBatch(py::module_& m) {
   m.def("_batch_unit",
         [](const std::vector<std::string>& args, const std::string& batch_id, size_t index, const std::string& serial,
            bool serial_thread) {
+          io::ForgetNotedInputs();  // each call is its own command (the provenance's inputs)
           Cells row;
           {
             py::gil_scoped_release release;

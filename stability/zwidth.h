@@ -321,7 +321,7 @@ class ZWidth {
   // directions of the crossings between.
   int DirectZeroKCount(size_t slot) const;
   void FillZeroKBlock(size_t block) const;
-  static constexpr size_t kZeroKBlock = 16;
+  static constexpr size_t kZeroKBlock = 8;
   // Schur-Cohn on the characteristic polynomial (K = 0 as 0+).
   bool PolynomialStable(double K, double B) const;
   // Whether K_in is stable and K_out (1e-6 across a boundary from it) is

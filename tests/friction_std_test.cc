@@ -103,8 +103,10 @@ TEST(FrictionStd, ReportedStdMatchesTheScatterOverSeeds) {
 // (F_c +32 %); Table I at 13 % friction with an offset of 0.1 F_c, seed 5005,
 // stopped with "161 usable samples (every 54-th)": the linear fit's inert
 // pole-zero pair at 15.3 Hz set the band at 6.1 Hz.
+// must_fit: the log is one the fit must identify (else not identified is
+// also honest), so that a fit that gives up on every log fails.
 void ExpectHonest(const model::SimulatedLog& log, const model::Plant& truth, double fc, int num_modes, int window,
-                  const char* what) {
+                  const char* what, bool must_fit = false) {
   FitOptions fo;
   fo.num_modes = num_modes;
   fo.delay_samples = 0;
@@ -121,6 +123,7 @@ void ExpectHonest(const model::SimulatedLog& log, const model::Plant& truth, dou
               r.friction.coulomb_pos, r.friction_std.coulomb_pos, 100 * (r.friction.coulomb_pos / fc - 1), r.fit.plant.b,
               r.fit.std_errors.b, 100 * (r.fit.plant.b / truth.b - 1), r.message.c_str());
   ASSERT_TRUE(r.status == FrictionFitStatus::kFitted || r.status == FrictionFitStatus::kNotIdentified) << what;
+  if (must_fit) ASSERT_EQ(r.status, FrictionFitStatus::kFitted) << what << ": " << r.message;
   ASSERT_EQ(r.fit.status, FitStatus::kConverged) << what;
   if (r.status == FrictionFitStatus::kNotIdentified) {
     EXPECT_EQ(r.fit.plant.b, lin.plant.b) << what << ": the linear fit is kept";
@@ -158,7 +161,7 @@ TEST(FrictionRobust, UnidentifiableLogsAreReportedNotFittedAndTheRestWithin10Per
   model::Friction f1 = model::Friction::Symmetric(0.13 * st.torque_rms);
   f1.offset = 0.1 * f1.coulomb_pos;
   ExpectHonest(model::SimulateNonlinearLog(table1, st, f1, model::Actuator{}), table1, f1.coulomb_pos, 2, 4096,
-               "Table I, seed 5005");
+               "Table I, seed 5005", /*must_fit=*/true);
 }
 
 }  // namespace

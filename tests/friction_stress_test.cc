@@ -50,7 +50,18 @@ TEST_P(FrictionSweep, DoneWhenOfIssue32) {
   const FrictionFitResult r = FitFriction(log.torque, log.position, 1000.0, lin, fo, o);
   o.model = FrictionModel::kNone;
   const FrictionFitResult none = FitFriction(log.torque, log.position, 1000.0, lin, fo, o);
-  ASSERT_EQ(r.status, FrictionFitStatus::kFitted);
+  // Fitted, or (the one honest alternative) not identified because the log
+  // does not determine b beside the friction: then the linear-only fit is
+  // returned, and it is poor, never good with a friction-inflated b.
+  if (r.status == FrictionFitStatus::kNotIdentified) {
+    std::printf("sweep: F_c %2.0f %% %5d counts | %s\n", 100 * c.coulomb_fraction, c.counts,
+                r.message.c_str());
+    EXPECT_NE(r.message.find("within 1 std of 0"), std::string::npos) << r.message;
+    EXPECT_EQ(r.fit.plant.b, lin.plant.b);
+    EXPECT_EQ(none.fit.quality, FitQuality::kPoor);
+    return;
+  }
+  ASSERT_EQ(r.status, FrictionFitStatus::kFitted) << r.message;
   auto kcr = [](const model::Plant& p) { return stability::ZWidth(p, 1e-3, 2).Summarize().K_cr_at_zero_B; };
   const double kt = kcr(truth), kf = kcr(r.fit.plant);
   std::printf("sweep: F_c %2.0f %% %5d counts | b %+6.1f %% (%.1f std of %.1f %%) | F_c %+6.1f %% (%.1f std) | K_CR(0) %+6.1f %% "

@@ -237,6 +237,10 @@ SMOKE
 mkdir -p "$T/work" "$T/kit/tests" "$T/kit/datasets"
 # What the smoke needs from the source tree, copied before it is hidden.
 cp "$SRC/tests/cli_help_test.sh" "$SRC/tests/cli_lib.sh" "$T/kit/tests/"
+# cli_help_test.sh collects the exit statuses the sources use (main.cc, the commands, the signal handler).
+mkdir -p "$T/kit/apps" "$T/kit/io"
+cp "$SRC"/apps/*.cc "$T/kit/apps/"
+cp "$SRC/io/atomic_file.cc" "$T/kit/io/"
 cp -r "$SRC/tests/consumer" "$T/kit/consumer"
 cp -r "$SRC/examples" "$T/kit/examples"
 ln -s "$P/share/zwidth/phantom" "$T/kit/datasets/phantom"

@@ -177,7 +177,7 @@ TEST(ZWidthCount, TheCountAtZeroKIsTheBruteForcesAtEveryB) {
 
 TEST(ZWidthCount, EveryKnownChangeAtZeroKIsTheBruteForcesAndTheCountsFollow) {
   // The counts at K = 0+ of the intervals between the K = 0 boundary's B
-  // values are propagated from every 16th by the changes zero_k_changes()
+  // values are propagated from every 8th by the changes zero_k_changes()
   // gives: each known change must be the brute force's change of count
   // across its B, and every interval's count the brute force's, at its
   // midpoint (at K = 1e-7 K_cr as above).
