@@ -49,6 +49,14 @@ SampledPlant SampleForOneLoop(const model::Plant& plant, double period_s, int de
   return SampledPlant(plant, period_s, loop.hand);
 }
 
+// g'(-1) = dW/dx - B dV/dx on the real axis at x = -1 (the sign of the real
+// root's motion at theta = pi, in K and in B), nan where rounding hides it.
+double SlopeAtMinusOne(double dW, double dV, double B) {
+  const double g1 = dW - B * dV;
+  const bool known = std::isfinite(g1) && std::abs(g1) > 1e-6 * (std::abs(dW) + std::abs(B * dV));
+  return known ? g1 : std::numeric_limits<double>::quiet_NaN();
+}
+
 bool SameHand(const Hand& a, const Hand& b) { return a.M == b.M && a.B == b.B && a.K == b.K; }
 
 }  // namespace
@@ -295,9 +303,8 @@ std::vector<Crossing> ZWidth::Crossings(double B) const {
     const int dir = (at_end || iv == 0.0 || s.Ba == s.Bb) ? 0 : ((s.Bb > s.Ba) == (iv > 0.0) ? 1 : -1);
     out.push_back({t, k, dir});
   }
-  const double g1 = dW_pi_ - B * dV_pi_;  // g'(-1): the real root leaves through -1 when < 0
-  const bool known = std::isfinite(g1) && std::abs(g1) > 1e-6 * (std::abs(dW_pi_) + std::abs(B * dV_pi_));
-  out.push_back({std::numbers::pi, K_pi_at_zero_B_ - B * V_pi_, known ? (g1 < 0.0 ? 1 : -1) : 0});
+  const double g1 = SlopeAtMinusOne(dW_pi_, dV_pi_, B);  // the real root leaves through -1 when < 0
+  out.push_back({std::numbers::pi, K_pi_at_zero_B_ - B * V_pi_, std::isnan(g1) ? 0 : (g1 < 0.0 ? 1 : -1)});
   return out;
 }
 
@@ -361,9 +368,8 @@ std::vector<double> ZWidth::ZeroKCandidates(std::vector<int>* changes) const {
   }
   if (V_pi_ != 0.0 && K_pi_at_zero_B_ / V_pi_ > 0.0) {
     const double b = K_pi_at_zero_B_ / V_pi_;
-    const double g1 = dW_pi_ - b * dV_pi_;
-    const bool known = std::isfinite(g1) && std::abs(g1) > 1e-6 * (std::abs(dW_pi_) + std::abs(b * dV_pi_));
-    cand.push_back({b, known ? ((V_pi_ / g1 < 0.0) ? 1 : -1) : 0});
+    const double g1 = SlopeAtMinusOne(dW_pi_, dV_pi_, b);
+    cand.push_back({b, std::isnan(g1) ? 0 : ((V_pi_ / g1 < 0.0) ? 1 : -1)});
   }
   std::sort(cand.begin(), cand.end());
   std::vector<double> bs;
