@@ -155,15 +155,6 @@ PlantStability AnalysePlantStability(const io::ModelFile& fitted, double T, cons
   return r;
 }
 
-PlantStability AnalysePlantStability(const io::ModelFile& model, double T, const std::vector<int>& delays,
-                                     const stability::LoopOptions& loop, const stability::BGridOptions& grid) {
-  PlantStabilityOptions o;
-  o.delays = delays;
-  o.loops = {loop};
-  o.grid = grid;
-  return AnalysePlantStability(model, T, o);
-}
-
 nlohmann::json DelaySummaryJson(const stability::DelaySummary& summary, const stability::SummaryStd* std_or_null,
                                 int delay_samples, const model::Plant& plant, const stability::Passivity& passivity,
                                 const stability::MonteCarloResult* monte_carlo_or_null, std::uint64_t seed) {

@@ -88,10 +88,6 @@ struct PlantStability {
 // comes from them).
 PlantStability AnalysePlantStability(const io::ModelFile& model, double period_s, const PlantStabilityOptions& options);
 
-// One loop, no Monte Carlo, no friction (`run`'s Z-width without friction).
-PlantStability AnalysePlantStability(const io::ModelFile& model, double period_s, const std::vector<int>& delays,
-                                     const stability::LoopOptions& loop, const stability::BGridOptions& grid);
-
 // One entry of a summary JSON's "delays": io::SummaryToJson (with the std
 // when given), the loop, model and total delays (io::AddDelays), "passivity"
 // and, when given, "monte_carlo" (with its seed). `boundary --summary` and

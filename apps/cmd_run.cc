@@ -112,7 +112,6 @@ void Run(RunFlags& f) {
 void AddRunAnalysisFlags(CLI::App* cmd, RunFlags* f) {
   cmd->add_option("--reference", f->reference, "compare with: table1 (the paper's PHANToM, built in) or a model JSON (default: no comparison)");
   cmd->add_option("--delays", f->delays, "loop delays [samples]")->delimiter(',')->capture_default_str();
-  f->fit.modes = "auto";  // run chooses the order unless told
   AddFitFlags(cmd, &f->fit);
   cmd->add_option("--b-step", f->grid.b_step, "B step of the boundary [N m s/rad] (wins over --b-points)");
   cmd->add_option("--b-points", f->grid.b_points, "B values of the boundary, 0 to 1.05 x the largest stable B")

@@ -473,7 +473,7 @@ void BM_RunBoundary(benchmark::State& state) {
   const std::vector<int> delays = {2, 4, 8};
   std::optional<analysis::PlantStability> r;
   for (auto _ : state) {
-    r.emplace(analysis::AnalysePlantStability(m, 1e-3, delays, {}, {}));
+    r.emplace(analysis::AnalysePlantStability(m, 1e-3, {.delays = delays}));
     benchmark::DoNotOptimize(r->rows.data());
   }
   double err = 0;

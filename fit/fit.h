@@ -70,11 +70,14 @@ struct FitOptions {
 // The options a user's fit starts from: the one source of the defaults of
 // `zwidth fit` / `run` (FitFlags) and of Python's fit() and run(). FitOptions{}
 // with the input delay searched (auto_delay): every device tried has one, and
-// a fit that assumes none is poor there (chi2/dof 15.7-12283). FitOptions{}
-// itself keeps a fixed delay of 0 for the library's own callers.
+// a fit that assumes none is poor there (chi2/dof 15.7-12283); and the order
+// chosen by BIC (auto_modes): a fixed 2 sections judged a one-section device
+// poor where `run` (which searched) called it good. FitOptions{} itself keeps
+// a fixed delay of 0 and 2 sections for the library's own callers.
 inline FitOptions UserFitOptions() {
   FitOptions o;
   o.auto_delay = true;
+  o.auto_modes = true;
   return o;
 }
 

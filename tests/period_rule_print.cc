@@ -17,7 +17,7 @@ int main(int argc, char** argv) {
   try {
     const zwidth::io::ModelFile m = zwidth::io::ReadModelJson(argv[1]);
     const auto r = zwidth::analysis::AnalysePlantStability(m, std::strtod(argv[2], nullptr),
-                                                           {std::atoi(argv[3])}, {}, {});
+                                                           {.delays = {std::atoi(argv[3])}});
     std::printf("%.17g\n", r.summaries.at(0).K_cr_at_zero_B);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());

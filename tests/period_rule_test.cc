@@ -21,13 +21,13 @@ io::ModelFile FittedAtOneMs(int delay_samples) {
 }
 
 double KcrAtZero(const io::ModelFile& m, double T, int d) {
-  return AnalysePlantStability(m, T, {d}, {}, {}).summaries.at(0).K_cr_at_zero_B;
+  return AnalysePlantStability(m, T, {.delays = {d}}).summaries.at(0).K_cr_at_zero_B;
 }
 
 TEST(PeriodRule, DelayFittedAtOneMsCountsTwiceAtHalfAMs) {
   io::ModelFile by_hand = FittedAtOneMs(2);  // 1 sample of 1 ms = 2 samples of 0.5 ms
   by_hand.sample_period_s = 5e-4;
-  const PlantStability converted = AnalysePlantStability(FittedAtOneMs(1), 5e-4, {2}, {}, {});
+  const PlantStability converted = AnalysePlantStability(FittedAtOneMs(1), 5e-4, {.delays = {2}});
   EXPECT_EQ(converted.summaries.at(0).K_cr_at_zero_B, KcrAtZero(by_hand, 5e-4, 2));  // to the last digit
   EXPECT_NE(converted.period_note.find("2 samples at the period 0.0005 s"), std::string::npos)
       << converted.period_note;
@@ -38,14 +38,14 @@ TEST(PeriodRule, DelayFittedAtOneMsCountsTwiceAtHalfAMs) {
 }
 
 TEST(PeriodRule, SamePeriodOrNoDelayIsLeftAsItIs) {
-  EXPECT_EQ(AnalysePlantStability(FittedAtOneMs(1), 1e-3, {2}, {}, {}).period_note, "");
-  EXPECT_EQ(AnalysePlantStability(FittedAtOneMs(0), 5e-4, {2}, {}, {}).period_note, "");
+  EXPECT_EQ(AnalysePlantStability(FittedAtOneMs(1), 1e-3, {.delays = {2}}).period_note, "");
+  EXPECT_EQ(AnalysePlantStability(FittedAtOneMs(0), 5e-4, {.delays = {2}}).period_note, "");
 }
 
 TEST(PeriodRule, FractionOfASampleIsRefused) {
   // 1 sample of 1 ms at 0.4 ms is 2.5 samples.
   try {
-    AnalysePlantStability(FittedAtOneMs(1), 4e-4, {2}, {}, {});
+    AnalysePlantStability(FittedAtOneMs(1), 4e-4, {.delays = {2}});
     FAIL() << "a delay of 2.5 samples was accepted";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("2.5 samples"), std::string::npos) << e.what();
@@ -55,7 +55,7 @@ TEST(PeriodRule, FractionOfASampleIsRefused) {
 TEST(PeriodRule, PeriodOutsideItsRangeIsRefusedNamingIt) {
   for (double T : {1000.0, 1e-9, -1e-3}) {
     try {
-      AnalysePlantStability(FittedAtOneMs(1), T, {2}, {}, {});
+      AnalysePlantStability(FittedAtOneMs(1), T, {.delays = {2}});
       FAIL() << "period " << T << " accepted";
     } catch (const InputError& e) {
       EXPECT_NE(std::string(e.what()).find("ModelPeriod::period_s"), std::string::npos) << e.what();

@@ -269,7 +269,7 @@ estimate_logs.__doc__ = _signatures.overloads(_zwidth._estimate_logs_options)[1]
 
 def run(logs, out_dir, **options):
     # options: run's own (_run's keywords), estimate_logs' and fit's; fmin/fmax bound both the
-    # estimate and the fit's band, as `zwidth run --fmin/--fmax`; modes defaults to 'auto' as `run`.
+    # estimate and the fit's band, as `zwidth run --fmin/--fmax`.
     own = _names(_zwidth._run) - {"logs", "out_dir", "estimate", "fit", "command_line"}
     est_names = _names(_zwidth._estimate_logs_options)
     fit_names = _names(_zwidth._fit_options)
@@ -280,7 +280,6 @@ def run(logs, out_dir, **options):
         raise TypeError(f"run() got unexpected keyword arguments {unknown}")
     est = {k: v for k, v in options.items() if k in est_names}
     fit_kw = {k: v for k, v in options.items() if k in fit_names}
-    fit_kw.setdefault("modes", "auto")
     est_defaults = _signatures.signature(_signatures.overloads(_zwidth._estimate_logs_options)[0][0]).parameters
     for k in ("fmin", "fmax"):  # the fit's band is the estimate's, as FitFlags::Resolve
         fit_kw[k] = est.get(k, est_defaults[k].default)
@@ -300,9 +299,7 @@ def _run_signature():
     own = [p.replace(kind=P.KEYWORD_ONLY)
            for p in _signatures.signature(_signatures.overloads(_zwidth._run)[0][0]).parameters.values()
            if p.name not in ("logs", "out_dir", "estimate", "fit", "command_line")]
-    sig = _keywords_signature(first + own, [_zwidth._estimate_logs_options, _zwidth._fit_options], ret="dict")
-    params = [p.replace(default="auto") if p.name == "modes" else p for p in sig.parameters.values()]
-    return sig.replace(parameters=params)
+    return _keywords_signature(first + own, [_zwidth._estimate_logs_options, _zwidth._fit_options], ret="dict")
 
 
 run.__signature__ = _run_signature()
@@ -315,7 +312,7 @@ Coulomb friction fitted when one log shows it, 'coulomb', 'none': as `zwidth run
 table2 (True: Table II's relay points beside the model, as `zwidth run --table2`)),
 estimate_logs' (the
 window, the selectors, whole_record, ...; fmin/fmax also bound the fit) and fit's (modes, default
-'auto' as `zwidth run`, delay_samples, allow_short, ...). OUT_DIR must be new or empty (or
+'auto' as `zwidth fit` and `run`, delay_samples, allow_short, ...). OUT_DIR must be new or empty (or
 force=True); its parent must exist; nothing is left behind on an error or Ctrl-C. Warnings
 (a poor fit's, the estimate's) are raised as UserWarning; a poor fit also as
 FitQualityWarning. Returns a dict: out_dir, quality ('good'/'poor'), figures, fit_report."""
