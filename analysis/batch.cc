@@ -442,4 +442,19 @@ BatchResult RunBatchWith(const std::vector<io::BatchEntry>& units, const BatchOp
   return out;
 }
 
+BatchTableSaver::BatchTableSaver(std::string path, double interval_s)
+    : path_(std::move(path)), interval_s_(interval_s), last_(std::chrono::steady_clock::now()) {}
+
+void BatchTableSaver::operator()(const BatchProgress& progress,
+                                 const std::vector<std::optional<std::map<std::string, std::string>>>& rows) {
+  if (progress.done >= progress.total) return;
+  if (std::chrono::steady_clock::now() - last_ < std::chrono::duration<double>(interval_s_)) return;
+  Save(rows);
+}
+
+void BatchTableSaver::Save(const std::vector<std::optional<std::map<std::string, std::string>>>& rows) {
+  io::WriteBatchTable(path_, BatchTableOf(rows));
+  last_ = std::chrono::steady_clock::now();
+}
+
 }  // namespace zwidth::analysis

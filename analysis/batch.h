@@ -8,6 +8,7 @@
 // only its slot, so the table never depends on timing. Prints nothing.
 #pragma once
 
+#include <chrono>
 #include <functional>
 #include <map>
 #include <optional>
@@ -148,6 +149,26 @@ std::map<std::string, std::string> BatchRowOf(const io::BatchEntry& unit, const 
 std::vector<std::string> BatchColumns(const std::vector<std::map<std::string, std::string>>& rows);
 // The table of the rows finished so far (those set), columns by BatchColumns.
 io::BatchTable BatchTableOf(const std::vector<std::optional<std::map<std::string, std::string>>>& rows);
+
+// The rows finished so far saved at `path` (io::WriteBatchTable of
+// BatchTableOf: atomic, a resumable table) now and then while a batch runs, so
+// that a batch killed midway keeps its finished units: `zwidth batch` and
+// Python's zwidth.batch call it after each unit (a BatchOnProgress). A save
+// when `interval_s` has passed since the start or the last save and units are
+// left (the batch's end writes the whole table); Save() at once (an interrupt).
+class BatchTableSaver {
+ public:
+  static constexpr double kDefaultIntervalS = 2.0;
+  explicit BatchTableSaver(std::string path, double interval_s = kDefaultIntervalS);
+  void operator()(const BatchProgress& progress,
+                  const std::vector<std::optional<std::map<std::string, std::string>>>& rows);
+  void Save(const std::vector<std::optional<std::map<std::string, std::string>>>& rows);
+
+ private:
+  std::string path_;
+  double interval_s_;
+  std::chrono::steady_clock::time_point last_;
+};
 
 // Every unit by AnalyseUnit. Throws InputError for invalid options (before
 // any unit); a unit's errors go to its row.

@@ -11,7 +11,7 @@
 #include "analysis/plant_stability.h"
 #include "analysis/scene_check.h"
 #include "apps/friction_flags.h"
-#include "apps/loop_flags.h"
+#include "flags/loop_flags.h"
 #include "io/printable.h"
 #include "io/provenance.h"
 #include "stability/haptic_loop.h"

@@ -7,7 +7,7 @@
 
 #include "apps/common.h"
 #include "apps/friction_flags.h"
-#include "apps/loop_flags.h"
+#include "flags/loop_flags.h"
 #include "analysis/friction_amplitude.h"
 #include "io/atomic_file.h"
 #include "io/model_json.h"

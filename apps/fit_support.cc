@@ -25,69 +25,13 @@
 #include "stability/zwidth.h"
 
 namespace zwidth::app {
-io::ModelFile ReadReference(const std::string& flag, bool* is_table1) {
-  return io::ReadReferenceModel(flag, "--reference", is_table1);
-}
-
-void ResolveModesFlag(const std::string& flag, fit::FitOptions* o) {
-  if (flag == "auto") { o->auto_modes = true; return; }
-  try {
-    size_t pos = 0;
-    const int n = std::stoi(flag, &pos);
-    if (pos != flag.size() || n < 0) throw std::invalid_argument("");
-    o->num_modes = n;
-    o->auto_modes = false;
-  } catch (const std::exception&) {
-    throw InputError("--modes '" + flag + "': expected 'auto' or an integer >= 0");
-  }
-}
-
-void AddFitFlags(CLI::App* cmd, FitFlags* f) {
-  cmd->add_option("--modes", f->modes, "resonance/antiresonance sections (0: rigid body) or 'auto' (0..--max-modes, by BIC)")->capture_default_str();
-  cmd->add_option("--max-modes", f->o.max_modes, "largest order --modes auto tries, <= 8")->capture_default_str();
-  cmd->add_option("--delay-samples", f->delay, "input delay [samples] or 'auto' (searched from the phase of H / G_rigid)")->capture_default_str();
-  cmd->add_option("--max-delay", f->o.max_auto_delay, "largest delay --delay-samples auto tries [samples]")->capture_default_str();
-  cmd->add_flag("--allow-short", f->o.allow_few_averages, "fit a response of fewer than 3 Welch segments anyway (judged poor)");
-  cmd->add_option("--min-input-power", f->o.band.min_input_power_ratio,
-                  "bins used only where the input PSD is at least this fraction of its 99th percentile")->capture_default_str();
-  cmd->add_option("--min-coherence", f->o.band.min_coherence, "bins with lower coherence are not used")->capture_default_str();
-  cmd->add_option("--noise-coherence-sigmas", f->o.band.noise_coherence_sigmas,
-                  "leave out the region at the top of the band whose coherence is within this many std of what "
-                  "noise alone gives (bins near Nyquist that are noise; 0: off)")->capture_default_str();
-}
-
-void FitFlags::Resolve(double fmin_hz, double fmax_hz) {
-  ResolveModesFlag(modes, &o);
-  ResolveDelayFlag(delay, &o);
-  o.band.fmin_hz = fmin_hz;
-  o.band.fmax_hz = fmax_hz;
-  std::string why;
-  if (!o.IsValid(&why)) throw InputError(why);
-}
-
-// The library names option fields; the CLI shows its flags (WithFlags).
-std::string FitReport(const fit::FitResult& r) { return WithFlags(analysis::FitReport(r)); }
-
-void ResolveDelayFlag(const std::string& flag, fit::FitOptions* o) {
-  if (flag == "auto") { o->auto_delay = true; return; }
-  try {
-    size_t pos = 0;
-    const int d = std::stoi(flag, &pos);
-    if (pos != flag.size() || d < 0) throw std::invalid_argument("");
-    o->delay_samples = d;
-    o->auto_delay = false;
-  } catch (const std::exception&) {
-    throw InputError("--delay-samples '" + flag + "': expected 'auto' or an integer >= 0");
-  }
-}
 
 
-void AddFrictionFlag(CLI::App* cmd, std::string* flag) {
-  cmd->add_option("--friction", *flag,
-                  "Coulomb friction: auto (fitted when the log shows it), coulomb (always fitted) or none (the linear "
-                  "fit; friction only detected); needs one time-domain log")
-      ->capture_default_str();
-}
+
+
+
+
+
 
 void AddTable2Flags(CLI::App* cmd, bool* on, analysis::Table2Options* t2) {
   cmd->add_flag("--table2", *on,

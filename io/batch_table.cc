@@ -2,6 +2,7 @@
 
 #include <glob.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -290,6 +291,21 @@ BatchTable ReadBatchTable(const std::string& path) {
       },
       [&](std::string_view frame) { text = frame; });
   return ParseBatchCsv(text, where);
+}
+
+BatchTable ReadPreviousBatchTable(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) return {};
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw InputError(Printable(path) + " is not a regular file: -o names the table (a .csv or .h5 file) to write");
+  }
+  BatchTable t = ReadBatchTable(path);
+  if (!t.rows.empty() && (std::find(t.columns.begin(), t.columns.end(), "input_hash") == t.columns.end() ||
+                          std::find(t.columns.begin(), t.columns.end(), "serial") == t.columns.end())) {
+    throw InputError(Printable(path) + " exists and is not a table of zwidth batch (no serial and input_hash "
+                     "columns): write the table elsewhere, or remove the file");
+  }
+  return t;
 }
 
 }  // namespace zwidth::io

@@ -77,5 +77,10 @@ void WriteBatchTable(const std::string& path, const BatchTable& table);
 // (ParseBatchCsv); a file of at most 1 GiB. InputError naming the file for
 // a file that is no such table.
 BatchTable ReadBatchTable(const std::string& path);
+// The table of an earlier batch at `path` (its -o), to resume from: empty
+// when no file is there; InputError when `path` is no regular file, or a
+// table without the serial and input_hash columns of zwidth batch (then -o
+// names some other file, which a batch must not overwrite).
+BatchTable ReadPreviousBatchTable(const std::string& path);
 
 }  // namespace zwidth::io

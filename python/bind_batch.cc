@@ -1,11 +1,14 @@
 // zwidth.batch's core (python/zwidth/_batch.py): `zwidth batch`'s request
-// parsed by the command's own declarations (app::ParseBatchRequest: the same
-// flags, checks and options key), each unit computed in this process by the
-// batch engine (analysis::RunBatch on that one unit: run's pipeline, its row,
-// its resume by input hash, its errors as a row) with the GIL released, so
-// Python threads or a dask worker's threads compute units side by side; then
-// the batch's end as the command's (app::FinishBatch: every unit resumed from
-// the rows, the outlier columns, the table written by io::WriteBatchTable).
+// parsed by the command's own declarations (flags::ParseBatchRequest, below
+// apps: the same flags, checks and options key), each unit computed in this
+// process by the batch engine (analysis::RunBatch on that one unit: run's
+// pipeline, its row, its resume by input hash, its errors as a row) with the
+// GIL released, so Python threads or a dask worker's threads compute units
+// side by side; the rows finished so far saved as the command saves them
+// (analysis::BatchTableSaver); then the batch's end as the command's
+// (flags::FinishBatch: every unit resumed from the rows, the outlier columns,
+// the table written by io::WriteBatchTable). The request records the Python
+// call that made it (the unit folders' and the fleet report's command).
 #include <map>
 #include <memory>
 #include <mutex>
@@ -15,7 +18,8 @@
 #include <vector>
 
 #include "analysis/batch.h"
-#include "apps/batch_command.h"
+#include "flags/batch_request.h"
+#include "io/provenance.h"
 #include "io/atomic_file.h"
 #include "io/batch_table.h"
 #include "io/option_names.h"
@@ -31,9 +35,10 @@ using Cells = std::map<std::string, std::string>;
 // The request of (batch id, arguments), parsed once per process: a dask worker
 // computes many units of one batch; a new zwidth.batch call has a new id, so a
 // changed design or manifest is read again.
-std::shared_ptr<const app::BatchRequest> Request(const std::string& batch_id, const std::vector<std::string>& args) {
+std::shared_ptr<const flags::BatchRequest> Request(const std::string& batch_id, const std::vector<std::string>& args,
+                                                   const std::string& call) {
   static std::mutex mu;
-  static std::vector<std::pair<std::pair<std::string, std::vector<std::string>>, std::shared_ptr<const app::BatchRequest>>> cache;
+  static std::vector<std::pair<std::pair<std::string, std::vector<std::string>>, std::shared_ptr<const flags::BatchRequest>>> cache;
   const auto key = std::make_pair(batch_id, args);
   {
     std::lock_guard<std::mutex> lock(mu);
@@ -41,7 +46,7 @@ std::shared_ptr<const app::BatchRequest> Request(const std::string& batch_id, co
       if (k == key) return r;
     }
   }
-  std::shared_ptr<const app::BatchRequest> r = app::ParseBatchRequest(args);
+  std::shared_ptr<const flags::BatchRequest> r = flags::ParseBatchRequest(args, call);
   std::lock_guard<std::mutex> lock(mu);
   if (cache.size() >= 4) cache.erase(cache.begin());
   cache.emplace_back(key, r);
@@ -56,6 +61,11 @@ py::dict RowDict(const Cells& row) {
   }
   return d;
 }
+
+// The saver of each batch running here (by its id): the rows finished so far
+// written as `zwidth batch` writes them while it runs.
+std::mutex g_savers_mu;
+std::map<std::string, std::shared_ptr<analysis::BatchTableSaver>> g_savers;
 
 Cells CellsFrom(const py::dict& d) {
   Cells row;
@@ -78,15 +88,16 @@ void BindBatch(py::module_& m) {
         },
         py::arg("keyword"), "The `zwidth batch` flag of a keyword.", kCLocale);
   m.def("_batch_units",
-        [](const std::vector<std::string>& args, const std::string& batch_id) {
+        [](const std::vector<std::string>& args, const std::string& batch_id, const std::string& call) {
           io::ForgetNotedInputs();  // each call is its own command (the provenance's inputs)
-          std::shared_ptr<const app::BatchRequest> r;
+          io::SetInvocation(call);  // the provenance of the unit folders' JSON files
+          std::shared_ptr<const flags::BatchRequest> r;
           std::vector<std::optional<Cells>> resumed;
           {
             py::gil_scoped_release release;
             ScopedCLocale c;
-            r = Request(batch_id, args);
-            const io::BatchTable previous = app::PreviousBatchTable(*r);
+            r = Request(batch_id, args, call);
+            const io::BatchTable previous = flags::PreviousBatchTable(*r);
             std::map<std::string, const Cells*> by_serial;
             for (const Cells& row : previous.rows) {
               if (auto it = row.find("serial"); it != row.end()) by_serial[it->second] = &row;
@@ -102,6 +113,9 @@ void BindBatch(py::module_& m) {
               }
               resumed.push_back(std::move(row));
             }
+            std::lock_guard<std::mutex> lock(g_savers_mu);
+            if (g_savers.size() >= 16) g_savers.erase(g_savers.begin());
+            g_savers[batch_id] = std::make_shared<analysis::BatchTableSaver>(r->table);
           }
           py::list units;
           for (size_t i = 0; i < r->units.size(); ++i) {
@@ -109,19 +123,20 @@ void BindBatch(py::module_& m) {
           }
           return units;
         },
-        py::arg("args"), py::arg("batch_id"),
+        py::arg("args"), py::arg("batch_id"), py::arg("call") = "",
         "The units of `zwidth batch ARGS`: (serial, its row of the table at -o when its inputs hash the same, "
         "else None: to compute); InputError for a bad request, before any unit is computed.",
         kCLocale);
   m.def("_batch_unit",
         [](const std::vector<std::string>& args, const std::string& batch_id, size_t index, const std::string& serial,
-           bool serial_thread) {
+           bool serial_thread, const std::string& call) {
           io::ForgetNotedInputs();  // each call is its own command (the provenance's inputs)
+          io::SetInvocation(call);  // a dask worker's too
           Cells row;
           {
             py::gil_scoped_release release;
             ScopedCLocale c;
-            std::shared_ptr<const app::BatchRequest> r = Request(batch_id, args);
+            std::shared_ptr<const flags::BatchRequest> r = Request(batch_id, args, call);
             if (index >= r->units.size() || r->units[index].serial != serial) {
               throw InputError("batch: unit " + std::to_string(index) + " is not '" + serial +
                                "' here: the units (a glob, a manifest) differ between the caller and this process");
@@ -136,26 +151,55 @@ void BindBatch(py::module_& m) {
           return RowDict(row);
         },
         py::arg("args"), py::arg("batch_id"), py::arg("index"), py::arg("serial"), py::arg("serial_thread") = true,
+        py::arg("call") = "",
         "Unit `index` of `zwidth batch ARGS` computed here, its own work on this thread alone when serial_thread: "
         "its row of text cells (an error as a row).",
         kCLocale);
   m.def("_batch_finish",
-        [](const std::vector<std::string>& args, const std::string& batch_id, const std::vector<py::dict>& rows) {
+        [](const std::vector<std::string>& args, const std::string& batch_id, const std::vector<py::dict>& rows,
+           const std::string& call) {
           io::BatchTable done;
           for (const py::dict& d : rows) done.rows.push_back(CellsFrom(d));
           py::gil_scoped_release release;
           ScopedCLocale c;
-          std::shared_ptr<const app::BatchRequest> r = Request(batch_id, args);
+          std::shared_ptr<const flags::BatchRequest> r = Request(batch_id, args, call);
           analysis::BatchOptions o = r->options;
           done.columns = analysis::BatchColumns(done.rows);
           o.previous = std::move(done);
           // Every unit resumed from its row (the same input hash), as `zwidth batch` run again.
           const analysis::BatchResult result = analysis::RunBatch(r->units, o, r->unit_options, r->unit_done);
-          return io::FormatBatchCsv(app::FinishBatch(*r, result));
+          {
+            std::lock_guard<std::mutex> lock(g_savers_mu);
+            g_savers.erase(batch_id);
+          }
+          return io::FormatBatchCsv(flags::FinishBatch(*r, result));
         },
-        py::arg("args"), py::arg("batch_id"), py::arg("rows"),
+        py::arg("args"), py::arg("batch_id"), py::arg("rows"), py::arg("call") = "",
         "The end of `zwidth batch ARGS` from the units' rows: the table written at -o (and --population, "
         "--fleet-report); returns its CSV text.",
+        kCLocale);
+  m.def("_batch_progress",
+        [](const std::string& batch_id, const std::vector<std::optional<py::dict>>& rows, bool now) {
+          std::vector<std::optional<Cells>> done;
+          size_t finished = 0;
+          for (const std::optional<py::dict>& d : rows) {
+            done.push_back(d ? std::optional<Cells>(CellsFrom(*d)) : std::nullopt);
+            finished += d ? 1 : 0;
+          }
+          std::shared_ptr<analysis::BatchTableSaver> saver;
+          {
+            std::lock_guard<std::mutex> lock(g_savers_mu);
+            if (auto it = g_savers.find(batch_id); it != g_savers.end()) saver = it->second;
+          }
+          if (!saver) return;
+          py::gil_scoped_release release;
+          ScopedCLocale c;
+          if (now) saver->Save(done);
+          else (*saver)({.total = done.size(), .done = finished}, done);
+        },
+        py::arg("batch_id"), py::arg("rows"), py::arg("now") = false,
+        "The rows finished so far (None: not yet) saved at the batch's -o as `zwidth batch` saves them while "
+        "it runs (every 2 s while units are left; at once with now: an interrupt), so a killed batch resumes.",
         kCLocale);
 }
 

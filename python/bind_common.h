@@ -188,7 +188,7 @@ void DefWith(py::module_& m, const char* name, F&& f, Args&& args, Extra&&... ex
              std::forward<Args>(args));
 }
 
-// The CLI's loop flags (apps/loop_flags.cc) as keywords: a first-order
+// The CLI's loop flags (flags/loop_flags.cc) as keywords: a first-order
 // velocity low-pass at velocity_filter_hz (None: the raw difference) and the
 // user's hand (M, B, K) (None: nobody holds the device).
 stability::LoopOptions LoopFrom(std::optional<double> velocity_filter_hz,

@@ -71,10 +71,13 @@ std::optional<bool> UnitsFrom(const std::optional<std::string>& units) {
 }
 
 // zwidth.fit of a FrequencyResponse, or of a Log's (`log`, whose samples the
-// friction fit reads again): the friction fit's input by the CLI's rule
-// (analysis::FrictionInputFor; a response alone is a saved response's case).
+// friction fit reads again, with `welch`: the options the response was
+// estimated with, as `zwidth fit LOG` gives its Welch flags): the friction
+// fit's input by the CLI's rule (analysis::FrictionInputFor; a response alone
+// is a saved response's case).
 PyFitResult FitResponse(const ident::FrequencyResponse& frf, const fit::FitOptions& o, const std::string& friction,
-                        const std::optional<std::string>& units, const std::string& name, const PyLog* log) {
+                        const std::optional<std::string>& units, const std::string& name, const PyLog* log,
+                        const ident::WelchOptions& welch = {}) {
   const fit::FrictionModel fm = analysis::FrictionModelNamed(friction);
   const bool linear = UnitsFrom(units).value_or(false);  // no header to read: rotary unless given
   std::optional<analysis::FrictionInput> in;
@@ -86,7 +89,7 @@ PyFitResult FitResponse(const ident::FrequencyResponse& frf, const fit::FitOptio
     l.info.num_samples = log->u.size();
     l.input = log->u;
     l.output = log->y;
-    in = analysis::FrictionInputFor(std::move(l), ident::WelchOptions{.window_length = 0}, fm);
+    in = analysis::FrictionInputFor(std::move(l), welch, fm);
   } else {
     in = analysis::FrictionInputFor({}, true, {}, {}, fm, &warning);
   }
@@ -389,11 +392,15 @@ friction and numbers, and nothing printed.)doc", kCLocale);
   // zwidth.fit of a Log (its samples read again by the friction fit) and of log files.
   m.def("_fit_response",
         [](const ident::FrequencyResponse& frf, const fit::FitOptions& o, const std::string& friction,
-           const std::optional<std::string>& units, const std::string& name, const PyLog& log) {
-          return FitResponse(frf, o, friction, units, name, &log);
+           const std::optional<std::string>& units, const std::string& name, const PyLog& log,
+           const analysis::LogsEstimateOptions& estimate) {
+          return FitResponse(frf, o, friction, units, name, &log, estimate.welch);
         },
         py::arg("frf"), py::arg("fit"), py::arg("friction"), py::arg("units"), py::arg("name"), py::arg("log"),
-        "fit(log, ...)'s core: the response estimated from the Log, the Log for the friction fit.", kCLocale);
+        py::arg("estimate"),
+        "fit(log, ...)'s core: the response estimated from the Log, the Log for the friction fit with the "
+        "Welch options of `estimate` (_estimate_logs_options: the ones the response was estimated with).",
+        kCLocale);
   m.def("_fit_logs", &FitLogs, py::arg("paths"), py::arg("estimate"), py::arg("fit"), py::arg("friction"),
         py::arg("units"), py::arg("name"),
         "fit(path, ...)'s core: `zwidth fit LOG...` with the options made by _estimate_logs_options and "

@@ -9,7 +9,7 @@ in io/option_names.cc. This check keeps the table from going stale:
    ("" where there is none; tests/python checks that each keyword is one the
    module accepts);
 2. every row's field is still named by the library (no dead rows), and every
-   row's flag is a flag the CLI registers (add_option / add_flag in apps/);
+   row's flag is a flag the CLI registers (add_option / add_flag in apps/ or flags/);
 3. no string literal of the library names a command-line flag ("--name");
 4. end to end: the CLI prints the flag, not the field, for an option error
    (zwidth excite --rms -1) and for a log-selection error (zwidth estimate
@@ -98,12 +98,13 @@ if len(table) < 40:
 
 # The flags the CLI registers.
 registered = set()
-for name in os.listdir(os.path.join(src, "apps")):
-    if name.endswith(".cc"):
-        with open(os.path.join(src, "apps", name), encoding="utf-8") as f:
-            text = f.read()
-        for m in re.finditer(r'add_(?:option|flag)\(\s*"([^"]+)"', text):
-            registered.update(p for p in m.group(1).split(",") if p.startswith("--"))
+for folder in ("apps", "flags"):  # the commands, and the option table they share with Python (flags/)
+    for name in os.listdir(os.path.join(src, folder)):
+        if name.endswith(".cc"):
+            with open(os.path.join(src, folder, name), encoding="utf-8") as f:
+                text = f.read()
+            for m in re.finditer(r'add_(?:option|flag)\(\s*"([^"]+)"', text):
+                registered.update(p for p in m.group(1).split(",") if p.startswith("--"))
 
 for field, where in sorted(named.items()):
     if field not in table:

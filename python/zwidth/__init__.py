@@ -205,7 +205,16 @@ def fit(data, *args, **kwargs):
                     est[k] = kw[k]
             res = _zwidth._fit_logs(paths, _zwidth._estimate_logs_options(**est), _zwidth._fit_options(**kw), *own)
         else:
-            res = _zwidth._fit_response(estimate(data, **est), _zwidth._fit_options(**kw), *own, data)
+            # `zwidth fit LOG`'s rule for a Log: fmin/fmax bound the estimate too, and the friction
+            # refit reads the log with the Welch options the response was estimated with
+            # (analysis::FrictionInputFor, as the command gives it its flags).
+            for k in ("fmin", "fmax"):
+                if k in kw:
+                    est[k] = kw[k]
+            frf = estimate(data, **est)  # its errors first, in estimate's words
+            welch = _zwidth._estimate_logs_options(**{k: v for k, v in est.items()
+                                                      if k in _names(_zwidth._estimate_logs_options)})
+            res = _zwidth._fit_response(frf, _zwidth._fit_options(**kw), *own, data, welch)
     if res.quality != "good":
         warnings.warn(FitQualityWarning(res), stacklevel=2)
     return res

@@ -2,13 +2,13 @@
 
 The request is `zwidth batch`'s: the keywords are its flags (the library's option table,
 io/option_names.cc, else the keyword with dashes), parsed by the command's own declarations in
-the compiled module (app::ParseBatchRequest), so a bad flag is refused as the command refuses it
+the compiled module (flags::ParseBatchRequest, below apps), so a bad flag is refused as the command refuses it
 and a unit's input hash is the command's. Each unit is then computed in this process (or in a
 worker's) by the batch engine, analysis::RunBatch on that unit, with the GIL released: its row of
 text cells, its error as a row. Threads here, or the workers of a ``dask.distributed.Client``
 (``client.map``; dask is the scheduler, zwidth does not bring one), run units side by side; a
 worker needs only ``import zwidth`` and the logs at the paths given (a shared file system, or
-localhost). The batch's end is the command's too (app::FinishBatch): every unit resumed from its
+localhost). The batch's end is the command's too (flags::FinishBatch): every unit resumed from its
 row, the population's outlier columns, the table written by io::WriteBatchTable.
 """
 
@@ -44,10 +44,56 @@ def _flag_args(flags):
     return args
 
 
-def _unit_row(args, batch_id, index, serial, serial_thread=True):
+def _unit_row(args, batch_id, index, serial, serial_thread=True, call=""):
     """Unit `index` of the batch computed here (a thread or a dask worker): its row, a dict of text cells."""
     from . import _zwidth
-    return _zwidth._batch_unit(args, batch_id, index, serial, serial_thread)
+    return _zwidth._batch_unit(args, batch_id, index, serial, serial_thread, call)
+
+
+def _call_text(logs, output, manifest, client, threads, flags):
+    """The call as a readable line, what the unit folders and the fleet report record as their command:
+    zwidth.batch(['a.csv', 'b.csv'], output='t.csv', threads=2, delays=[2, 4])."""
+    parts = [repr(logs)] if logs is not None else []
+    parts += [f"output={os.fspath(output)!r}"]
+    if manifest is not None:
+        parts.append(f"manifest={os.fspath(manifest)!r}")
+    if client is not None:
+        parts.append("client=<dask client>")
+    if threads is not None:
+        parts.append(f"threads={threads!r}")
+    parts += [f"{k}={v!r}" for k, v in flags.items()]
+    return "zwidth.batch(" + ", ".join(parts) + ")"
+
+
+def _run_on_threads(args, batch_id, call, rows, todo, serials, threads):
+    """The units `todo` on a pool of threads, the rows finished so far saved as the command saves them
+    (the library's BatchTableSaver, every 2 s). Ctrl-C (KeyboardInterrupt): no unit is started after it,
+    the running ones end, every finished row is saved at once (a resumable table whose rows are exactly
+    the finished units, their folders written), and the KeyboardInterrupt goes on."""
+    from concurrent.futures import FIRST_COMPLETED, wait
+    from . import _zwidth
+    workers = min(max(len(todo), 1), threads or os.cpu_count() or 1)
+    serial_thread = workers > 1  # each unit's own work on its thread alone, as `zwidth batch --jobs`
+    pool = ThreadPoolExecutor(max_workers=workers)
+    futures = {pool.submit(_unit_row, args, batch_id, i, s, serial_thread, call): i for i, s in zip(todo, serials)}
+    pending = set(futures)
+    try:
+        while pending:
+            finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+            for f in finished:
+                rows[futures[f]] = f.result()
+            _zwidth._batch_progress(batch_id, rows)
+    except KeyboardInterrupt:
+        for f in pending:
+            f.cancel()
+        pool.shutdown(wait=True)
+        for f, i in futures.items():
+            if f.done() and not f.cancelled() and f.exception() is None:
+                rows[i] = f.result()
+        _zwidth._batch_progress(batch_id, rows, now=True)
+        raise
+    finally:
+        pool.shutdown(wait=True)
 
 
 def _table_text(path):
@@ -79,8 +125,9 @@ def batch(logs=None, *, output, manifest=None, client=None, threads=None, **flag
     args = ["--manifest", os.fspath(manifest)] if manifest else [os.fspath(a) for a in logs]
     args += ["--output", os.fspath(output), *_flag_args(flags)]
     batch_id = uuid.uuid4().hex  # a worker parses this request once
+    call = _call_text(logs, output, manifest, client, threads, flags)
     try:
-        units = _zwidth._batch_units(args, batch_id)  # (serial, the previous table's row or None)
+        units = _zwidth._batch_units(args, batch_id, call)  # (serial, the previous table's row or None)
     except _zwidth.InputError as e:
         raise BatchError(str(e)) from None
     rows = [row for _, row in units]  # a unit resumed from the table at `output`: its row; else None
@@ -88,15 +135,13 @@ def batch(logs=None, *, output, manifest=None, client=None, threads=None, **flag
     serials = [units[i][0] for i in todo]
     if client is not None:
         n = len(todo)
-        done = client.gather(client.map(_unit_row, [args] * n, [batch_id] * n, todo, serials, pure=False))
+        done = client.gather(client.map(_unit_row, [args] * n, [batch_id] * n, todo, serials, [True] * n, [call] * n,
+                                        pure=False))
+        for i, row in zip(todo, done):
+            rows[i] = row
     else:
-        workers = min(max(len(todo), 1), threads or os.cpu_count() or 1)
-        serial_thread = workers > 1  # each unit's own work on its thread alone, as `zwidth batch --jobs`
-        with ThreadPoolExecutor(max_workers=workers) as pool:
-            done = list(pool.map(lambda k: _unit_row(args, batch_id, todo[k], serials[k], serial_thread), range(len(todo))))
-    for i, row in zip(todo, done):
-        rows[i] = row
-    text = _zwidth._batch_finish(args, batch_id, rows)
+        _run_on_threads(args, batch_id, call, rows, todo, serials, threads)
+    text = _zwidth._batch_finish(args, batch_id, rows, call)
     try:
         import pandas
         return pandas.read_csv(io.StringIO(text), dtype={"serial": str, "input_hash": str, "logs": str})

@@ -101,3 +101,35 @@ def test_fit_prints_nothing(friction_log, capfd):
         zwidth.fit(zwidth.estimate(friction_log), friction="none")
     out, err = capfd.readouterr()
     assert out == "" and err == "", (out, err)
+
+
+@pytest.fixture(scope="module")
+def short_friction_log(cli, table1_json, tmp_path_factory):
+    """8 s of Table I with Coulomb friction: a rigid-body fit (--modes 0) refits its friction in < 1 s."""
+    path = tmp_path_factory.mktemp("friction8") / "f.h5"
+    cli("simulate", "--model", table1_json, "-o", path, "--coulomb", COULOMB, "--seed", 7, "--seconds", 8)
+    return str(path)
+
+
+def test_friction_refit_of_a_log_uses_the_welch_options_given_as_the_cli(cli, short_friction_log, tmp_path):
+    """zwidth.fit(Log, window=..., overlap=..., window_length=...): the friction refit reads the log with
+    those Welch options, as `zwidth fit LOG --friction coulomb` with the same flags (FrictionInputFor),
+    not with the defaults: the model equals the command's number for number, and the command's
+    friction with default flags differs (so the comparison can fail)."""
+    log_path = short_friction_log
+    welch = dict(window="hamming", overlap=0.25, window_length=2048)
+    flags = ["--window", "hamming", "--overlap", "0.25", "--window-length", "2048"]
+    fit_flags = ["--friction", "coulomb", "--modes", "0", "--delay-samples", "1"]
+    out, plain = tmp_path / "cli.json", tmp_path / "plain.json"
+    cli("fit", log_path, "-o", out, *fit_flags, *flags)
+    cli("fit", log_path, "-o", plain, *fit_flags)
+    want, default = json.loads(out.read_text()), json.loads(plain.read_text())
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = zwidth.fit(zwidth.read_log(log_path), friction="coulomb", modes=0, delay_samples=1, **welch)
+    got = json.loads(res.model.to_json())
+    assert want["fit"]["friction"]["status"] == "fitted" and got["fit"]["friction"]["status"] == "fitted"
+    gn, wn = _numbers(got), _numbers(want)
+    assert gn.keys() == wn.keys()
+    assert {k: v for k, v in gn.items() if v != wn[k]} == {}
+    assert want["friction"] != default["friction"]  # the flags change the refit

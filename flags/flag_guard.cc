@@ -4,11 +4,11 @@
 #include <set>
 #include <string>
 
-#include "apps/common.h"
+#include "flags/flag_guard.h"
 #include "io/printable.h"
 #include "model/error.h"
 
-namespace zwidth::app {
+namespace zwidth::flags {
 namespace {
 
 // "" (CLI11 reads it as 0: `--delays ""` was the delay 0), "nan" and "inf"
@@ -82,4 +82,4 @@ void GuardNumericFlags(CLI::App* app) {
   for (CLI::App* sub : app->get_subcommands([](CLI::App*) { return true; })) GuardNumericFlags(sub);
 }
 
-}  // namespace zwidth::app
+}  // namespace zwidth::flags

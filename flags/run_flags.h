@@ -1,6 +1,6 @@
 // The flags `run` and `batch` share and their options, so that a batch's unit
 // is computed exactly as `run` computes that log (one pipeline below:
-// analysis::EstimateFitAndAnalyse; apps/cmd_run.cc defines these).
+// analysis::EstimateFitAndAnalyse; flags/run_flags.cc defines these).
 #pragma once
 
 #include <string>
@@ -10,11 +10,12 @@
 
 #include "analysis/run.h"
 #include "analysis/run_input.h"
-#include "apps/common.h"
-#include "apps/fit_support.h"
-#include "apps/loop_flags.h"
+#include "flags/estimate_flags.h"
+#include "flags/fit_flags.h"
+#include "flags/loop_flags.h"
+#include "stability/zwidth.h"
 
-namespace zwidth::app {
+namespace zwidth::flags {
 
 struct RunFlags {
   std::vector<std::string> logs;
@@ -44,4 +45,4 @@ analysis::RunOptions ResolveRunOptions(RunFlags* f, analysis::RunInput* in);
 // The run's loop for the log's period (one --hand), for `run` and each unit of `batch`.
 analysis::LoopForPeriod RunLoop(const RunFlags& f);
 
-}  // namespace zwidth::app
+}  // namespace zwidth::flags

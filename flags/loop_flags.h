@@ -1,5 +1,5 @@
 // Command-line flags of the haptic loop (issue 16): velocity filter, hands,
-// shared by boundary, check and run.
+// shared by boundary, check and run (and batch, through flags/run_flags.h).
 #pragma once
 
 #include <limits>
@@ -11,7 +11,7 @@
 #include "model/plant.h"
 #include "stability/haptic_loop.h"
 
-namespace zwidth::app {
+namespace zwidth::flags {
 
 struct LoopFlags {
   double filter_hz = std::numeric_limits<double>::quiet_NaN();
@@ -29,4 +29,4 @@ std::vector<stability::LoopOptions> ResolveLoops(const LoopFlags& flags, double 
 // True when the loop is the paper's (no filter, no hand).
 inline bool IsPlainLoop(const stability::LoopOptions& l) { return !l.HasFilter() && l.hand.IsNone(); }
 
-}  // namespace zwidth::app
+}  // namespace zwidth::flags

@@ -1,4 +1,4 @@
-#include "apps/loop_flags.h"
+#include "flags/loop_flags.h"
 
 #include <cmath>
 #include <fstream>
@@ -9,7 +9,7 @@
 #include "io/atomic_file.h"
 #include "model/error.h"
 
-namespace zwidth::app {
+namespace zwidth::flags {
 
 void AddLoopFlags(CLI::App* cmd, LoopFlags* f) {
   cmd->add_option("--velocity-filter-hz", f->filter_hz,
@@ -66,4 +66,4 @@ std::vector<stability::LoopOptions> ResolveLoops(const LoopFlags& f, double T) {
   return out;
 }
 
-}  // namespace zwidth::app
+}  // namespace zwidth::flags
