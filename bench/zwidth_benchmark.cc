@@ -2,6 +2,8 @@
 // log at 1 kHz, seed 1). Each benchmark reports its error as a counter and
 // sweeps the knob that trades one for the other.
 #include <cmath>
+#include <cstddef>
+#include <type_traits>
 #include <random>
 #include <numbers>
 
@@ -17,6 +19,7 @@
 #include "stability/haptic_loop.h"
 #include "stability/relay.h"
 #include "tests/brute_force.h"
+#include "tests/brute_force_wide.h"
 #include "tests/devices.h"
 #include <unsupported/Eigen/MatrixFunctions>
 #include "stability/uncertainty.h"
@@ -347,8 +350,10 @@ BENCHMARK(BM_PassivityRows)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);  // 
 // 60-step bisection of the brute force's closed-loop eigenvalues; a K_CR of 0
 // (past B_max_from_zero) is right when the brute force is unstable just above
 // K = 0; 1 for any other non-positive or non-finite K_CR.
-template <class BruteForce>
-double KcrErrorAt8B(const BruteForce& bf, const std::vector<double>& K) {
+// refine(k_bisected, K_CR, B), when given: the reference from the bisection's
+// result (BM_CrowdedModeBoundary: its last steps in 30 digits).
+template <class BruteForce, class Refine = std::nullptr_t>
+double KcrErrorAt8B(const BruteForce& bf, const std::vector<double>& K, const Refine& refine = nullptr) {
   double err = 0;
   for (int i = 0; i < 8; ++i) {
     if (K[i] == 0.0) { if (!(bf.MaxRoot(1e-6 * K[0], 0.008 * i) >= 1.0)) err = 1.0; continue; }
@@ -358,7 +363,9 @@ double KcrErrorAt8B(const BruteForce& bf, const std::vector<double>& K) {
       const double mid = 0.5 * (lo + hi);
       (bf.MaxRoot(mid, 0.008 * i) < 1 ? lo : hi) = mid;
     }
-    err = std::max(err, std::abs(0.5 * (lo + hi) / K[i] - 1));
+    double ref = 0.5 * (lo + hi);
+    if constexpr (!std::is_same_v<Refine, std::nullptr_t>) ref = refine(ref, K[i], 0.008 * i);
+    err = std::max(err, std::abs(ref / K[i] - 1));
   }
   return err;
 }
@@ -393,9 +400,14 @@ BENCHMARK(BM_ManyModeBoundary)->Arg(1)->Arg(2)->Arg(3)->Arg(8)->Arg(16)->Arg(64)
 // 1 % apart, damping ratio 1e-4, first at 300 rad/s), where the double
 // pole-residue sum cancels and the double state space errs near the modes
 // (8 sections: 4e-7 against a long double ZOH): G_d in binary128. Error: the
-// largest relative difference of K_CR from a 60-step bisection of the long
-// double brute force's closed-loop eigenvalues (tests/brute_force.h,
-// IndependentZoh: the tests' own realisation and ZOH).
+// largest relative difference of K_CR from the brute force's boundary
+// (tests/brute_force.h, IndependentZoh: the tests' own realisation and ZOH):
+// a 60-step bisection of its long double eigenvalues, whose last steps are
+// redone in 30 digits (tests/brute_force_wide.h, WideBisect: 30 steps on
+// 1e-5 either side of both K_CR and the long double's boundary), since at 32
+// sections long double misplaces the boundary by 1.6e-6 (its error beside:
+// long_double_ref_err). Without Boost the long double figure alone
+// (wide_referee = 0).
 void BM_CrowdedModeBoundary(benchmark::State& state) {
   model::Plant p = model::PhantomTable1();
   p.modes.clear();
@@ -411,7 +423,23 @@ void BM_CrowdedModeBoundary(benchmark::State& state) {
   }
   const stability::IndependentZoh<long double> zoh(p, 1e-3);
   const stability::LoopBruteForceT<long double> bf(zoh.A, zoh.B, zoh.C, {}, {}, 2, 1e-3);
-  state.counters["max_rel_err_K_cr_vs_long_double_brute_force"] = KcrErrorAt8B(bf, K);
+#if ZWIDTH_HAVE_WIDE_BRUTE_FORCE
+  const stability::WideBruteForce wide(p, 2, 1e-3);
+  double ld_err = 0.0;
+  auto refine = [&](double k_ld, double k_zw, double B) {
+    const double mid = 0.5 * (k_ld + k_zw), span = std::abs(k_ld - k_zw) / mid + 1e-5;
+    const double k = stability::WideBisect(wide, mid, B, span, 30);
+    if (!std::isfinite(k)) return k_ld;  // no boundary near: KcrErrorAt8B's figure stands
+    ld_err = std::max(ld_err, std::abs(k_ld / k - 1));
+    return k;
+  };
+  state.counters["max_rel_err_K_cr_vs_brute_force"] = KcrErrorAt8B(bf, K, refine);
+  state.counters["long_double_ref_err"] = ld_err;
+  state.counters["wide_referee"] = 1;
+#else
+  state.counters["max_rel_err_K_cr_vs_brute_force"] = KcrErrorAt8B(bf, K);
+  state.counters["wide_referee"] = 0;
+#endif
   state.counters["K_cr_at_zero_B"] = K[0];
 }
 BENCHMARK(BM_CrowdedModeBoundary)->Arg(8)->Arg(16)->Arg(32)->Unit(benchmark::kMillisecond);

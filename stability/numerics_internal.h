@@ -96,6 +96,38 @@ double BrentExtremum(const F& f, double a, double b, double sign, double tol) {
   return x;
 }
 
+// The count of closed-loop roots outside the unit circle past a crossing of
+// the circle that changes it by `change` (the crossing's direction times its
+// weight; `known` false where the direction is lost to rounding): count +
+// change, or -1 (not known: the caller counts by the eigenvalues instead)
+// where count is not known, the change is not, or the sum leaves [0, order]
+// (order: the closed loop's, the most roots there are), which a direction
+// of the wrong sign can make it do.
+inline int PropagateCount(int count, int change, bool known, int order) {
+  if (count < 0 || !known) return -1;
+  const int c = count + change;
+  return (c >= 0 && c <= order) ? c : -1;
+}
+
+// The counts between two directly counted ones: first, then first +
+// changes[0], ..., which must reach next (changes[j] == 0: not known). True
+// with (*counts)[j] the count after changes[j] (j < changes.size() - 1)
+// where every step is known, stays in [0, order] (PropagateCount) and the
+// last reaches next; false (counts cleared) else.
+inline bool PropagateCounts(int first, int next, const std::vector<int>& changes, int order,
+                            std::vector<int>* counts) {
+  counts->clear();
+  int c = first;
+  for (int change : changes) {
+    c = PropagateCount(c, change, change != 0, order);
+    if (c < 0) { counts->clear(); return false; }
+    counts->push_back(c);
+  }
+  if (c != next) { counts->clear(); return false; }
+  if (!counts->empty()) counts->pop_back();  // next's own, counted directly
+  return true;
+}
+
 // The coefficients of a(z) b(z), lowest power first.
 std::vector<double> PolyMul(const std::vector<double>& a, const std::vector<double>& b);
 

@@ -393,8 +393,9 @@ int ZWidth::DirectZeroKCount(size_t slot) const {
 void ZWidth::FillZeroKBlock(size_t block) const {
   // The block's first slot and the next block's first are counted by the
   // eigenvalues; the slots between follow from the first by the changes of
-  // the crossings between them, kept only when every change is known, no
-  // count goes negative and the sum reaches the next block's count.
+  // the crossings between them, kept only when every change is known, every
+  // count stays in [0, order] and the sum reaches the next block's count
+  // (internal::PropagateCounts); else each slot is counted when asked.
   std::vector<std::atomic<int>>& slots = *zero_k_counts_;
   const size_t base = block * kZeroKBlock, last = slots.size() - 1;
   auto direct = [&](size_t i) {
@@ -402,18 +403,15 @@ void ZWidth::FillZeroKBlock(size_t block) const {
     if (c < 0) { c = DirectZeroKCount(i); slots[i].store(c, std::memory_order_relaxed); }
     return c;
   };
-  int c = direct(base);
+  const int c = direct(base);
   if (base == last) return;
   const size_t next = std::min(base + kZeroKBlock, last);
   const int c_next = direct(next);
+  // At K = 0+ the integrator's root is deflated: one root fewer.
+  const int order = closed_loop_->order() - (has_integrator_ ? 1 : 0);
+  const std::vector<int> changes(zero_k_change_.begin() + base, zero_k_change_.begin() + next);
   std::vector<int> counts;
-  for (size_t j = base; j < next; ++j) {
-    if (zero_k_change_[j] == 0) return;
-    c += zero_k_change_[j];
-    if (c < 0) return;
-    counts.push_back(c);
-  }
-  if (c != c_next) return;
+  if (!internal::PropagateCounts(c, c_next, changes, order, &counts)) return;
   for (size_t j = base + 1; j < next; ++j) slots[j].store(counts[j - base - 1], std::memory_order_relaxed);
 }
 
@@ -592,7 +590,7 @@ std::vector<KInterval> ZWidth::IntervalsFrom(double B, const std::vector<Crossin
   for (size_t i = 0; i <= n; ++i) {
     if (i > 0) {
       unstable_at_least -= weight[i - 1];
-      exact = (exact >= 0 && known[i - 1] && exact + change[i - 1] >= 0) ? exact + change[i - 1] : -1;
+      exact = internal::PropagateCount(exact, change[i - 1], known[i - 1], closed_loop_->order());
     }
     const double a = lo_of(i), b = hi_of(i);
     if (exact >= 0) {

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <functional>
 #include <limits>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -159,13 +160,36 @@ struct LoopBruteForceT {
 };
 using LoopBruteForce = LoopBruteForceT<double>;
 
+// e^M by scaling and squaring of a Taylor series, for the scalars Eigen's
+// matrix exponential does not know (tests/brute_force_wide.h): M halved
+// until its infinity norm is below 1/64, 20 terms (truncation below
+// (1/64)^21 / 21! = 1e-58 relative), squared back.
+template <typename Mat>
+Mat TaylorExp(const Mat& M) {
+  using R = typename Mat::Scalar;
+  R norm = 0;
+  for (int i = 0; i < M.rows(); ++i) {
+    R row = 0;
+    for (int j = 0; j < M.cols(); ++j) row += abs(M(i, j));
+    if (row > norm) norm = row;
+  }
+  int squarings = 0;
+  Mat X = M;
+  while (norm > R(1) / R(64)) { norm /= R(2); X /= R(2); ++squarings; }
+  Mat E = Mat::Identity(M.rows(), M.cols()), term = E;
+  for (int k = 1; k <= 20; ++k) { term = (term * X) / R(k); E += term; }
+  for (int i = 0; i < squarings; ++i) E = E * E;
+  return E;
+}
+
 // The plant of eq. (1) realised the other way round from model/state_space.cc
 // (u -> rigid body (theta, theta') -> section 1 -> ... -> y; section (x1, x2):
 // x1' = -c x1 - w x2 + in, x2' = w x1, out = g ((d - c) x1 + (v^2 - w^2)/w x2 + in),
 // g = w^2 / v^2, so that (sI - A)^-1 e1 = (s, w) / (s^2 + c s + w^2) and
 // out / in = g (s^2 + d s + v^2) / (s^2 + c s + w^2)), sampled by Eigen's
-// matrix exponential without balancing, in the scalar R (double, or long
-// double for a referee with 3 more digits): the discrete A, B, C.
+// matrix exponential without balancing (TaylorExp for other scalars), in the
+// scalar R (double; long double for a referee with 3 more digits; 30
+// decimal digits in tests/brute_force_wide.h): the discrete A, B, C.
 template <typename R>
 struct IndependentZoh {
   using Mat = typename LoopBruteForceT<R>::Mat;
@@ -200,7 +224,9 @@ struct IndependentZoh {
     Mat M = Mat::Zero(n + 1, n + 1);
     M.topLeftCorner(n, n) = Ac * T;
     M.topRightCorner(n, 1) = Bc * T;
-    const Mat E = M.exp();
+    Mat E;
+    if constexpr (std::is_floating_point_v<R>) E = M.exp();
+    else E = TaylorExp(M);  // Eigen's exp knows float, double and long double only
     A = E.topLeftCorner(n, n);
     B = E.topRightCorner(n, 1);
     C = out;

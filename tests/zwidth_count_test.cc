@@ -21,6 +21,7 @@
 
 #include "model/plant.h"
 #include "stability/haptic_loop.h"
+#include "stability/numerics_internal.h"
 #include "stability/zwidth.h"
 #include "tests/brute_force.h"
 
@@ -214,6 +215,33 @@ TEST(ZWidthCount, EveryKnownChangeAtZeroKIsTheBruteForcesAndTheCountsFollow) {
       EXPECT_EQ(z.UnstableRoots(0.0, mids[i]), counts[i]) << c.name << ", interval " << i << ", B = " << mids[i];
     }
   }
+}
+
+TEST(ZWidthCount, APropagatedCountOutsideZeroToTheOrderFallsBackToCounting) {
+  // FillZeroKBlock's rule (internal::PropagateCounts) with directions
+  // injected by hand, in a closed loop of order 4 counted 3 roots outside at
+  // both ends of a block of two boundary crossings. Right directions: a pair
+  // in, then out again.
+  std::vector<int> counts;
+  ASSERT_TRUE(internal::PropagateCounts(3, 3, {-2, +2}, 4, &counts));
+  EXPECT_EQ(counts, std::vector<int>{1});
+  // Both directions wrong: the sum still reaches the end's count, but the
+  // middle count would be 5 roots outside a loop of order 4 (the rule before
+  // the cap kept it): rejected, the slot is then counted by the eigenvalues.
+  EXPECT_FALSE(internal::PropagateCounts(3, 3, {+2, -2}, 4, &counts));
+  EXPECT_TRUE(counts.empty());
+  // Below 0, an unknown direction (0) and a sum that misses the end.
+  EXPECT_FALSE(internal::PropagateCounts(1, 1, {-2, +2}, 4, &counts));
+  EXPECT_FALSE(internal::PropagateCounts(1, 1, {+2, 0, -2}, 4, &counts));
+  EXPECT_FALSE(internal::PropagateCounts(1, 3, {+2, -2}, 4, &counts));
+  // The step IntervalsFrom uses along K: a known change of 0 (a tangency) is
+  // kept, the range [0, order] is inclusive.
+  EXPECT_EQ(internal::PropagateCount(2, 0, true, 4), 2);
+  EXPECT_EQ(internal::PropagateCount(3, 1, true, 4), 4);
+  EXPECT_EQ(internal::PropagateCount(4, 1, true, 4), -1);
+  EXPECT_EQ(internal::PropagateCount(1, -2, true, 4), -1);
+  EXPECT_EQ(internal::PropagateCount(1, 2, false, 4), -1);
+  EXPECT_EQ(internal::PropagateCount(-1, 2, true, 4), -1);
 }
 
 }  // namespace
