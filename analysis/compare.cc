@@ -1,6 +1,7 @@
 #include "analysis/compare.h"
 
 #include <cmath>
+#include <numbers>
 #include <memory>
 #include <cstdio>
 #include <limits>
@@ -92,6 +93,16 @@ std::string ParameterTable(const io::ModelFile& mf, bool linear) {
   }
   std::snprintf(line, sizeof line, "%-8s %14d %12s  %s\n", "delay", mf.plant.delay_samples, "", "samples");
   os << line;
+  if (mf.encoder_step) {  // read from the log (ident::EncoderStep); the friction predictions use it
+    const double q = *mf.encoder_step;
+    if (linear) {
+      std::snprintf(line, sizeof line, "%-8s %14.6g %12s  %s\n", "encoder", q, "", "m per count (read from the log)");
+    } else {
+      std::snprintf(line, sizeof line, "%-8s %14.6g %12s  rad per count (read from the log; %.6g per turn)\n",
+                    "encoder", q, "", 2.0 * std::numbers::pi / q);
+    }
+    os << line;
+  }
   return os.str();
 }
 

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "fit/fit_api.h"
+#include "ident/encoder_step.h"
 #include "io/fit_file.h"
 #include "model/error.h"
 
@@ -146,6 +147,7 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
     if (auto reason = SignOrSwap(frf, r)) r.reasons.insert(r.reasons.begin(), *reason);
   }
   fit::FrictionFitResult ff;
+  double encoder_step = 0.0;  // of the friction fit's log (ident::EncoderStep), 0: not known
   // Not on a log whose sign or columns look wrong: its friction would mean nothing.
   const bool broken = !r.reasons.empty() && (r.reasons.front().code == "sign_reversed" ||
                                              r.reasons.front().code == "columns_swapped");
@@ -153,6 +155,7 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
     std::optional<io::Log> read;
     if (!friction->log) read = io::ReadLog(friction->path, friction->select);
     const io::Log& log = friction->log ? *friction->log : *read;
+    encoder_step = ident::EncoderStep(log.output);
     fit::FrictionFitOptions fo = friction->options;
     if (fo.welch.window_length == 0) fo.welch.window_length = frf.window_length;  // the linear fit's estimate
     fo.linear = messages.linear;
@@ -171,6 +174,7 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
   if (r.status != fit::FitStatus::kConverged) throw ComputationError(r.message);
   io::ModelFile mf = io::FittedModelFile(r, frf, o, source);
   mf.linear = messages.linear;
+  if (encoder_step > 0.0) mf.encoder_step = encoder_step;
   if (ff.status == fit::FrictionFitStatus::kFitted) {
     mf.friction = ff.friction;
     mf.friction_std = ff.friction_std;

@@ -9,6 +9,16 @@
 
 namespace zwidth::analysis {
 
+double EncoderStepOf(const io::ModelFile& model, std::optional<double> given, const std::string& name) {
+  if (!given) return model.encoder_step.value_or(0.0);
+  if (!(std::isfinite(*given) && *given >= 0.0)) {
+    char b[64];
+    std::snprintf(b, sizeof b, "%g", *given);
+    throw InputError(name + " " + b + ": must be finite and >= 0 (rad or m per count; 0: an exact encoder)");
+  }
+  return *given;
+}
+
 bool FrictionAmplitudeOptions::IsValid(std::string* why) const {
   auto bad = [&](const std::string& m) { if (why) *why = "FrictionAmplitudeOptions::" + m; return false; };
   if (!(k_factor > 1.0 && k_factor <= 100.0)) {

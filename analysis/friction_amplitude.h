@@ -7,11 +7,13 @@
 #pragma once
 
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "io/model_json.h"
 #include "io/stability_files.h"
 #include "model/friction.h"
 #include "model/plant.h"
@@ -32,6 +34,13 @@ struct FrictionAmplitudeOptions {
   stability::FrictionPredictionOptions prediction{1e-6};  // A* to ~1e-6 relative
   bool IsValid(std::string* why) const;  // names FrictionAmplitudeOptions::field
 };
+
+// The encoder step of the friction predictions: `given` (a caller's
+// --encoder-step or keyword; 0: an exact encoder) when given, else the
+// model's (io::ModelFile::encoder_step, read from the log it was fitted on),
+// else 0. InputError naming `name` when `given` is negative or not finite.
+double EncoderStepOf(const io::ModelFile& model, std::optional<double> given,
+                     const std::string& name = "FrictionAmplitudeOptions::encoder_step");
 
 struct FrictionAmplitudeRow {
   int delay_samples = 0;

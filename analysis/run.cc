@@ -234,12 +234,13 @@ RunAnalysis Analyse(RunInput input, const RunOptions& o) {
   // The model's Z-width per delay, computed once for the summary, the
   // comparison, the boundary rows and the figures.
   // With Coulomb friction in the model, A* along the boundary (default
-  // options on the run's loop; no encoder step is known here).
+  // options on the run's loop, with the encoder step read from the log).
   PlantStabilityOptions po;
   po.delays = o.delays;
   po.loops = {o.loop};
   po.grid = o.grid;
   po.friction = input.model.friction;
+  po.amplitude.encoder_step = EncoderStepOf(input.model, std::nullopt);
   RunAnalysis a(AnalysePlantStability(input.model, T, po));
   a.input = std::move(input);
   a.options = o;

@@ -94,6 +94,7 @@ void AddBoundaryCommand(CLI::App& app) {
     LoopFlags loop;
     FrictionFlags friction;
     analysis::FrictionAmplitudeOptions amplitude;
+    double encoder_step = kNotGiven;  // else the model's
   };
   auto bf = std::make_shared<BoundaryFlags>();
   CLI::App* b = app.add_subcommand("boundary", "exact Z-width: stable K intervals per B, K_CR(B), summary, per delay");
@@ -111,9 +112,9 @@ void AddBoundaryCommand(CLI::App& app) {
   AddSeedOption(b, &bf->seed, "seed of --monte-carlo");
   AddLoopFlags(b, &bf->loop);
   AddFrictionFlags(b, &bf->friction);
-  b->add_option("--encoder-step", bf->amplitude.encoder_step,
-                "rad per encoder count, for the friction amplitude's validity and rest point (0: exact)")
-      ->capture_default_str();
+  b->add_option("--encoder-step", bf->encoder_step,
+                "rad per encoder count, for the friction amplitude's validity and rest point (default: the model's "
+                "encoder_step, read from the log it was fitted on, else 0; 0: exact)");
   b->add_option("--amplitude-k-factor", bf->amplitude.k_factor,
                 "with friction: the amplitude A* below which friction holds a wall at this multiple of K_cr(B)")
       ->capture_default_str();
@@ -138,6 +139,7 @@ void AddBoundaryCommand(CLI::App& app) {
     o.seed = bf->seed;
     o.friction = ResolveFriction(bf->friction, mf);
     o.amplitude = bf->amplitude;
+    o.amplitude.encoder_step = analysis::EncoderStepOf(mf, Given(bf->encoder_step), "--encoder-step");
     o.on_monte_carlo = [](int d, int n) { std::fprintf(stderr, "Monte Carlo, d = %d: %d samples...\n", d, n); };
     std::string why;
     if (!o.IsValid(&why)) throw InputError(WithFlags(why));
@@ -440,7 +442,7 @@ void AddCheckCommand(CLI::App& app) {
     bool json = false;
     LoopFlags loop;
     FrictionFlags friction;
-    double encoder_step = 0.0;
+    double encoder_step = kNotGiven;  // else the model's
     analysis::SceneCheckOptions options;
   };
   auto cf = std::make_shared<CheckFlags>();
@@ -456,8 +458,8 @@ void AddCheckCommand(CLI::App& app) {
   AddLoopFlags(c, &cf->loop);
   AddFrictionFlags(c, &cf->friction);
   c->add_option("--encoder-step", cf->encoder_step,
-                "rad per encoder count, for the friction prediction's validity and rest point (0: exact)")
-      ->capture_default_str();
+                "rad per encoder count, for the friction prediction's validity and rest point (default: the model's "
+                "encoder_step, read from the log it was fitted on, else 0; 0: exact)");
   c->callback([cf] {
     io::ModelFile mf = io::ReadModelJsonFor(cf->model, "check --model");  // not const: --period may convert its delay
     CheckDelay(cf->delay, "--delay");
@@ -465,9 +467,7 @@ void AddCheckCommand(CLI::App& app) {
     const std::vector<io::SceneObject> objs = io::ReadScene(cf->scene);
     const std::vector<stability::LoopOptions> loops = ResolveLoops(cf->loop, T);
     const model::Friction friction = ResolveFriction(cf->friction, mf);
-    if (!(std::isfinite(cf->encoder_step) && cf->encoder_step >= 0)) {
-      throw InputError("--encoder-step " + std::to_string(cf->encoder_step) + ": must be finite and >= 0 (rad per count)");
-    }
+    const double encoder_step = analysis::EncoderStepOf(mf, Given(cf->encoder_step), "--encoder-step");
     const analysis::SceneCheck sc = analysis::CheckScene(mf.plant, mf.log_covariance, T, cf->delay, loops, objs, cf->options);
     if (!mf.log_covariance.empty() && !sc.has_std) std::fprintf(stderr, "note: no std (and no marginal status) with several hands\n");
     nlohmann::json out = analysis::SceneCheckJson(sc, objs, cf->delay, T, cf->options);
@@ -479,7 +479,7 @@ void AddCheckCommand(CLI::App& app) {
       // The friction prediction for an object the linear loop does not hold.
       const std::string note = sc.objects[i].verdict.stable ? ""
                                    : FrictionNote(mf.plant, T, cf->delay, loops[0], objs[i], friction,
-                                                  cf->encoder_step, model::Units(mf.linear), j);
+                                                  encoder_step, model::Units(mf.linear), j);
       if (!cf->json) PrintObjectCheck(sc.objects[i], objs[i], note);
     }
     out["provenance"] = io::ProvenanceJson();

@@ -65,7 +65,7 @@ double StageTimer::Lap(const std::string& stage) {
 
 double ResolvePeriod(double flag, io::ModelFile* mf) {
   std::string note;
-  const double T = io::ResolveModelPeriod(std::isnan(flag) ? std::nullopt : std::optional<double>(flag), mf, &note);
+  const double T = io::ResolveModelPeriod(Given(flag), mf, &note);
   if (!note.empty()) std::fprintf(stderr, "note: %s\n", WithFlags(note).c_str());
   return T;
 }

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <chrono>
+#include <cmath>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -61,6 +63,7 @@ class StageTimer {
 
 // Flags whose absence means "use the model's value".
 inline constexpr double kNotGiven = std::numeric_limits<double>::quiet_NaN();
+inline std::optional<double> Given(double flag) { return std::isnan(flag) ? std::nullopt : std::optional(flag); }
 // --period when given, else the model's sample_period_s, else 1 ms. A given
 // --period must lie in [io::kMinPeriodS, io::kMaxPeriodS] (the rates a log may
 // have, 10 Hz..1 MHz; the same rule as a model's sample_period_s). When T

@@ -312,7 +312,7 @@ ModelFile ParseModelJson(const std::string& text, const std::string& source) {
   CheckDuplicateKeys(text, source);  // valid JSON: nlohmann kept the last of a repeated key
   if (!j.is_object()) Fail(source, "top level must be a JSON object");
   CheckKeys(j, {"m", "b", "modes", "delay_samples", "sample_period_s", "name", "std", "fit", "covariance",
-                "friction", "format_version", "provenance", "units"},
+                "friction", "format_version", "provenance", "units", "encoder_step"},
             source, "");
   if (auto it = j.find("format_version"); it != j.end()) {
     if (!it->is_number_integer() || it->get<std::int64_t>() < 1) {
@@ -351,6 +351,16 @@ ModelFile ParseModelJson(const std::string& text, const std::string& source) {
     const double t = Number(j, "sample_period_s", source, "");
     if (const std::string why = SamplePeriodProblem(t, "key 'sample_period_s'"); !why.empty()) Fail(source, why);
     mf.sample_period_s = t;
+  }
+  if (j.contains("encoder_step")) {
+    const double q = Number(j, "encoder_step", source, "");
+    if (!(q >= kPlausibleMin && q <= 1.0)) {
+      char b[64];
+      std::snprintf(b, sizeof b, "%g", q);
+      Fail(source, std::string("key 'encoder_step' = ") + b + " is outside [1e-12, 1] (rad or m per count): remove "
+                       "the key when the encoder step is not known");
+    }
+    mf.encoder_step = q;
   }
   if (auto it = j.find("std"); it != j.end()) {
     mf.std_errors = ParsePlant(*it, source, "std.", true);
@@ -464,6 +474,7 @@ json ModelToJson(const ModelFile& mf) {
   j["delay_samples"] = mf.plant.delay_samples;
   if (mf.linear) j["units"] = model::kLinearUnits.word;  // absent: rotary (files of rotary models unchanged)
   if (mf.sample_period_s) j["sample_period_s"] = *mf.sample_period_s;
+  if (mf.encoder_step) j["encoder_step"] = *mf.encoder_step;
   if (mf.std_errors) j["std"] = PlantToJson(*mf.std_errors);
   if (mf.friction) {
     j["friction"] = FrictionToJson(*mf.friction);

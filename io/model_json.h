@@ -48,6 +48,12 @@ struct ModelFile {
   // N s/m, m); absent or "rotary": kg m^2, N m s/rad, rad. Every label that
   // reads the model follows it.
   bool linear = false;
+  // The position's quantum (rad or m per encoder count) read from the log
+  // the model was fitted on (ident::EncoderStep), "encoder_step" in the file;
+  // absent: not known (a continuous or noisy position, a saved response,
+  // several logs that disagree). The friction predictions use it
+  // (analysis::FrictionAmplitudeOptions::encoder_step) unless told another.
+  std::optional<double> encoder_step;
 };
 
 // "rotary" -> false, "linear" -> true; another word: InputError naming `name`

@@ -252,7 +252,11 @@ void DefModelParameters(py::class_<io::ModelFile>& cls) {
                                return j.contains("std") && j["std"].contains("friction")
                                           ? JsonToPython(j["std"]["friction"]) : py::object(py::none());
                              },
-                             "the friction's std (dict, None = unknown), else None");
+                             "the friction's std (dict, None = unknown), else None")
+      .def_property_readonly("encoder_step",
+                             [](const io::ModelFile& mf) { return mf.encoder_step; },
+                             "the position's step per encoder count (rad, or m on a linear axis) read from the log "
+                             "the model was fitted on (model.json's 'encoder_step'), else None");
 }
 
 // Model: validate, response, state_space, repr, pickling.

@@ -6,7 +6,8 @@
 # - the friction log: run's model.json is fit's (--modes auto, run's default
 #   order) byte for byte but the provenance; its summary.json holds the A* rows
 #   and its boundary.csv the A_star columns that `boundary` computes from that
-#   model (another front end over analysis::FrictionAmplitudes);
+#   model (another front end over analysis::FrictionAmplitudes), both with the
+#   encoder step model.json holds, read from the log (simulate's default);
 # - the friction-free log: the default (auto) run folder equals --friction
 #   none's byte for byte but the provenance (friction only detected, not
 #   fitted), with no friction in model.json and none in summary.json;
@@ -35,6 +36,8 @@ def load(p): return json.load(open(os.path.join(t, p)))
 fit, run = load("fit.json"), load("runf/model.json")
 assert run["friction"]["coulomb_pos"] > 0.001, run["friction"]  # fitted (the truth is 0.004)
 assert run["fit"]["friction"]["status"] == "fitted", run["fit"]["friction"]
+# simulate's default encoder (2 pi / 40960 rad per count), read back from the log (ident::EncoderStep)
+assert abs(run["encoder_step"] / (2 * 3.141592653589793 / 40960) - 1) < 1e-9, run.get("encoder_step")
 for j in (fit, run): j.pop("provenance")
 assert fit == run, [k for k in fit if fit[k] != run.get(k)]
 s, b = load("runf/summary.json"), load("b.json")
