@@ -50,7 +50,12 @@
 // it follows the device), not from the band-limited velocity: under a white
 // torque the velocity changes sign faster than the rigid-body band, and
 // sign(L[v]) underestimates F_c by a third (measured: 5.4 for 8 mN m). The
-// detection uses sign(L[v]) (no simulation: cheap, and unbiased at F_c = 0).
+// detection (friction_fit.cc, Detect) uses two cheap tests unbiased at
+// F_c = 0: the time-domain rows on sign(L[v]), and the frequency-domain rows
+// on sign(v) of the body simulated without friction (a coarse encoder's
+// noise swamps the first); friction is detected when either's F_c / std
+// exceeds detection_z and its equivalent damping would put the linear b
+// more than 3 std off.
 //
 // Two topologies (FrictionTopology), both fitted (2026-12-02): friction
 // opposing the rigid body's velocity x' with the sections after it on the
@@ -72,6 +77,7 @@
 // ChooseB); F_c and the offset from step 2 with their OLS std.
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -84,7 +90,10 @@ namespace zwidth::fit {
 // What the fit does about friction.
 enum class FrictionModel {
   kNone,     // the linear fit; friction only detected (the verdict's `friction` reason)
-  kAuto,     // friction fitted when detected (F_c / std > detection_z), else the linear fit
+  // friction fitted when detected (F_c / std > detection_z, and relevant), else the linear
+  // fit; when detected weakly (F_c / std in (2, detection_z]) fitted too and kept only if
+  // its b is inconsistent (beyond 3 std) with the linear fit's
+  kAuto,
   kCoulomb,  // friction always fitted
 };
 std::string ToString(FrictionModel f);
@@ -136,12 +145,21 @@ std::string ToString(FrictionFitStatus s);
 struct FrictionFitResult {
   FrictionFitStatus status = FrictionFitStatus::kNotRun;
   std::string message;
-  // The first IDIM on the linear fit's plant (what the detection uses).
+  // The detection on the linear fit's plant (friction_fit.cc, Detect): two
+  // tests of F_c = 0, each's F_c / std, and the estimate of the one with the
+  // larger (detected: it exceeds FrictionFitOptions::detection_z).
   bool detected = false;
   double detection_coulomb = 0.0, detection_coulomb_std = 0.0;
+  double detection_time_domain_z = 0.0, detection_frequency_domain_z = 0.0;
   // The last IDIM: coulomb_pos = coulomb_neg = F_c, offset; std alike.
   model::Friction friction, friction_std;
   double idim_b = 0.0, idim_b_std = 0.0;  // b of the last IDIM [N m s/rad]
+  // The last IDIM's plant (m, sections, delay: the refit before the last),
+  // its std (propagated into b's and F_c's), and its fixed point's Jacobian
+  // d(G(x) - x)/dx at x = (idim_b, F_c), the offset held, row-major, from
+  // which their std comes (NaN when not run).
+  model::Plant idim_plant, idim_plant_std;
+  std::array<double, 4> fixed_point_jacobian{};
   double cutoff_hz = 0.0;
   int rows_used = 0;
   int decimation = 1;
@@ -169,5 +187,22 @@ FrictionFitResult FitFriction(const std::vector<double>& input, const std::vecto
 // The verdict's `friction` reason (fit/quality.cc): appended to r, which is
 // then poor, when a linear fit was kept on a log that shows friction.
 void AddFrictionReason(const FrictionFitResult& ff, FitResult* r);
+
+namespace internal {
+
+// One evaluation of the simulation-based IDIM's map G (friction_fit.cc,
+// IdimRound) on a log: the body simulated from the torque with (b, F_c,
+// offset) on `plant` in `topology`, then regressed over the band up to
+// cutoff_hz; its estimates and the rows' own covariance (not the fixed
+// point's). For tests of the fixed point FitFriction returns; not a fit.
+struct IdimMapValue {
+  double b = 0.0, coulomb = 0.0, offset = 0.0;
+  double b_std = 0.0, coulomb_std = 0.0, b_coulomb_cov = 0.0, offset_std = 0.0;
+};
+IdimMapValue EvaluateIdimMap(const std::vector<double>& input, const std::vector<double>& output, double sample_rate_hz,
+                             const model::Plant& plant, FrictionTopology topology, double cutoff_hz, double b,
+                             double coulomb, double offset, double min_speed_fraction = 0.0);
+
+}  // namespace internal
 
 }  // namespace zwidth::fit
