@@ -251,13 +251,16 @@ var d=JSON.parse(document.getElementById('zwidth-chart-data').textContent);
 function g(id,rows,labels,opt){var el=document.getElementById(id);if(!el)return;
  var o={labels:labels,customBars:true,legend:'always',labelsSeparateLines:true,connectSeparatedPoints:false};
  for(var k in opt)o[k]=opt[k];el.zwidthGraph=new Dygraph(el,rows,o);}
-var e3=function(v){return Number(v).toPrecision(2);};
+// Tick labels of 2 significant digits, in exponent form past 1e-3..1e4 (toPrecision
+// alone writes 5e-5 as 0.000050, wider than the axis's label column).
+var e3=function(v){var a=Math.abs(v);return a!==0&&(a<1e-3||a>=1e4)?Number(v).toExponential(1):Number(v).toPrecision(2);};
 g('chart-bode-mag',d.mag,['f [Hz]','measured','model'],{logscale:true,axes:{x:{logscale:true},
  y:{axisLabelFormatter:e3,valueFormatter:function(v){return Number(v).toPrecision(5);},pixelsPerLabel:40,axisLabelWidth:60}},
  xlabel:'f [Hz]',ylabel:'|H| ['+d.units.H+']',drawPoints:true,strokeWidth:1,series:{measured:{strokeWidth:0,pointSize:2}}});
 g('chart-bode-phase',d.phase,['f [Hz]','measured','model'],{axes:{x:{logscale:true}},xlabel:'f [Hz]',
  ylabel:'phase [deg]',drawPoints:true,strokeWidth:1,series:{measured:{strokeWidth:0,pointSize:2}}});
-g('chart-kcr',d.kcr,d.kcr_labels,{xlabel:'B ['+d.units.B+']',ylabel:'K_CR ['+d.units.K+']'});
+g('chart-kcr',d.kcr,d.kcr_labels,{xlabel:'B ['+d.units.B+']',ylabel:'K_CR ['+d.units.K+']',
+ axes:{y:{axisLabelFormatter:e3,axisLabelWidth:60}}});
 })();
 )js";
 

@@ -361,19 +361,23 @@ def test_read_log_scales_units_and_delimiter_equal_the_cli(tmp_path, short_log, 
 def test_fit_of_a_log_and_of_a_path_equal_the_two_steps(log_h5):
     log = zwidth.read_log(log_h5)
     # A log or a path also goes to the friction fit (as `zwidth fit`), whose record the model's "fit"
-    # holds ("friction": not run with friction="none", none detected here with "auto"); a response
-    # alone cannot: everything else is the two steps' to the last bit.
+    # holds ("friction": not run with friction="none", none detected here with "auto"), and gives the
+    # encoder step read from its samples (the shipped log's 2 pi / 40960 rad); a response alone
+    # cannot: everything else is the two steps' to the last bit.
     two = zwidth.fit(zwidth.estimate(log, window_length=2048), modes=2, friction="none")
+    assert two.model.encoder_step is None
 
     def without_friction_record(r):
         j = json.loads(r.model.to_json())
         j["fit"].pop("friction", None)
+        j.pop("encoder_step", None)
         return j, np.asarray(r.covariance).tobytes(), np.asarray(r.used).tobytes()
 
     for friction in ("none", "auto"):
         for data in (log, log_h5):
             got = zwidth.fit(data, modes=2, window_length=2048, friction=friction)
             assert without_friction_record(got) == without_friction_record(two), (friction, data)
+            assert abs(got.model.encoder_step / (2 * np.pi / 40960) - 1) < 1e-9, got.model.encoder_step
     with pytest.raises(TypeError, match="window_length"):
         zwidth.fit(zwidth.estimate(log), window_length=2048)
     with pytest.raises(TypeError, match="not ndarray"):
