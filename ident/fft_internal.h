@@ -15,9 +15,10 @@ namespace zwidth::ident::internal {
 // (ident/fft.h; executing a plan on new arrays is thread-safe when they have
 // the alignment fftw_alloc_* gives).
 struct PlanCache {
-  std::map<int, fftw_plan> plans;
+  std::map<int, fftw_plan> plans, inverse_plans;  // r2c; c2r (ident::InverseReal)
   ~PlanCache() {
     for (auto& [n, plan] : plans) fftw_destroy_plan(plan);
+    for (auto& [n, plan] : inverse_plans) fftw_destroy_plan(plan);
     fftw_cleanup();
   }
   static PlanCache& Get() {
@@ -30,6 +31,15 @@ struct PlanCache {
     if (it != plans.end()) return it->second;
     fftw_plan p = fftw_plan_dft_r2c_1d(n, in, out, FFTW_ESTIMATE);
     plans[n] = p;
+    return p;
+  }
+  // The c2r plan of length n (it overwrites its input, as every c2r plan).
+  fftw_plan InverseFor(int n, fftw_complex* in, double* out) {
+    std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+    auto it = inverse_plans.find(n);
+    if (it != inverse_plans.end()) return it->second;
+    fftw_plan p = fftw_plan_dft_c2r_1d(n, in, out, FFTW_ESTIMATE);
+    inverse_plans[n] = p;
     return p;
   }
 };

@@ -67,17 +67,7 @@ struct RunDft {
   std::vector<std::vector<cd>> z;
 };
 
-std::vector<cd> Dft(const double* v, int n) {
-  double* in = fftw_alloc_real(n);
-  fftw_complex* out = fftw_alloc_complex(n / 2 + 1);
-  std::copy(v, v + n, in);
-  fftw_execute_dft_r2c(internal::PlanCache::Get().For(n, in, out), in, out);
-  std::vector<cd> r(n / 2 + 1);
-  for (int k = 0; k <= n / 2; ++k) r[k] = cd(out[k][0], out[k][1]);
-  fftw_free(in);
-  fftw_free(out);
-  return r;
-}
+std::vector<cd> Dft(const double* v, int n) { return ForwardReal(std::vector<double>(v, v + n)); }
 
 // (1 - z^-1)^d applied to v inside the record: t = d..N-1.
 std::vector<double> Difference(const std::vector<double>& v, int d) {
