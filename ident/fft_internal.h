@@ -26,20 +26,21 @@ struct PlanCache {
     return cache;
   }
   fftw_plan For(int n, double* in, fftw_complex* out) {
-    std::lock_guard<std::mutex> lock(FftwPlannerMutex());
-    auto it = plans.find(n);
-    if (it != plans.end()) return it->second;
-    fftw_plan p = fftw_plan_dft_r2c_1d(n, in, out, FFTW_ESTIMATE);
-    plans[n] = p;
-    return p;
+    return Cached(&plans, n, [&] { return fftw_plan_dft_r2c_1d(n, in, out, FFTW_ESTIMATE); });
   }
   // The c2r plan of length n (it overwrites its input, as every c2r plan).
   fftw_plan InverseFor(int n, fftw_complex* in, double* out) {
+    return Cached(&inverse_plans, n, [&] { return fftw_plan_dft_c2r_1d(n, in, out, FFTW_ESTIMATE); });
+  }
+
+ private:
+  template <class Make>
+  fftw_plan Cached(std::map<int, fftw_plan>* cache, int n, Make make) {
     std::lock_guard<std::mutex> lock(FftwPlannerMutex());
-    auto it = inverse_plans.find(n);
-    if (it != inverse_plans.end()) return it->second;
-    fftw_plan p = fftw_plan_dft_c2r_1d(n, in, out, FFTW_ESTIMATE);
-    inverse_plans[n] = p;
+    auto it = cache->find(n);
+    if (it != cache->end()) return it->second;
+    fftw_plan p = make();
+    (*cache)[n] = p;
     return p;
   }
 };
