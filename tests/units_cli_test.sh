@@ -18,7 +18,7 @@ SEL="--input-column force --modes 1"
 "$ZW" fit "$T/lin.csv" $SEL -o "$T/lin.json" > "$T/out" 2>&1
 check "fit of a force [N], position [m] log: linear without --units" 'grep -q "\"units\": \"linear\"" "$T/lin.json" && grep -qE "^m .* kg$" "$T/out" && grep -qE "^b .* N s/m$" "$T/out"'
 "$ZW" fit "$T/lin.csv" $SEL --units linear -o "$T/lin_given.json" > /dev/null 2>&1
-check "fit --units linear agrees with the header: the same model" 'cmp -s <(grep -v "\"date\"\|\"command\"" "$T/lin.json") <(grep -v "\"date\"\|\"command\"" "$T/lin_given.json")'
+check "fit --units linear agrees with the header: the same model" 'cmp -s <(grep -v "\"utc_date\"\|\"command\"" "$T/lin.json") <(grep -v "\"utc_date\"\|\"command\"" "$T/lin_given.json")'
 "$ZW" fit "$T/plain.csv" $SEL -o "$T/plain.json" > /dev/null 2>&1
 check "fit of a header without units: rotary (no units key)" '[ -f "$T/plain.json" ] && ! grep -q "\"units\"" "$T/plain.json"'
 expect "fit --units rotary on a linear header" "header says linear units.*--units rotary was given" "$T/bad.json" -- \
