@@ -19,7 +19,8 @@
 #include "io/model_json.h"
 #include "io/stability_files.h"
 #include "model/friction.h"
-#include "stability/haptic_loop.h"
+#include "stability/loop_options.h"
+#include "stability/passivity.h"
 #include "stability/uncertainty.h"
 #include "stability/zwidth.h"
 

@@ -12,9 +12,10 @@
 #include "analysis/laps.h"
 #include "io/reference_models.h"
 #include "io/stability_files.h"
-#include "stability/uncertainty.h"
 #include "model/error.h"
 #include "model/parallel.h"
+#include "stability/uncertainty.h"
+#include "stability/velocity_filter.h"
 
 namespace zwidth::analysis {
 namespace {

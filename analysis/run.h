@@ -18,7 +18,7 @@
 #include "fit/friction_fit.h"
 #include "ident/joint.h"
 #include "io/model_json.h"
-#include "stability/haptic_loop.h"
+#include "stability/loop_options.h"
 #include "stability/zwidth.h"
 
 namespace zwidth::analysis {

@@ -11,7 +11,7 @@
 
 #include "io/stability_files.h"
 #include "model/plant.h"
-#include "stability/haptic_loop.h"
+#include "stability/loop_options.h"
 
 namespace zwidth::analysis {
 

@@ -6,21 +6,24 @@
 #include <iostream>
 #include <memory>
 
-#include "apps/common.h"
 #include "analysis/friction_amplitude.h"
 #include "analysis/plant_stability.h"
 #include "analysis/scene_check.h"
+#include "apps/common.h"
 #include "apps/friction_flags.h"
 #include "flags/loop_flags.h"
+#include "io/atomic_file.h"
+#include "io/loop_text.h"
+#include "io/model_json.h"
 #include "io/printable.h"
 #include "io/provenance.h"
-#include "stability/haptic_loop.h"
-#include "io/atomic_file.h"
-#include "io/model_json.h"
 #include "io/stability_files.h"
 #include "model/error.h"
 #include "model/units.h"
+#include "stability/cutoff_sweep.h"
 #include "stability/friction_prediction.h"
+#include "stability/loop_options.h"
+#include "stability/passivity.h"
 #include "stability/relay.h"
 #include "stability/uncertainty.h"
 #include "stability/zwidth.h"
@@ -218,7 +221,7 @@ void AddFilterSweepCommand(CLI::App& app) {
     if (sf->points < 2 || sf->points > 10000) throw InputError("--points must be in [2, 10000]");
     if (sf->hands.size() > 1) throw InputError("filter-sweep takes one --hand");
     stability::LoopOptions loop;
-    if (!sf->hands.empty()) loop.hand = stability::ParseHand(sf->hands[0]);
+    if (!sf->hands.empty()) loop.hand = io::ParseHand(sf->hands[0]);
     stability::CutoffSweepOptions o;
     o.measure = stability::SweepMeasureFromString(sf->measure);
     for (int i = 0; i < sf->points; ++i) {

@@ -13,6 +13,7 @@
 
 #include "io/isolated.h"
 #include "io/log.h"
+#include "io/log_internal.h"
 
 namespace zwidth {
 namespace {

@@ -12,10 +12,11 @@
 
 #include <Eigen/Dense>
 
+#include "fit/friction_fit_internal.h"
 #include "ident/fft.h"
-#include "model/units.h"
 #include "model/error.h"
 #include "model/state_space.h"
+#include "model/units.h"
 
 namespace zwidth::fit {
 namespace {

@@ -7,7 +7,9 @@
 #include <sys/stat.h>
 
 #include "io/atomic_file.h"
+#include "io/loop_text.h"
 #include "model/error.h"
+#include "stability/velocity_filter.h"
 
 namespace zwidth::flags {
 
@@ -32,7 +34,7 @@ std::vector<stability::LoopOptions> ResolveLoops(const LoopFlags& f, double T) {
     const std::string& c = f.filter_coeffs;
     const size_t a = c.find_first_not_of(" \t");
     if (a != std::string::npos && c.compare(a, 2, "b:") == 0) {
-      stability::ParseFilterCoefficients(c, "--velocity-filter-coeffs", &base);
+      io::ParseFilterCoefficients(c, "--velocity-filter-coeffs", &base);
     } else {
       // A regular file only (a FIFO would block, /dev/zero never ends), read
       // at most 64 kB + 1 bytes; noted as an input, so no output replaces it.
@@ -53,14 +55,14 @@ std::vector<stability::LoopOptions> ResolveLoops(const LoopFlags& f, double T) {
         throw InputError("--velocity-filter-coeffs '" + c + "': file over 64 kB");
       }
       for (char& ch : text) if (ch == '\n' || ch == '\r') ch = ' ';
-      stability::ParseFilterCoefficients(text, "--velocity-filter-coeffs file '" + c + "'", &base);
+      io::ParseFilterCoefficients(text, "--velocity-filter-coeffs file '" + c + "'", &base);
     }
   }
   std::vector<stability::LoopOptions> out;
   if (f.hands.empty()) out.push_back(base);
   for (const std::string& h : f.hands) {
     stability::LoopOptions l = base;
-    l.hand = stability::ParseHand(h);
+    l.hand = io::ParseHand(h);
     out.push_back(l);
   }
   return out;

@@ -9,7 +9,7 @@
 #include <CLI/CLI.hpp>
 
 #include "model/plant.h"
-#include "stability/haptic_loop.h"
+#include "stability/loop_options.h"
 
 namespace zwidth::flags {
 

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "io/atomic_file.h"
+#include "io/frf_file_internal.h"
 #include "io/hdf5_api.h"
 #include "io/io_internal.h"
 #include "io/isolated.h"

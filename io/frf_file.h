@@ -51,10 +51,4 @@ void CheckFiniteResponse(const ident::FrequencyResponse& r, const std::string& s
 inline constexpr double kNoInputPower = 1e-24;
 void CheckInputPower(const ident::FrequencyResponse& r, const std::string& source);
 
-namespace internal {
-// ReadFrequencyResponse without the child process for HDF5 (the fuzzer's
-// entry point; the isolation is tested on its own).
-ident::FrequencyResponse ReadFrequencyResponseInProcess(const std::string& path, double sample_rate_hz = 0.0);
-}  // namespace internal
-
 }  // namespace zwidth::io

@@ -129,12 +129,6 @@ class LogFingerprint {
   std::uint64_t hu_ = 14695981039346656037ull, hy_ = 14695981039346656037ull, n_ = 0;
 };
 
-// The HDF5 parsing that StreamLog runs in a child process (io/isolated.h),
-// callable in this process for the fuzzer (the isolation is tested on its own).
-namespace internal {
-LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& select, const LogSink& sink);
-}  // namespace internal
-
 using model::IsDeviceLogRate;  // the readers' range of a rate (model/sample_period.h)
 
 // What the readers refuse in the samples they read, for a log made in memory

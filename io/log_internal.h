@@ -1,7 +1,7 @@
 // Internals of the log readers and writers, shared by io/log.cc (format
 // detection, the child-process framing) and one file per format:
 // log_text.cc (delimited text), log_mat.cc (MATLAB .mat), log_hdf5.cc.
-// Not installed: include only from io/*.cc.
+// Not installed: include only from io/*.cc (and tests, benchmarks, the fuzzer).
 #pragma once
 
 #include <algorithm>
@@ -19,6 +19,10 @@
 #include "model/error.h"
 
 namespace zwidth::io::internal {
+
+// The HDF5 parsing that StreamLog runs in a child process (io/isolated.h),
+// callable in this process for the fuzzer (the isolation is tested on its own).
+LogInfo StreamHdf5InProcess(const std::string& path, const LogSelect& select, const LogSink& sink);
 
 constexpr size_t kChunk = 1 << 16;
 

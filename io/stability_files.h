@@ -8,7 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "stability/haptic_loop.h"
+#include "stability/passivity.h"
 #include "stability/uncertainty.h"
 #include "stability/zwidth.h"
 
@@ -19,7 +19,7 @@ struct BoundaryRow {
   stability::CriticalPoint point;
   std::vector<stability::KInterval> intervals;  // the stable K intervals at point.B
   double K_cr_std = std::numeric_limits<double>::quiet_NaN();  // N m/rad; nan = no covariance
-  // Largest K of the passive set at B (Colgate and Schenkel; stability/haptic_loop.h) [N m/rad]; 0 = none passive.
+  // Largest K of the passive set at B (Colgate and Schenkel; stability/passivity.h) [N m/rad]; 0 = none passive.
   double K_passive = std::numeric_limits<double>::quiet_NaN();
   // With friction (analysis/friction_amplitude.h): the wall K = k x K_cr(B)
   // outside the linear Z-width and the amplitude A* below which friction stops

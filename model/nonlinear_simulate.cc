@@ -8,6 +8,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "model/error.h"
+#include "model/state_space_internal.h"
 
 namespace zwidth::model {
 namespace {

@@ -30,7 +30,7 @@
 //     in the direction the net torque pushes it.
 //   - Stuck: the friction is f_req(t), which makes the plant input
 //     u_p = -C A^2 x / g: a linear autonomous system x' = (A - B C A^2 / g) x
-//     (the constrained system, as the hand feedback of stability/haptic_loop.cc),
+//     (the constrained system, as the hand feedback of stability/hand.cc),
 //     exactly sampled the same way. C A x stays 0 and the position stays put;
 //     flexible sections (modes) keep moving. The body breaks away when f_req(t)
 //     leaves the static band: again a crossing of an explicit function of time,

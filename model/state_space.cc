@@ -9,6 +9,7 @@
 #include <unsupported/Eigen/MatrixFunctions>
 
 #include "model/error.h"
+#include "model/state_space_internal.h"
 
 namespace zwidth::model {
 

@@ -41,7 +41,7 @@ StateSpace ContinuousStateSpace(const Plant& plant);
 // a period that is not finite and positive.
 StateSpace DiscretizeZoh(const Plant& plant, double period_s);
 // The same for any continuous state space (delay_samples 0): e.g. the plant
-// with the hand (stability/haptic_loop.h) or the stuck plant of
+// with the hand (stability/hand.h) or the stuck plant of
 // model/nonlinear_simulate.h.
 StateSpace DiscretizeZoh(const StateSpace& continuous, double period_s);
 
@@ -74,10 +74,5 @@ class DiscreteResponse {
 // the input held over each period and sampled at the start of each period.
 std::vector<double> SimulateDiscrete(const StateSpace& discrete,
                                      const std::vector<double>& input);
-
-namespace internal {
-// Diagonal scales (powers of two) that balance M: diag(s)^-1 M diag(s).
-Eigen::VectorXd BalancingScales(const Eigen::MatrixXd& M);
-}  // namespace internal
 
 }  // namespace zwidth::model

@@ -30,7 +30,8 @@
 #include "io/model_json.h"
 #include "model/c_locale.h"
 #include "model/sample_period.h"
-#include "stability/haptic_loop.h"
+#include "stability/loop_options.h"
+#include "stability/zwidth.h"
 
 namespace zwidth::python {
 

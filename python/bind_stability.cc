@@ -9,9 +9,11 @@
 #include "io/stability_files.h"
 #include "model/error.h"
 #include "python/bind_common.h"
-#include "stability/haptic_loop.h"
+#include "stability/loop_options.h"
+#include "stability/passivity.h"
 #include "stability/relay.h"
 #include "stability/uncertainty.h"
+#include "stability/velocity_filter.h"
 #include "stability/zwidth.h"
 
 namespace zwidth::python {

@@ -7,6 +7,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "model/error.h"
+#include "model/state_space_internal.h"
 
 namespace zwidth::stability {
 

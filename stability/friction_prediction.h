@@ -11,7 +11,7 @@
 //     b_e is the extra physical damping that makes (K, B) marginally stable,
 //     omega the loop's crossing frequency there. The extra damping acts where
 //     the friction does (the plant input, velocity of the measured coordinate):
-//     exactly the hand's damping of stability/haptic_loop.h, so b_e is a 1-D
+//     exactly the hand's damping of stability/hand.h, so b_e is a 1-D
 //     root of "K is stable at B" in the hand's B_h, each test an exact Z-width
 //     (SampledPlant + ZWidth). Without modes this is the brief's b* - b.
 //     A* is an unstable limit cycle: a start below it dies out, above it grows.

@@ -1,5 +1,24 @@
-// Options of the haptic loop (velocity filter, the user's hand), used by
-// ZWidth; see stability/haptic_loop.h for the loop and where the hand acts.
+// Options of the haptic loop as devices run it (issue 16): a velocity filter in
+// the virtual wall and the user's hand on the device, used by ZWidth, the
+// relay, the wall simulation and passivity (stability/passivity.h).
+//
+// Loop (with D = loop delay + the model's own input delay, in samples):
+//
+//   u = -z^-D (K + B F(z) (1 - z^-1)/T) y,    y = G_h(z) u,
+//
+// F(z) = (b0 + b1 z^-1 + ... + bn z^-n) / (a0 + a1 z^-1 + ... + am z^-m),
+// a0 = 1, the velocity filter (F = 1: the paper's raw backward difference),
+// and G_h the exact ZOH sampling of the continuous plant with the hand,
+//
+//   G_h(s) = G(s) / (1 + G(s) Z_h(s)),   Z_h(s) = M s^2 + B_h s + K_h.
+//
+// Where the hand is attached: its force acts where the motor torque does (the
+// plant input) and it feels the measured coordinate y (position, velocity,
+// acceleration). With modes, that treats the hand as collocated with the
+// encoder and the motor: the modes stay between the torque and y exactly as
+// identified, and the hand does not sit behind a compliant link. M, B_h, K_h
+// are in the model's units at that coordinate (kg m^2, N m s/rad, N m/rad for
+// a rotary model; kg, N s/m, N/m for a linear one).
 #pragma once
 
 #include <string>

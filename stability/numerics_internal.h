@@ -1,7 +1,7 @@
 // The numerical kernels the stability module shares (internal, not
 // installed): Brent's root and extremum searches, a golden-section search and
 // the product of two polynomials. One copy each, used by the Z-width
-// (zwidth.cc, zwidth_summary.cc), the haptic loop's sweeps (haptic_loop.cc)
+// (zwidth.cc, zwidth_summary.cc), the haptic loop's sweeps (passivity.cc)
 // and the sampled plant (sampled_plant.cc).
 #pragma once
 

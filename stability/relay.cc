@@ -12,8 +12,9 @@
 #include "model/error.h"
 #include "model/nonlinear_simulate.h"
 #include "model/state_space.h"
-#include "stability/haptic_loop.h"
+#include "stability/hand.h"
 #include "stability/velocity_filter_internal.h"
+#include "stability/zwidth.h"
 
 #include <unsupported/Eigen/FFT>
 
@@ -544,7 +545,7 @@ model::StateSpace RelayPlant(const model::Plant& plant, const RelayOptions& o) {
   if (o.Nonlinear()) return ContinuousStateSpaceWithHand(plant, o.loop.hand);
   model::StateSpace ss = o.loop.hand.IsNone()
                       ? model::DiscretizeZoh(plant, o.period_s)
-                      : DiscretizeZohStateSpace(ContinuousStateSpaceWithHand(plant, o.loop.hand), o.period_s);
+                      : model::DiscretizeZoh(ContinuousStateSpaceWithHand(plant, o.loop.hand), o.period_s);
   ss.delay_samples = 0;
   return ss;
 }

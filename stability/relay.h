@@ -10,7 +10,7 @@
 // steered to chosen frequencies (two resonators in the relay path) measure L
 // where needed, find every -180 deg crossing, and keep the smallest K.
 //
-// The loop may be the haptic loop of stability/haptic_loop.h (issue 16): the
+// The loop may be the haptic loop of stability/loop_options.h (issue 16): the
 // damping acts on the filtered velocity B F(z)(1 - z^-1)/T and the user's hand
 // is on the plant (sampled exactly by ZOH from its state space), so the relay
 // estimates K_CR(B) of ZWidth(plant, T, d, loop).

@@ -10,8 +10,11 @@
 #include <Eigen/Eigenvalues>
 
 #include "model/error.h"
+#include "model/state_space.h"
+#include "model/state_space_internal.h"
 #include "stability/closed_loop.h"
-#include "stability/haptic_loop.h"
+#include "stability/hand.h"
+#include "stability/loop_options.h"
 #include "stability/numerics_internal.h"
 
 namespace zwidth::stability {
@@ -32,7 +35,7 @@ model::StateSpace Sampled(const model::Plant& plant, double period_s, const Hand
   std::string why;
   if (!l.IsValid(&why)) throw InputError("loop options: " + why);
   model::StateSpace d = hand.IsNone() ? model::DiscretizeZoh(plant, period_s)
-                               : DiscretizeZohStateSpace(ContinuousStateSpaceWithHand(plant, hand), period_s);
+                               : model::DiscretizeZoh(ContinuousStateSpaceWithHand(plant, hand), period_s);
   d.delay_samples = 0;  // delays are handled by the caller
   return d;
 }
@@ -239,15 +242,16 @@ inline DD ToDD(__float128 q) {
 }
 #endif
 
-struct Binary128Modal {
+}  // namespace internal
+
+struct SampledPlant::Binary128Modal {
 #if defined(__SIZEOF_FLOAT128__)
-  model::ZohModalForm<Quad> form;
+  model::ZohModalForm<internal::Quad> form;
   // Each term n / (z - p) of the form, upper poles and their conjugates, in
   // double-double: re n, im n, re p, im p.
-  std::vector<std::array<DD, 4>> terms;
+  std::vector<std::array<internal::DD, 4>> terms;
 #endif
 };
-}  // namespace internal
 
 namespace {
 
@@ -293,6 +297,8 @@ std::complex<double> DoubleDoubleAt(const std::vector<std::array<DD, 4>>& terms,
 }
 #endif
 
+}  // namespace
+
 // Where the pole-residue form fails in double (its terms cancel: crowded,
 // lightly damped modes), the same form in binary128 when its rounding stays
 // below 1e-12 of |G_d| at the check points (16 uniform, every 160th mode-patch
@@ -304,10 +310,10 @@ std::complex<double> DoubleDoubleAt(const std::vector<std::array<DD, 4>>& terms,
 // rounding makes B(theta) jagged (23844 extrema on the boundary grid; 128 in
 // binary128). Evaluated in double-double (DD above, checked against the
 // binary128 sum). nullptr where binary128 is not available or a check fails.
-std::shared_ptr<const internal::Binary128Modal> Binary128Form(const model::Plant& plant, double T,
-                                                               const std::vector<double>& patch_theta) {
+std::shared_ptr<const SampledPlant::Binary128Modal> SampledPlant::Binary128Form(const model::Plant& plant, double T,
+                                                                                 const std::vector<double>& patch_theta) {
 #if defined(__SIZEOF_FLOAT128__)
-  auto q = std::make_shared<internal::Binary128Modal>();
+  auto q = std::make_shared<Binary128Modal>();
   std::vector<Quad> sec;
   for (const model::Mode& md : plant.modes) sec.insert(sec.end(), {md.omega, md.c, md.v, md.d});
   if (!q->form.Build(Quad(plant.m), Quad(plant.b), sec.data(), static_cast<int>(plant.modes.size()), T)) return nullptr;
@@ -343,6 +349,8 @@ std::shared_ptr<const internal::Binary128Modal> Binary128Form(const model::Plant
   return nullptr;
 #endif
 }
+
+namespace {
 
 // The double pole-residue sum against the same sum in long double at the 16
 // uniform points and every 40th point of the mode patches (see the

@@ -27,10 +27,6 @@
 #include "stability/loop_options.h"
 
 namespace zwidth::stability {
-namespace internal {
-struct Binary128Modal;  // the pole-residue form in binary128 (sampled_plant.cc)
-}  // namespace internal
-
 // Each patch: the damped frequency sqrt(w^2 - c^2/4) T +- k h, h = max(c T / 16,
 // 1e-9) rad, k = -kModePatchHalfWidth..kModePatchHalfWidth, inside (pi 1e-7, pi (1 - 1e-9)).
 constexpr int kModePatchHalfWidth = 320;
@@ -110,6 +106,10 @@ class SampledPlant {
   std::complex<double> gd_at_minus_one() const { return d_->g_minus_one; }
 
  private:
+  struct Binary128Modal;  // the pole-residue form in binary128 (sampled_plant.cc)
+  // That form where it holds to 1e-12 of |G_d| (sampled_plant.cc); nullptr elsewhere.
+  static std::shared_ptr<const Binary128Modal> Binary128Form(const model::Plant& plant, double T,
+                                                             const std::vector<double>& patch_theta);
   struct Data {
     model::Plant plant;
     double period_s = 0.0;
@@ -118,7 +118,7 @@ class SampledPlant {
     model::DiscreteResponse response;
     model::ZohModalForm<double> modal;
     bool use_modal = false;
-    std::shared_ptr<const internal::Binary128Modal> quad;  // set where Gd uses binary128
+    std::shared_ptr<const Binary128Modal> quad;  // set where Gd uses binary128
     std::vector<double> num, den, den1;
     std::vector<double> patch_theta;
     std::complex<double> g_minus_one;

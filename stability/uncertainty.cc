@@ -1,7 +1,8 @@
 #include "stability/uncertainty.h"
 
 #include "model/cancel.h"
-#include "stability/haptic_loop.h"
+#include "stability/loop_options.h"
+#include "stability/zwidth.h"
 
 #include <cmath>
 #include <complex>

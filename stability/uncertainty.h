@@ -22,7 +22,7 @@
 //   recomputed near its nominal value (ZWidth::SummarizeNear) for x +- log_step
 //   e_i, then var = J Sigma J^T. Valid where the quantity is a smooth function
 //   of x (not where, e.g., B_max jumps between two bands).
-// With a velocity filter and a hand (LoopOptions, stability/haptic_loop.h) the
+// With a velocity filter and a hand (LoopOptions, stability/loop_options.h) the
 // same holds with V = F (1 - z^-1)/T in place of (1 - z^-1)/T: B Im V = Im W
 // fixes theta, dtheta/dx = Im W_x / (B Im V_theta - Im W_theta),
 // dK/dx = Re W_x + (Re W_theta - B Re V_theta) dtheta/dx; the hand stays fixed.

@@ -8,7 +8,7 @@
 #include "model/error.h"
 #include "model/nonlinear_simulate.h"
 #include "model/state_space.h"
-#include "stability/haptic_loop.h"
+#include "stability/hand.h"
 #include "stability/velocity_filter_internal.h"
 
 namespace zwidth::stability {

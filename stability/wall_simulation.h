@@ -3,7 +3,7 @@
 //   u_k = Act( -(K y_m + B F(z)(1 - z^-1)/T y_m) delayed D samples ),
 //   y_m = the encoder's reading of the position (rounded to encoder_step),
 //
-// on the plant of eq. (1) with the user's hand (stability/haptic_loop.h) and
+// on the plant of eq. (1) with the user's hand (stability/hand.h) and
 // Coulomb friction at its input, simulated exactly (model::StickSlipPlant);
 // Act is the actuator's DAC step and saturation (model::Actuator). D is the
 // loop delay plus the model's own. The wall is bilateral (the loop of eq. (2)

@@ -11,7 +11,6 @@
 #include "model/cancel.h"
 #include "model/error.h"
 #include "stability/closed_loop.h"
-#include "stability/haptic_loop.h"
 #include "stability/numerics_internal.h"
 #include "stability/schur_cohn.h"
 #include <Eigen/Eigenvalues>
@@ -670,6 +669,22 @@ ZWidth::Row ZWidth::RowAt(double B) const {
   r.point = PointFrom(B, xs, stable, Check::kVerify);
   r.intervals = IntervalsFrom(B, xs, stable, Check::kVerify);
   return r;
+}
+
+std::vector<KInterval> IntersectIntervals(const std::vector<KInterval>& a, const std::vector<KInterval>& b) {
+  std::vector<KInterval> out;
+  size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    KInterval r;
+    r.K_lo = std::max(a[i].K_lo, b[j].K_lo);
+    r.f_lo_hz = a[i].K_lo >= b[j].K_lo ? a[i].f_lo_hz : b[j].f_lo_hz;
+    r.K_hi = std::min(a[i].K_hi, b[j].K_hi);
+    r.f_hi_hz = a[i].K_hi <= b[j].K_hi ? a[i].f_hi_hz : b[j].f_hi_hz;
+    r.verified = a[i].verified && b[j].verified;
+    if (r.K_hi > r.K_lo) out.push_back(r);
+    (a[i].K_hi < b[j].K_hi ? i : j)++;
+  }
+  return out;
 }
 
 }  // namespace zwidth::stability

@@ -90,6 +90,10 @@ struct KInterval {
   bool verified = false;
 };
 
+// The stable set at one B for several loops (e.g. a range of hands): the
+// intersection of their interval sets. Ends keep the frequency of the loop that sets them.
+std::vector<KInterval> IntersectIntervals(const std::vector<KInterval>& a, const std::vector<KInterval>& b);
+
 // A B range past B_max_from_zero in which some K > 0 is stable again (the
 // stable K interval there starts above 0).
 struct ReopenedBand {
@@ -198,7 +202,7 @@ class ZWidth {
   // invalid plant, period or delay.
   ZWidth(const model::Plant& plant, double period_s, int delay_samples,
          const BoundaryOptions& options = {});
-  // The generalised loop of stability/haptic_loop.h: velocity filter F(z) and
+  // The generalised loop of stability/loop_options.h: velocity filter F(z) and
   // the user's hand. With W = -z^D / G_h and V = F(z)(1 - z^-1)/T the crossing
   // condition on the circle is K + B V = W: B = Im W / Im V, K = Re W - B Re V
   // (theta = pi: K = W(pi) - B V(pi), V(pi) = 2 F(-1)/T real). The

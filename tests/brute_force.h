@@ -17,7 +17,8 @@
 
 #include "model/plant.h"
 #include "model/state_space.h"
-#include "stability/haptic_loop.h"
+#include "stability/hand.h"
+#include "stability/loop_options.h"
 #include "stability/zwidth.h"
 
 namespace zwidth::stability {

@@ -18,6 +18,7 @@
 #include <Eigen/Dense>
 
 #include "fit/friction_fit.h"
+#include "fit/friction_fit_internal.h"
 #include "tests/friction_sim.h"
 
 namespace zwidth::fit {

@@ -18,6 +18,7 @@
 
 #include "io/isolated.h"
 #include "io/log.h"
+#include "io/log_internal.h"
 #include "model/error.h"
 #include "tests/test_util.h"
 

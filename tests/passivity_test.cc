@@ -16,7 +16,9 @@
 
 #include <gtest/gtest.h>
 
-#include "stability/haptic_loop.h"
+#include "stability/loop_options.h"
+#include "stability/passivity.h"
+#include "stability/velocity_filter.h"
 
 namespace zwidth::stability {
 namespace {

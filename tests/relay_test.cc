@@ -14,8 +14,9 @@
 #include <gtest/gtest.h>
 
 #include "model/error.h"
-#include "stability/haptic_loop.h"
+#include "stability/loop_options.h"
 #include "stability/relay.h"
+#include "stability/velocity_filter.h"
 #include "stability/zwidth.h"
 #include "tests/test_util.h"
 

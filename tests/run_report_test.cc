@@ -18,6 +18,7 @@
 #include "analysis/run.h"
 #include "io/atomic_file.h"
 #include "report/run_report.h"
+#include "stability/velocity_filter.h"
 #include "tests/run_input.h"
 #include "tests/test_util.h"
 

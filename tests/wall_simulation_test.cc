@@ -14,7 +14,6 @@
 #include "analysis/friction_amplitude.h"
 #include "io/stability_files.h"
 #include "stability/friction_prediction.h"
-#include "stability/haptic_loop.h"
 #include "stability/relay.h"
 #include "stability/zwidth.h"
 

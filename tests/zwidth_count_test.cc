@@ -20,8 +20,9 @@
 #include <gtest/gtest.h>
 
 #include "model/plant.h"
-#include "stability/haptic_loop.h"
+#include "stability/loop_options.h"
 #include "stability/numerics_internal.h"
+#include "stability/velocity_filter.h"
 #include "stability/zwidth.h"
 #include "tests/brute_force.h"
 

@@ -22,7 +22,9 @@
 #include <unsupported/Eigen/MatrixFunctions>
 
 #include "model/plant.h"
-#include "stability/haptic_loop.h"
+#include "model/state_space_internal.h"
+#include "stability/loop_options.h"
+#include "stability/velocity_filter.h"
 #include "stability/zwidth.h"
 #include "tests/brute_force.h"
 

@@ -14,7 +14,9 @@
 #include <hdf5.h>
 
 #include "io/frf_file.h"
+#include "io/frf_file_internal.h"
 #include "io/log.h"
+#include "io/log_internal.h"
 #include "io/stability_files.h"
 #include "model/error.h"
 
