@@ -174,7 +174,8 @@ io::ModelFile FitToModelFile(const ident::FrequencyResponse& frf, const fit::Fit
   if (r.status != fit::FitStatus::kConverged) throw ComputationError(r.message);
   io::ModelFile mf = io::FittedModelFile(r, frf, o, source);
   mf.linear = messages.linear;
-  if (encoder_step > 0.0) mf.encoder_step = encoder_step;
+  // Only a step the model file can hold (a log in raw counts, q = 1, is; q > 1 rad per count is a unit slip).
+  if (encoder_step >= io::kPlausibleMin && encoder_step <= io::kMaxEncoderStep) mf.encoder_step = encoder_step;
   if (ff.status == fit::FrictionFitStatus::kFitted) {
     mf.friction = ff.friction;
     mf.friction_std = ff.friction_std;

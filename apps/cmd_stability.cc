@@ -115,9 +115,7 @@ void AddBoundaryCommand(CLI::App& app) {
   AddSeedOption(b, &bf->seed, "seed of --monte-carlo");
   AddLoopFlags(b, &bf->loop);
   AddFrictionFlags(b, &bf->friction);
-  b->add_option("--encoder-step", bf->encoder_step,
-                "rad per encoder count, for the friction amplitude's validity and rest point (default: the model's "
-                "encoder_step, read from the log it was fitted on, else 0; 0: exact)");
+  b->add_option("--encoder-step", bf->encoder_step, kEncoderStepHelp);
   b->add_option("--amplitude-k-factor", bf->amplitude.k_factor,
                 "with friction: the amplitude A* below which friction holds a wall at this multiple of K_cr(B)")
       ->capture_default_str();
@@ -355,6 +353,7 @@ void AddRelayCommand(CLI::App& app) {
     bool json = false;
     LoopFlags loop;
     FrictionFlags friction;
+    double encoder_step = kNotGiven;  // else the model's
   };
   auto rf = std::make_shared<RelayFlags>();
   CLI::App* r = app.add_subcommand("relay", "simulate the relay experiment of section IV (Fig. 9)");
@@ -366,7 +365,7 @@ void AddRelayCommand(CLI::App& app) {
   r->add_option("--seconds", rf->o.seconds, "simulated time [s]")->capture_default_str();
   r->add_flag("--json", rf->json, "print only JSON on standard output");
   r->add_option("-o,--output", rf->trace, "trace CSV (t, relay, damping, command, position)");
-  r->add_option("--encoder-step", rf->o.encoder_step, "rad per encoder count (0: exact)")->capture_default_str();
+  r->add_option("--encoder-step", rf->encoder_step, kEncoderStepHelp);
   AddLoopFlags(r, &rf->loop);
   AddFrictionFlags(r, &rf->friction);
   r->callback([rf] {
@@ -380,6 +379,7 @@ void AddRelayCommand(CLI::App& app) {
     rf->o.loop = loops.front();
     rf->o.friction = ResolveFriction(rf->friction, mf);
     rf->o.actuator = ResolveActuator(rf->friction);
+    rf->o.encoder_step = analysis::EncoderStepOf(mf, Given(rf->encoder_step), "--encoder-step");
     std::string why;
     if (!rf->o.IsValid(&why)) throw InputError(why);  // the fields' flags: io/option_names.cc
     std::fprintf(stderr, "simulating %.3g s of relay feedback (d = %d, B = %g)...\n", rf->o.seconds,
@@ -460,9 +460,7 @@ void AddCheckCommand(CLI::App& app) {
                 "(exit 4 when none is unstable); 0: off (default 2)");
   AddLoopFlags(c, &cf->loop);
   AddFrictionFlags(c, &cf->friction);
-  c->add_option("--encoder-step", cf->encoder_step,
-                "rad per encoder count, for the friction prediction's validity and rest point (default: the model's "
-                "encoder_step, read from the log it was fitted on, else 0; 0: exact)");
+  c->add_option("--encoder-step", cf->encoder_step, kEncoderStepHelp);
   c->callback([cf] {
     io::ModelFile mf = io::ReadModelJsonFor(cf->model, "check --model");  // not const: --period may convert its delay
     CheckDelay(cf->delay, "--delay");

@@ -87,6 +87,7 @@ void AddWallCommand(CLI::App& app) {
     bool json = false;
     LoopFlags loop;
     FrictionFlags friction;
+    double encoder_step = kNotGiven;  // else the model's
   };
   auto f = std::make_shared<WallFlags>();
   CLI::App* w = app.add_subcommand("wall", "simulate a virtual wall on the device with friction, encoder, actuator");
@@ -97,7 +98,7 @@ void AddWallCommand(CLI::App& app) {
   w->add_option("--period", f->period, "sample period T [s] (default: the model's, else 0.001)");
   w->add_option("--seconds", f->o.seconds, "simulated time [s]")->capture_default_str();
   w->add_option("--initial-position", f->o.initial_position, "start at rest here [rad]")->capture_default_str();
-  w->add_option("--encoder-step", f->o.encoder_step, "rad per encoder count (0: exact)")->capture_default_str();
+  w->add_option("--encoder-step", f->encoder_step, kEncoderStepHelp);
   w->add_flag("--json", f->json, "print only JSON on standard output");
   w->add_option("-o,--output", f->trace, "trace CSV (t, position, measured, force)");
   AddLoopFlags(w, &f->loop);
@@ -112,6 +113,7 @@ void AddWallCommand(CLI::App& app) {
     f->o.loop = loops.front();
     f->o.friction = ResolveFriction(f->friction, mf);
     f->o.actuator = ResolveActuator(f->friction);
+    f->o.encoder_step = analysis::EncoderStepOf(mf, Given(f->encoder_step), "--encoder-step");
     std::string why;
     if (!f->o.IsValid(&why)) throw InputError(why);
     const stability::WallResult r = stability::SimulateWall(mf.plant, f->o);

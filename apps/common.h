@@ -64,6 +64,10 @@ class StageTimer {
 // Flags whose absence means "use the model's value".
 inline constexpr double kNotGiven = std::numeric_limits<double>::quiet_NaN();
 inline std::optional<double> Given(double flag) { return std::isnan(flag) ? std::nullopt : std::optional(flag); }
+// --encoder-step of the commands that read a model (analysis::EncoderStepOf).
+inline constexpr const char* kEncoderStepHelp =
+    "rad (m on a linear axis) per encoder count (default: the model's encoder_step, read from the log it was fitted "
+    "on, else 0; 0: exact)";
 // --period when given, else the model's sample_period_s, else 1 ms. A given
 // --period must lie in [io::kMinPeriodS, io::kMaxPeriodS] (the rates a log may
 // have, 10 Hz..1 MHz; the same rule as a model's sample_period_s). When T

@@ -354,7 +354,7 @@ ModelFile ParseModelJson(const std::string& text, const std::string& source) {
   }
   if (j.contains("encoder_step")) {
     const double q = Number(j, "encoder_step", source, "");
-    if (!(q >= kPlausibleMin && q <= 1.0)) {
+    if (!(q >= kPlausibleMin && q <= kMaxEncoderStep)) {
       char b[64];
       std::snprintf(b, sizeof b, "%g", q);
       Fail(source, std::string("key 'encoder_step' = ") + b + " is outside [1e-12, 1] (rad or m per count): remove "

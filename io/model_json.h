@@ -73,6 +73,9 @@ inline constexpr size_t kMaxJsonBytes = 64u << 20; // size of a model or scene f
 // A sample period, from a model's "sample_period_s" or a --period flag, lies
 // in [kMinPeriodS, kMaxPeriodS] s: the rates a log may have, 10 Hz..1 MHz.
 inline constexpr double kMinPeriodS = 1e-6, kMaxPeriodS = 0.1;
+// A model's "encoder_step" lies in [kPlausibleMin, kMaxEncoderStep] (rad or m
+// per count); a fit stores a step read from its log only there.
+inline constexpr double kMaxEncoderStep = 1.0;
 
 // "" when T lies in that range, else the message naming `name` ("--period",
 // "key 'sample_period_s'") with the likely slip (a rate or milliseconds typed

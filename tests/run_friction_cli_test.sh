@@ -48,6 +48,24 @@ for mine, theirs in zip(s["boundary"], b["delays"]):
     assert f["at_zero_B"]["B"] == 0 and f["at_zero_B"]["amplitude"] > 0, f
     assert abs(f["coulomb"] - run["friction"]["coulomb_pos"]) < 1e-15
 PY
+# relay (as wall, boundary, check) takes the model's encoder step unless --encoder-step is given.
+"$ZW" relay "$T/runf/model.json" --delay 2 --damping 0 --seconds 1 --json > "$T/relay.json" 2>/dev/null &&
+  "$ZW" relay "$T/runf/model.json" --delay 2 --damping 0 --seconds 1 --json --encoder-step 0 > "$T/relay0.json" 2>/dev/null ||
+  bad "relay on run's model"
+$PY - "$T" <<'PY' && ok "relay uses model.json's encoder_step, --encoder-step 0 an exact one" || bad "relay's encoder step"
+import json, os, sys
+t = sys.argv[1]
+m = json.load(open(os.path.join(t, "runf/model.json")))["encoder_step"]
+def step(j):  # the options' encoder_step, wherever the record keeps it
+    if isinstance(j, dict):
+        if "encoder_step" in j: return j["encoder_step"]
+        for v in j.values():
+            s = step(v)
+            if s is not None: return s
+    return None
+a, b = (step(json.load(open(os.path.join(t, f)))) for f in ("relay.json", "relay0.json"))
+assert a == m and b == 0, (a, b, m)
+PY
 grep -q "A\* = " "$T/runf/report.html" && ok "report.html shows A*" || bad "report.html lacks A*"
 # run --table2: summary.json's "table2" is compare --table2's on run's model (the same library call).
 "$ZW" compare "$T/runf/model.json" --table2 --coulomb-levels 0,0.004 --seconds 2 --json > "$T/t2.json" 2>/dev/null \
