@@ -12,6 +12,11 @@ namespace {
 
 std::atomic<std::mutex*> g_host{nullptr};
 
+void DestroyPlan(fftw_plan plan) {
+  std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+  fftw_destroy_plan(plan);
+}
+
 }  // namespace
 
 std::mutex& FftwPlannerMutex() {
@@ -22,7 +27,8 @@ std::mutex& FftwPlannerMutex() {
 
 void ShareFftwPlannerMutex(std::mutex* host) { g_host.store(host, std::memory_order_release); }
 
-// Both through internal::PlanCache: a plan per length made once (planning
+// Both through internal::PlanCache: a plan per length made once, for up to
+// PlanCache::kMaxCachedLengths lengths each (planning
 // even with FFTW_ESTIMATE computes the twiddle factors, sin and cos of every
 // bin: 12 % of a friction fit's time when each call planned), executed on
 // fftw_alloc'd copies (the alignment the shared plan needs).
@@ -33,7 +39,10 @@ std::vector<std::complex<double>> ForwardReal(std::vector<double> x) {
   double* in = fftw_alloc_real(n);
   fftw_complex* out = fftw_alloc_complex(n / 2 + 1);
   std::copy(x.begin(), x.end(), in);
-  fftw_execute_dft_r2c(internal::PlanCache::Get().For(n, in, out), in, out);
+  bool owned = false;
+  const fftw_plan plan = internal::PlanCache::Get().ForwardFor(n, in, out, &owned);
+  fftw_execute_dft_r2c(plan, in, out);
+  if (owned) DestroyPlan(plan);
   for (int k = 0; k <= n / 2; ++k) X[k] = {out[k][0], out[k][1]};
   fftw_free(in);
   fftw_free(out);
@@ -51,7 +60,10 @@ std::vector<double> InverseReal(std::vector<std::complex<double>> X, size_t n) {
     in[k][0] = v.real();
     in[k][1] = v.imag();
   }
-  fftw_execute_dft_c2r(internal::PlanCache::Get().InverseFor(m, in, out), in, out);
+  bool owned = false;
+  const fftw_plan plan = internal::PlanCache::Get().InverseFor(m, in, out, &owned);
+  fftw_execute_dft_c2r(plan, in, out);
+  if (owned) DestroyPlan(plan);
   std::copy(out, out + m, x.begin());
   fftw_free(in);
   fftw_free(out);

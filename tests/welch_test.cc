@@ -253,3 +253,24 @@ TEST(Fft, ACopyHandedTheHostsLockPlansUnderIt) {
   zwidth::ident::ShareFftwPlannerMutex(nullptr);
   EXPECT_EQ(&zwidth::ident::FftwPlannerMutex(), &own);
 }
+
+// ident::ForwardReal / InverseReal against a plain DFT written here, on more
+// lengths than their plan cache keeps (PlanCache::kMaxCachedLengths = 16): the
+// lengths past it are planned for the call and destroyed after it.
+TEST(Fft, ForwardAndInverseEqualAPlainDftOnFortyLengths) {
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> g;
+  for (size_t n = 3; n < 43; ++n) {
+    std::vector<double> x(n);
+    for (double& v : x) v = g(rng);
+    const std::vector<std::complex<double>> X = zwidth::ident::ForwardReal(x);
+    ASSERT_EQ(X.size(), n / 2 + 1);
+    for (size_t k = 0; k <= n / 2; ++k) {
+      std::complex<double> s = 0.0;
+      for (size_t i = 0; i < n; ++i) s += x[i] * std::polar(1.0, -2.0 * std::numbers::pi * double(k * i) / double(n));
+      EXPECT_LT(std::abs(X[k] - s), 1e-12 * n) << "n = " << n << ", bin " << k;
+    }
+    const std::vector<double> back = zwidth::ident::InverseReal(X, n);  // without the 1/n
+    for (size_t i = 0; i < n; ++i) EXPECT_NEAR(back[i] / double(n), x[i], 1e-12) << "n = " << n;
+  }
+}
