@@ -15,9 +15,7 @@ namespace {
 using namespace zwidth;
 
 void BM_FrictionFit30s(benchmark::State& state) {
-  model::Plant truth = model::PhantomTable1();
-  truth.b = 0.004;
-  truth.delay_samples = 1;
+  const model::Plant truth = testing::IssueThirtyTwoDevice();
   testing::FrictionLogOptions so;
   so.coulomb = 0.008;
   so.counts_per_rev = static_cast<int>(state.range(0));

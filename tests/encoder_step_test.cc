@@ -69,7 +69,7 @@ TEST(EncoderStep, AContinuousOrNoisyPositionHasNone) {
 TEST(EncoderStep, AStillOrShortLogCannotTell) {
   EXPECT_EQ(EncoderStep(std::vector<double>(5000, 0.25)), 0.0);
   EXPECT_EQ(EncoderStep(std::vector<double>{}), 0.0);
-  // Five moves of one count: too few to tell a grid from chance.
+  // Four moves of one count (at samples 1000-4000): too few to tell a grid from chance.
   std::vector<double> y(5000, 0.0);
   for (size_t i = 1000; i < 6000 && i < y.size(); i += 1000) for (size_t j = i; j < y.size(); ++j) y[j] += 1e-3;
   EXPECT_EQ(EncoderStep(y), 0.0);

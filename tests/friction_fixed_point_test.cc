@@ -34,9 +34,7 @@ class FrictionFixedPoint : public ::testing::TestWithParam<Case> {};
 
 TEST_P(FrictionFixedPoint, ReportedStdIsTheFixedPointsWithItsJacobianAtTheReturnedPoint) {
   const Case c = GetParam();
-  model::Plant truth = model::PhantomTable1();
-  truth.b = 0.004;
-  truth.delay_samples = 1;
+  const model::Plant truth = testing::IssueThirtyTwoDevice();
   testing::FrictionLogOptions so;
   so.seconds = 10;
   so.coulomb = c.coulomb_fraction * so.torque_rms;

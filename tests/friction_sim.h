@@ -95,6 +95,15 @@ inline void Advance(double m, double b, double fc, double U, double h, double* x
 
 }  // namespace friction_sim_internal
 
+// The device of issue 32's sweeps: Table I with b = 0.004 N m s/rad (friction
+// then dominates the damping) and a 1-sample input delay.
+inline model::Plant IssueThirtyTwoDevice() {
+  model::Plant p = model::PhantomTable1();
+  p.b = 0.004;
+  p.delay_samples = 1;
+  return p;
+}
+
 inline FrictionLog SimulateFrictionLog(const model::Plant& p, const FrictionLogOptions& o) {
   namespace fi = friction_sim_internal;
   const size_t n = static_cast<size_t>(std::llround(o.seconds * o.sample_rate_hz));

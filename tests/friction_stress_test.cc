@@ -34,9 +34,7 @@ class FrictionSweep : public ::testing::TestWithParam<Case> {};
 
 TEST_P(FrictionSweep, DoneWhenOfIssue32) {
   const Case c = GetParam();
-  model::Plant truth = model::PhantomTable1();
-  truth.b = 0.004;
-  truth.delay_samples = 1;
+  const model::Plant truth = testing::IssueThirtyTwoDevice();
   testing::FrictionLogOptions so;
   so.coulomb = c.coulomb_fraction * so.torque_rms;
   so.counts_per_rev = c.counts;
