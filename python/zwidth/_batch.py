@@ -96,6 +96,32 @@ def _run_on_threads(args, batch_id, call, rows, todo, serials, threads):
         pool.shutdown(wait=True)
 
 
+def _run_on_client(client, args, batch_id, call, rows, todo, serials):
+    """The units `todo` as tasks of a dask.distributed `client`, each row taken as its task ends and the rows
+    finished so far saved as on threads (every 2 s; a killed batch resumes them). Ctrl-C (KeyboardInterrupt):
+    the tasks not finished are cancelled, every finished row is saved at once, and the KeyboardInterrupt goes
+    on; so does an error of the cluster (a worker lost past dask's retries), after the same save. A task
+    already running on a worker cannot be stopped there (dask cancels its result, not its thread): such a
+    unit may still write its folder, but it is not in the table, so a re-run computes it again (its folder
+    replaced)."""
+    from distributed import as_completed
+    from . import _zwidth
+    n = len(todo)
+    futures = client.map(_unit_row, [args] * n, [batch_id] * n, todo, serials, [True] * n, [call] * n, pure=False)
+    index = {f.key: i for f, i in zip(futures, todo)}
+    try:
+        for f in as_completed(futures):
+            rows[index[f.key]] = f.result()
+            _zwidth._batch_progress(batch_id, rows)
+    except BaseException:
+        client.cancel([f for f in futures if not f.done()])
+        for f in futures:
+            if f.status == "finished" and rows[index[f.key]] is None:
+                rows[index[f.key]] = f.result()
+        _zwidth._batch_progress(batch_id, rows, now=True)
+        raise
+
+
 def _table_text(path):
     """The table at `path` as CSV text, read by the library (io::ReadBatchTable: CSV or HDF5, its rule)."""
     from . import _zwidth
@@ -134,11 +160,7 @@ def batch(logs=None, *, output, manifest=None, client=None, threads=None, **flag
     todo = [i for i, row in enumerate(rows) if row is None]
     serials = [units[i][0] for i in todo]
     if client is not None:
-        n = len(todo)
-        done = client.gather(client.map(_unit_row, [args] * n, [batch_id] * n, todo, serials, [True] * n, [call] * n,
-                                        pure=False))
-        for i, row in zip(todo, done):
-            rows[i] = row
+        _run_on_client(client, args, batch_id, call, rows, todo, serials)
     else:
         _run_on_threads(args, batch_id, call, rows, todo, serials, threads)
     text = _zwidth._batch_finish(args, batch_id, rows, call)
