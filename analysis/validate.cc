@@ -133,7 +133,7 @@ void FrequencyDomain(const model::StateSpace& sd, const io::Log& log, const Vali
   if (used == 0) throw InputError("no bin of the log's response has input power and coherence: nothing to compare");
   r->dof = 2 * used;
   r->chi2_per_dof = chi2 / r->dof;
-  r->chi2_limit = fit::Chi2PerDofLimit(r->dof, frf.bin_correlation);  // the fit verdict's rule
+  r->chi2_limit = fit::Chi2PerDofLimit(r->dof, frf);  // the fit verdict's rule
 }
 
 void Verdict(ValidationResult* r) {

@@ -256,7 +256,7 @@ std::string WalkDelay(const ident::FrequencyResponse& sub, const FitOptions& o, 
   // (chi2/dof above Chi2PerDofLimit), every start is screened at the two
   // neighbours too, and the walk goes on from the better.
   const int dof = 2 * static_cast<int>(bins->z.size()) - (2 + 4 * n);
-  const bool poor = rescreen_poor && 2.0 * fin->cost / std::max(1, dof) > Chi2PerDofLimit(dof, sub.bin_correlation);
+  const bool poor = rescreen_poor && 2.0 * fin->cost / std::max(1, dof) > Chi2PerDofLimit(dof, sub);
   bool rescreened = false;
   if (poor) {
     Screening again;
@@ -508,7 +508,7 @@ Fixed FitSingleOrder(const ident::FrequencyResponse& sub, const ident::ExcitedBa
   chosen.res.band = band;
   chosen.res.band_sample_rate_hz = sample_rate_hz;
   const bool suspect = chosen.res.status != FitStatus::kConverged || !SpuriousSections(chosen.res, o).empty() ||
-                       chosen.res.chi2_per_dof > Chi2Limit(chosen.res, sub.bin_correlation);
+                       chosen.res.chi2_per_dof > Chi2Limit(chosen.res, sub);
   if (o.num_modes < 1 || !o.retry_spurious || !suspect) return chosen;
   FitOptions lower = o;
   lower.auto_delay = false;

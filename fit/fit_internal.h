@@ -105,7 +105,7 @@ std::optional<model::Plant> LinearRationalStart(const ident::FrequencyResponse& 
 std::string Fmt(const char* fmt, double a, double b = 0, double c = 0, double d = 0);
 // "a", "a or b", "a, b, or c": the non-empty items as the alternatives of one advice sentence.
 std::string Alternatives(const std::vector<std::string>& items);
-double Chi2Limit(const FitResult& r, double kappa);  // chi2/dof above which the fit is poor
+double Chi2Limit(const FitResult& r, const ident::FrequencyResponse& frf);  // chi2/dof above which the fit is poor
 void JudgeQuality(const Fixed& fx, const ident::FrequencyResponse& sub, const FitOptions& o, FitResult* res);
 // The window's leakage bound on each section's damping (a reason or a warning
 // that suggests the local methods) and the robust method's distortion check.

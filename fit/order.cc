@@ -86,7 +86,7 @@ Fixed FitOrders(const ident::FrequencyResponse& sub, const ident::ExcitedBand& b
   // fit (the orders below the right one are all poor): the chosen one gets
   // it when it is poor.
   if (o.auto_delay && fits[pick].res.status == FitStatus::kConverged &&
-      fits[pick].res.chi2_per_dof > Chi2Limit(fits[pick].res, kappa)) {
+      fits[pick].res.chi2_per_dof > Chi2Limit(fits[pick].res, sub)) {
     std::vector<model::Plant> extra;
     if (pick > 0 && fits[pick - 1].res.status == FitStatus::kConverged) extra = GrowStarts(fits[pick - 1]);
     Fixed again = FitFixed(sub, o, pick, extra);

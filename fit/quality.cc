@@ -20,8 +20,8 @@ std::string Fmt(const char* fmt, double a, double b, double c, double d) {
   return s;
 }
 
-double Chi2Limit(const FitResult& r, double kappa) {
-  return Chi2PerDofLimit(r.num_residuals - r.num_parameters, kappa);
+double Chi2Limit(const FitResult& r, const ident::FrequencyResponse& frf) {
+  return Chi2PerDofLimit(r.num_residuals - r.num_parameters, frf);
 }
 
 // Leakage of the Welch window (a tapered one: bin_correlation > 1.2; a
@@ -139,7 +139,7 @@ void JudgeQuality(const Fixed& fx, const ident::FrequencyResponse& sub, const Fi
     res->reasons.push_back({std::move(code), std::move(msg), std::move(advice)});
   };
   const double kappa = std::max(1.0, sub.bin_correlation);
-  const double chi_limit = Chi2Limit(*res, sub.bin_correlation);
+  const double chi_limit = Chi2Limit(*res, sub);
   const std::string more_modes = MoreModesAdvice(o, *res);
   if (res->chi2_per_dof > chi_limit) {
     add("chi2_per_dof", Fmt("chi2/dof %.3g is above %.3g: the model does not explain the response within its std",
@@ -147,6 +147,14 @@ void JudgeQuality(const Fixed& fx, const ident::FrequencyResponse& sub, const Fi
         "try " + Alternatives({more_modes, o.auto_delay ? "" : "FitOptions::auto_delay",
                                "a band where the device is linear (BandOptions::fmin_hz/BandOptions::fmax_hz)",
                                "check for a mode above Nyquist or aliasing (eq. 1 cannot fit one)"}));
+  }
+  if (const double factor = Chi2SmallSampleFactor(sub); factor > 1.0) {
+    const double n = sub.effective_averages > 0.0 ? sub.effective_averages : sub.num_averages;
+    res->warnings.push_back(
+        Fmt("the response averages %.2g segments (Welch's effective count): its per-bin std is estimated from as "
+            "few, so a right model's chi2/dof is about %.2g and the verdict's limit is scaled to %.3g; more averages "
+            "(a longer log, or a shorter WelchOptions::window_length) make the verdict and the std firmer",
+            n, n > 2.0 ? n / (n - 2.0) : INFINITY, chi_limit));
   }
   // Runs test on every 3rd bin (Hann bins 3 apart are uncorrelated), or past
   // the correlation the estimator reports (a local method's window).

@@ -2,6 +2,7 @@
 // quality verdict, short logs (order selection: order_test.cc). Logs are
 // simulated by SimulateLog (tests/fit_devices.h), seeded, 1 kHz.
 #include <cmath>
+#include <complex>
 #include <cstdio>
 #include <numbers>
 #include <random>
@@ -247,6 +248,85 @@ TEST(FitQuality, DistortionAboveTheNoiseWhereTheRigidBodyIsSetIsAReason) {
     for (const auto& q : r.reasons) reason |= q.code == "nonlinear_distortion";
     EXPECT_EQ(reason, low_ratio > 1) << low_ratio;
     EXPECT_DOUBLE_EQ(r.distortion_to_noise, low_ratio);
+  }
+}
+
+}  // namespace
+}  // namespace zwidth::fit
+
+namespace zwidth::fit {
+namespace {
+
+// Chi2SmallSampleFactor's law, by a Monte Carlo of the estimator itself
+// written here: per bin, n segments U_i (complex normal), Y_i = H U_i + N_i,
+// H1 = sum conj(U) Y / sum |U|^2, its std from the coherence by
+// ident::CoherenceStd (per component), and the chi2 of the true H,
+// |H1 - H|^2 / (2 std^2). Its mean is n / (n - 2) (n/(n-1) F(2, 2n - 2)),
+// and the factor is that over its value at 8 averages.
+TEST(FitQuality, ChiSquareOfTheTrueResponseWithAnEstimatedStdHasTheMeanOfTheFLaw) {
+  std::mt19937_64 rng(20261204);
+  std::normal_distribution<double> g(0.0, std::sqrt(0.5));
+  const std::complex<double> H(0.3, -1.2);
+  auto mean_chi2 = [&](int n) {
+    const int bins = 400000 / n;
+    double sum = 0.0;
+    for (int b = 0; b < bins; ++b) {
+      double suu = 0.0, syy = 0.0;
+      std::complex<double> suy = 0.0;
+      for (int i = 0; i < n; ++i) {
+        const std::complex<double> u(g(rng), g(rng)), y = H * u + 0.7 * std::complex<double>(g(rng), g(rng));
+        suu += std::norm(u);
+        syy += std::norm(y);
+        suy += std::conj(u) * y;
+      }
+      const std::complex<double> h = suy / suu;
+      const double sd = ident::CoherenceStd(std::abs(h), std::norm(suy) / (suu * syy), n);
+      sum += std::norm(h - H) / (2.0 * sd * sd);
+    }
+    return sum / bins;
+  };
+  for (int n : {3, 4, 6, 8, 13}) {
+    const double measured = mean_chi2(n), law = n / (n - 2.0);
+    std::printf("n = %2d: mean chi2 of the true H %.4f, n/(n-2) %.4f\n", n, measured, law);
+    // n = 3: F(2, 4) has no finite variance; its sample mean converges slowly.
+    EXPECT_NEAR(measured / law, 1.0, n == 3 ? 0.08 : 0.02) << n;
+    ident::FrequencyResponse frf;
+    frf.estimator = "welch-h1";
+    frf.effective_averages = n;
+    EXPECT_NEAR(Chi2SmallSampleFactor(frf), n >= 8 ? 1.0 : law / (8.0 / 6.0), 1e-12) << n;
+    frf.estimator = "lpm";
+    EXPECT_EQ(Chi2SmallSampleFactor(frf), 1.0);
+  }
+}
+
+// A right model on a 10 s log (the default window leaves 3 segments): chi2/dof
+// near 3, as the law says; before the factor (2026-12-04) every such fit was
+// poor ("chi2/dof 2.93 is above 1.66") with advice to look for aliasing.
+// A model one section short is still poor there.
+TEST(FitQuality, TenSecondLogOfARightModelIsGoodAndAMissingSectionStillPoor) {
+  for (uint64_t seed : {31, 32, 33}) {
+    const model::Plant p = Device(kPoles[1]);
+    model::SimulateOptions so;
+    so.seed = seed;
+    so.seconds = 10;
+    so.bandwidth_hz = 450;
+    const model::SimulatedLog log = model::SimulateLog(p, so);
+    const ident::FrequencyResponse frf = ident::EstimateFrequencyResponse(
+        log.torque, log.position, 1000.0, ident::WelchOptions{.window_length = ident::DefaultWindowLength(1000.0, log.torque.size())});
+    ASSERT_EQ(frf.num_averages, 3);
+    FitOptions o;
+    o.num_modes = 1;
+    const FitResult r = FitModel(frf, o);
+    ASSERT_EQ(r.status, FitStatus::kConverged);
+    std::printf("seed %d: chi2/dof %.3f, %s\n", static_cast<int>(seed), r.chi2_per_dof, ToString(r.quality).c_str());
+    EXPECT_GT(r.chi2_per_dof, 2.0);  // the small-sample inflation is real
+    EXPECT_EQ(r.quality, FitQuality::kGood) << r.BriefReport();
+    bool warned = false;
+    for (const std::string& w : r.warnings) warned |= w.find("effective count") != std::string::npos;
+    EXPECT_TRUE(warned);
+    o.num_modes = 0;
+    const FitResult under = FitModel(frf, o);
+    EXPECT_EQ(under.quality, FitQuality::kPoor);
   }
 }
 
