@@ -135,6 +135,7 @@ StateSpace WithDelayStates(const StateSpace& s) {
   for (int j = 1; j < k; ++j) out.A(n + j, n + j - 1) = 1.0;
   out.B(n) = 1.0;
   out.C.head(n) = s.C;
+  out.C(n + k - 1) = s.D;  // y_t = C x_t + D u_{t-k}, u_{t-k} = r_k
   out.D = 0.0;  // the input reaches the output through the register only
   out.period_s = s.period_s;
   out.delay_samples = 0;

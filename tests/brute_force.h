@@ -1,4 +1,4 @@
-// Independent brute force for the Z-width tests (zwidth_test, haptic_loop_test,
+// Independent brute force for the Z-width tests (zwidth_test, closed_loop_test, hand_test,
 // zwidth_stress_test): closed-loop roots from companion matrices.
 #pragma once
 
@@ -93,7 +93,7 @@ inline double BruteForce::KCritical(double B, double k_lo, double k_hi) const {
 
 namespace zwidth::stability {
 
-// Independent brute force for the haptic loop (haptic_loop_test): the closed
+// Independent brute force for the haptic loop (closed_loop_test, hand_test): the closed
 // loop as one discrete state-space matrix, its eigenvalues by Eigen.
 // States: the sampled plant x (n), the previous output y_{k-1}, the velocity
 // filter in transposed direct form II (L states), and the delay line of the

@@ -183,10 +183,5 @@ TEST(Fit, OneIterationIsReportedAsNoConvergence) {
   EXPECT_NE(r.message.find("did not converge"), std::string::npos) << r.message;
 }
 
-TEST(Fit, DefaultOptionsAreValid) {
-  std::string why;
-  EXPECT_TRUE(FitOptions{}.IsValid(&why)) << why;
-}
-
 }  // namespace
 }  // namespace zwidth::fit

@@ -142,37 +142,6 @@ TEST(FrictionFit, LinearDeviceIsNotFlagged) {
   }
 }
 
-TEST(FrictionFitOptions, DefaultsAreValidAndBadFieldsAreNamed) {
-  std::string why;
-  EXPECT_TRUE(FrictionFitOptions{}.IsValid(&why)) << why;
-  FrictionFitOptions o;
-  o.cutoff_hz = -1;
-  EXPECT_FALSE(o.IsValid(&why));
-  EXPECT_NE(why.find("cutoff_hz"), std::string::npos);
-  o = {};
-  o.min_speed_fraction = 1.0;
-  EXPECT_FALSE(o.IsValid(&why));
-  EXPECT_NE(why.find("min_speed_fraction"), std::string::npos);
-  o = {};
-  o.iterations = 0;
-  EXPECT_FALSE(o.IsValid(&why));
-  EXPECT_NE(why.find("iterations"), std::string::npos);
-  o = {};
-  o.detection_z = 0;
-  EXPECT_FALSE(o.IsValid(&why));
-  EXPECT_NE(why.find("detection_z"), std::string::npos);
-}
-
-TEST(FrictionModel, NamesRoundTrip) {
-  for (FrictionModel m : {FrictionModel::kNone, FrictionModel::kAuto, FrictionModel::kCoulomb}) {
-    FrictionModel back = FrictionModel::kNone;
-    EXPECT_TRUE(FrictionModelFromString(ToString(m), &back));
-    EXPECT_EQ(back, m);
-  }
-  FrictionModel x;
-  EXPECT_FALSE(FrictionModelFromString("viscous", &x));
-}
-
 // The generator's stick-slip: with F_c above every torque sample the body
 // never moves; with F_c = 0 it never sticks.
 TEST(FrictionSim, SticksUnderLargeFrictionAndSlidesWithout) {

@@ -51,7 +51,7 @@ PY
   && same_frf "$T/ref.csv" "$T/sc_frf.csv" 1e-9 && ok "--input-scale/--output-scale undo the units" || { bad "scales"; cat "$T/err"; }
 
 # .mat v6 (uncompressed) and v7 (compressed) written by Octave from the same
-# numbers (Octave cannot write -v7.3; log_test covers it via libmatio).
+# numbers (Octave cannot write -v7.3; log_mat_test covers it via libmatio).
 if command -v octave >/dev/null 2>&1; then
   (cd "$T" && timeout 300 octave --no-gui --quiet --eval "d = dlmread('good.csv', ',', 1, 0); t = d(:,1); u = d(:,2); Theta = d(:,3); save('-v6', 'o6.mat', 't', 'u', 'Theta'); save('-v7', 'o7.dat', 't', 'u', 'Theta'); s.u = u; s.Theta = Theta; s.t = t; save('-v7', 'os.mat', 's');" >/dev/null 2>&1)
   for f in o6.mat o7.dat; do

@@ -45,7 +45,7 @@ struct RandomPlantRanges {
 // used only by cap_zero_below_nyquist.
 model::Plant RandomPlant(std::mt19937_64& rng, const RandomPlantRanges& r, int modes, double T = 1e-3);
 
-// A plausible device (haptic_loop_test, zwidth_test): m 10^-3.5..10^-1,
+// A plausible device (hand_test, closed_loop_test, zwidth_test): m 10^-3.5..10^-1,
 // b / m 10^0.3..10^1.5 rad/s, modes 30-400 Hz with damping ratios 0.002-0.3,
 // antiresonances 0.7-1.3 of their resonance.
 RandomPlantRanges PlausibleDevice();

@@ -14,6 +14,9 @@
 #include "model/plant.h"
 #include "stability/uncertainty.h"
 #include "stability/zwidth.h"
+#include "stability/loop_options.h"
+#include "stability/velocity_filter.h"
+#include "tests/hands.h"
 #include "tests/test_util.h"
 
 namespace zwidth::stability {
@@ -137,6 +140,45 @@ TEST(Uncertainty, RejectsALogVarianceBeyondTheBound) {
       EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
     }
   }
+}
+
+// Moved from haptic_loop_test.cc.
+TEST(HapticLoop, KcrStdWithFilterAndHandMatchesFiniteDifferencesOfKcr) {
+  // Implicit differentiation (stability/uncertainty.h) against K_CR(B)
+  // recomputed on perturbed plants: J Sigma J^T with a seeded diagonal covariance.
+  std::mt19937_64 rng(21);
+  int compared = 0;
+  for (int k = 0; k < 3; ++k) {
+    const model::Plant p = test::RandomPlausibleDevice(rng, 1 + k);
+    LoopOptions l;
+    SetLowPassFilter(40.0 + 30.0 * k, 1e-3, &l);
+    if (k > 0) l.hand = HandOf(k, p);
+    const int d = 2 + 2 * k, np = NumLogParameters(p);
+    std::vector<double> cov(np * np, 0.0), var(np);
+    std::uniform_real_distribution<double> u(1e-5, 1e-3);
+    for (int i = 0; i < np; ++i) cov[i * np + i] = var[i] = u(rng);
+    const ZWidth z(p, 1e-3, d, l);
+    const DelaySummary s = z.Summarize();
+    std::vector<CriticalPoint> pts;
+    for (double f : {0.0, 0.3, 0.6}) pts.push_back(z.At(f * s.B_max_from_zero));
+    const std::vector<double> sd = KcrStd(p, cov, 1e-3, d, pts, {}, l);
+    for (size_t j = 0; j < pts.size(); ++j) {
+      if (!(pts[j].K_cr > 0 && std::isfinite(pts[j].K_cr))) continue;
+      double v = 0.0;
+      for (int i = 0; i < np; ++i) {
+        std::vector<double> dx(np, 0.0);
+        dx[i] = 1e-5;
+        const double kp = ZWidth(PerturbLog(p, dx), 1e-3, d, l).At(pts[j].B).K_cr;
+        dx[i] = -1e-5;
+        const double km = ZWidth(PerturbLog(p, dx), 1e-3, d, l).At(pts[j].B).K_cr;
+        const double g = (kp - km) / 2e-5;
+        v += g * g * var[i];
+      }
+      EXPECT_NEAR(sd[j], std::sqrt(v), 1e-4 * std::sqrt(v)) << "k=" << k << " B=" << pts[j].B;
+      ++compared;
+    }
+  }
+  EXPECT_GE(compared, 6);
 }
 
 }  // namespace

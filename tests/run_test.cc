@@ -1,4 +1,4 @@
-// analysis::Analyse (the `run` pipeline after the estimate and the fit) on a
+// analysis/run.h: analysis::Analyse (the `run` pipeline after the estimate and the fit) on a
 // synthetic model (tests/run_input.h), checked against the exact ZOH response
 // of model/ and against identities (report::WriteRunReport: run_report_test.cc).
 #include <cmath>
