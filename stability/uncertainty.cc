@@ -181,7 +181,7 @@ struct BranchSlopes {
   Eigen::VectorXd K_x;
   double K_B = kNaN;
 };
-BranchSlopes Branch(const CrossingCondition& cc, int p, double th, double B) {
+BranchSlopes Branch(const CrossingCondition& cc, int p, double th, double B, bool with_K_B = true) {
   BranchSlopes s;
   s.K_x.resize(p);
   const bool at_pi = CrossingCondition::AtPi(th);
@@ -193,6 +193,7 @@ BranchSlopes Branch(const CrossingCondition& cc, int p, double th, double B) {
     const double dth = Wx.imag() / den;
     s.K_x[i] = Wx.real() + (Wth.real() - B * Vth.real()) * dth;
   }
+  if (!with_K_B) return s;
   const std::complex<double> V = cc.V(th);
   s.K_B = at_pi ? -V.real() : (Wth.real() - B * Vth.real()) * (-V.imag() / den) - V.real();
   return s;
@@ -236,7 +237,7 @@ std::vector<double> KcrStd(const PerturbedPlants& pl, const std::vector<double>&
     const CriticalPoint& c = points[k];
     if (c.K_cr == 0.0) { out[k] = 0.0; continue; }
     if (!std::isfinite(c.K_cr) || !std::isfinite(c.f_cr_hz)) continue;
-    out[k] = Quad(Branch(cc, p, cc.theta_of(c.f_cr_hz), c.B).K_x, S);
+    out[k] = Quad(Branch(cc, p, cc.theta_of(c.f_cr_hz), c.B, /*with_K_B=*/false).K_x, S);
   }
   return out;
 }
