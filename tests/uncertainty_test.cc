@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <ostream>
 #include <random>
 #include <string>
 #include <vector>
@@ -94,6 +95,7 @@ INSTANTIATE_TEST_SUITE_P(TableOne, UncertaintyDelays, ::testing::Values(2, 8), t
 // interval from 0+ closes (its B_max lies in a reopened band past it, which
 // the implicit rows do not cover: differenced).
 struct ImplicitCase { const char* name; model::Plant plant; int delay; bool b_max_at_zero_k = true; };
+void PrintTo(const ImplicitCase& c, std::ostream* os) { *os << c.name; }
 class UncertaintyImplicit : public ::testing::TestWithParam<ImplicitCase> {};
 
 TEST_P(UncertaintyImplicit, ImplicitDerivativesEqualFiniteDifferences) {
