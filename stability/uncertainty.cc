@@ -224,6 +224,27 @@ std::optional<Crossing> CrossingNear(const ZWidth& z, double B, double th) {
   return best;
 }
 
+// Two crossings on two branches that tie (the same K) at B, near theta1 and
+// theta2: K_1(B, x) = K_2(B, x) moves B by dB/dx = -(K_1,x - K_2,x) /
+// (K_1,B - K_2,B); upper is the branch with the larger K (either: they are
+// equal there). nullopt when the crossings are not found, do not tie to
+// 1e-6, or cross at the same slope.
+struct Tie {
+  Eigen::VectorXd B_x;
+  BranchSlopes upper;
+};
+std::optional<Tie> TieAt(const ZWidth& z, const CrossingCondition& cc, int p, double B, double th1, double th2) {
+  const std::optional<Crossing> c1 = CrossingNear(z, B, th1), c2 = CrossingNear(z, B, th2);
+  if (!c1 || !c2 || c1->theta == c2->theta ||
+      std::abs(c1->K - c2->K) > 1e-6 * std::max(std::abs(c1->K), std::abs(c2->K))) {
+    return std::nullopt;
+  }
+  const BranchSlopes s1 = Branch(cc, p, c1->theta, B), s2 = Branch(cc, p, c2->theta, B);
+  const double dkb = s1.K_B - s2.K_B;
+  if (!std::isfinite(dkb) || !(std::abs(dkb) > 1e-12 * (std::abs(s1.K_B) + std::abs(s2.K_B)))) return std::nullopt;
+  return Tie{-(s1.K_x - s2.K_x) / dkb, c1->K >= c2->K ? s1 : s2};
+}
+
 }  // namespace
 
 std::vector<double> KcrStd(const PerturbedPlants& pl, const std::vector<double>& cov, int delay,
@@ -291,7 +312,8 @@ SummaryStd FromRows(const Eigen::MatrixXd& J, const Eigen::MatrixXd& S, const De
 // - K_CR^max at that corner: K_1,x + K_1,B dB_t/dx; at the corner where the
 //   interval from 0+ closes (B_max_from_zero): K_x + K_B dB_0/dx; at a
 //   smooth interior maximum (K_B = 0 there): K_x; at B = 0: K_CR(0)'s row.
-// - B_max at B_max_from_zero, the curve's K = 0 point: ZeroKSlope.
+// - B_max at B_max_from_zero, the curve's K = 0 point: ZeroKSlope; at a
+//   reopened band's end where its interval's two ends tie: as B_t.
 Eigen::MatrixXd ImplicitRows(const ZWidth& z, const PerturbedPlants& pl, int delay, const DelaySummary& nom,
                              const LoopOptions& loop) {
   const int p = NumLogParameters(pl.nominal.plant());
@@ -311,16 +333,10 @@ Eigen::MatrixXd ImplicitRows(const ZWidth& z, const PerturbedPlants& pl, int del
   // The two branches that tie at B_t.
   std::optional<BranchSlopes> winner;
   if (nom.has_transition && std::isfinite(nom.B_t)) {
-    const std::optional<Crossing> c1 = CrossingNear(z, nom.B_t, cc.theta_of(nom.f_before_hz));
-    const std::optional<Crossing> c2 = CrossingNear(z, nom.B_t, cc.theta_of(nom.f_after_hz));
-    if (c1 && c2 && c1->theta != c2->theta &&
-        std::abs(c1->K - c2->K) <= 1e-6 * std::max(std::abs(c1->K), std::abs(c2->K))) {
-      const BranchSlopes s1 = Branch(cc, p, c1->theta, nom.B_t), s2 = Branch(cc, p, c2->theta, nom.B_t);
-      const double dkb = s1.K_B - s2.K_B;
-      if (std::isfinite(dkb) && std::abs(dkb) > 1e-12 * (std::abs(s1.K_B) + std::abs(s2.K_B))) {
-        J.row(1) = (-(s1.K_x - s2.K_x) / dkb).transpose();
-        winner = c1->K >= c2->K ? s1 : s2;
-      }
+    if (const std::optional<Tie> t =
+            TieAt(z, cc, p, nom.B_t, cc.theta_of(nom.f_before_hz), cc.theta_of(nom.f_after_hz))) {
+      J.row(1) = t->B_x.transpose();
+      winner = t->upper;
     }
   }
   // K_CR^max, as SummarizeNear finds it.
@@ -338,8 +354,26 @@ Eigen::MatrixXd ImplicitRows(const ZWidth& z, const PerturbedPlants& pl, int del
   } else if (has_k0) {
     J.row(2) = J.row(0);
   }
-  if (std::isfinite(nom.B_max) && nom.B_max > 0.0 && b0_x && std::abs(nom.B_max - B0) <= 1e-9 * nom.B_max) {
-    J.row(3) = b0_x->transpose();
+  if (std::isfinite(nom.B_max) && nom.B_max > 0.0) {
+    if (b0_x && std::abs(nom.B_max - B0) <= 1e-9 * nom.B_max) {
+      J.row(3) = b0_x->transpose();
+    } else if (nom.B_max > B0 * (1 + 1e-9)) {
+      // A reopened band's end: its last interval closes where its two ends,
+      // crossings on two branches, tie (a fold of one branch, where they
+      // merge, is left to the differences).
+      const std::vector<KInterval> iv = z.StableIntervals(nom.B_max * (1 - 1e-7));
+      const KInterval* last = nullptr;
+      for (const KInterval& v : iv) {
+        if (std::isfinite(v.K_hi) && v.K_lo > 0.0 && (!last || v.K_hi - v.K_lo < last->K_hi - last->K_lo)) last = &v;
+      }
+      if (last && std::isfinite(last->f_lo_hz) && std::isfinite(last->f_hi_hz) &&
+          std::abs(cc.theta_of(last->f_lo_hz) - cc.theta_of(last->f_hi_hz)) > 1e-2) {
+        if (const std::optional<Tie> t =
+                TieAt(z, cc, p, nom.B_max, cc.theta_of(last->f_lo_hz), cc.theta_of(last->f_hi_hz))) {
+          J.row(3) = t->B_x.transpose();
+        }
+      }
+    }
   }
   return J;
 }

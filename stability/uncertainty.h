@@ -24,7 +24,8 @@
 //   above; B_t where two branches tie: dB_t/dx = -(K_1,x - K_2,x) /
 //   (K_1,B - K_2,B); K_CR^max at a corner through dB_t/dx or dB_0/dx; B_max
 //   at the curve's K = 0 point B_0: W = B V there, so with a = W_theta -
-//   B V_theta, dB_0/dx = Im(conj(a) W_x) / Im(conj(a) V)): O(p) evaluations of
+//   B V_theta, dB_0/dx = Im(conj(a) W_x) / Im(conj(a) V); at a reopened band's
+//   end where its interval's two ends tie, as B_t): O(p) evaluations of
 //   G_d. Elsewhere each quantity is recomputed near its nominal value
 //   (ZWidth::SummarizeNear) for x +- log_step e_i (2 p Z-widths). Valid where
 //   the quantity is a smooth function of x (not where, e.g., B_max jumps
