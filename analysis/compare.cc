@@ -129,8 +129,9 @@ DelayStability SummarizeDelays(const io::ModelFile& mf, double T, const std::vec
     pert = std::make_unique<stability::PerturbedPlants>(stability::SamplePerturbedPlants(mf.plant, T));
   }
   for (int d : delays) {
-    r.summaries.push_back(stability::ZWidth(sp, d).Summarize());
-    r.stds.push_back(r.has_std ? stability::SummaryStdDelta(*pert, mf.log_covariance, d, r.summaries.back())
+    const stability::ZWidth z(sp, d);
+    r.summaries.push_back(z.Summarize());
+    r.stds.push_back(r.has_std ? stability::SummaryStdDelta(z, *pert, mf.log_covariance, d, r.summaries.back())
                                : stability::SummaryStd{});
   }
   return r;

@@ -111,7 +111,7 @@ PlantStability AnalysePlantStability(const io::ModelFile& fitted, double T, cons
   ParallelFor(num_std + nd * chunks, [&](size_t task) {
     if (task < num_std) {
       const size_t i = num_std - 1 - task;  // the longest delay first
-      r.stds[i] = stability::SummaryStdDelta(*perturbed, model.log_covariance, delays[i], r.summaries[i], loop);
+      r.stds[i] = stability::SummaryStdDelta(r.zwidths[i], *perturbed, model.log_covariance, delays[i], r.summaries[i]);
       return;
     }
     const size_t i = (task - num_std) / chunks, c = (task - num_std) % chunks;

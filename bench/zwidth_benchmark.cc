@@ -489,14 +489,28 @@ void BM_LongDelayBoundary(benchmark::State& state) {
 }
 BENCHMARK(BM_LongDelayBoundary)->Arg(100)->Arg(170)->Arg(240)->Unit(benchmark::kMillisecond)->Iterations(1);
 
+// Table I's rigid body with n sections (0-4): its two, then sections at 45
+// and 70 Hz (pole 8 % above its zero, zeta 0.1).
+model::Plant PlantWithSections(int n) {
+  model::Plant p = model::PhantomTable1();
+  std::vector<model::Mode> modes = p.modes;
+  for (double f : {45.0, 70.0}) {
+    const double w = 2 * std::numbers::pi * f * 1.08, v = 2 * std::numbers::pi * f;
+    modes.push_back({w, 2 * 0.1 * w, v, 2 * 0.1 * v});
+  }
+  modes.resize(n);
+  p.modes = modes;
+  return p;
+}
 // `zwidth run`'s boundary stage (analysis::AnalysePlantStability): Table I
+// (arg: the number of sections, PlantWithSections; 2 = Table I itself)
 // with the seeded covariance of BM_DeltaMethodStd, delays 2, 4, 8, 1000 B
 // values each: summaries and their std, intervals, K_CR and its std, passive
 // K; on the threads of model/parallel.h. Error: largest relative difference
 // of K_CR from the brute force's (tests/brute_force.h) on every 50th row.
 void BM_RunBoundary(benchmark::State& state) {
   io::ModelFile m;
-  m.plant = model::PhantomTable1();
+  m.plant = PlantWithSections(static_cast<int>(state.range(0)));
   const int n = stability::NumLogParameters(m.plant);
   m.log_covariance.assign(n * n, 0.0);
   std::mt19937_64 rng(3);
@@ -520,13 +534,14 @@ void BM_RunBoundary(benchmark::State& state) {
   }
   state.counters["max_rel_err_K_cr_vs_brute_force"] = err;
   state.counters["rows"] = static_cast<double>(r->rows.size());
+  state.counters["params"] = n;
 }
-BENCHMARK(BM_RunBoundary)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RunBoundary)->DenseRange(0, 4)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 
 // Delta-method std at d = 2 on Table I with a seeded covariance (1% relative
-// std): K_CR(B) on a 1000-point grid (implicit differentiation) plus the four
-// summary quantities (local finite differences). Error: largest relative
-// change of the summary std when the difference step is halved.
+// std): K_CR(B) on a 1000-point grid plus the four summary quantities (both
+// by implicit differentiation, SummaryStdDelta). Error: largest relative
+// change of the summary std when the difference step of W_x is halved.
 void BM_DeltaMethodStd(benchmark::State& state) {
   const model::Plant p = model::PhantomTable1();
   const int n = stability::NumLogParameters(p);
@@ -554,6 +569,43 @@ void BM_DeltaMethodStd(benchmark::State& state) {
   state.counters["max_rel_change_half_step"] = err;
 }
 BENCHMARK(BM_DeltaMethodStd)->Unit(benchmark::kMillisecond);
+
+// The summary std (K_CR(0), B_t, K_CR^max, B_max) of one delay against the
+// number of sections, 0-4 (2-18 log parameters): Table I's rigid body, its
+// two sections, and sections added at 45 and 70 Hz (pole 8 % above its zero,
+// zeta 0.1), d = 2, a seeded diagonal covariance (1 % relative std); the
+// nominal Z-width and the perturbed plants are built once, outside the loop
+// (run shares them; PlantWithSections above BM_RunBoundary). Arg 1: 0 = SummaryStdDelta (implicit differentiation on
+// the nominal crossings, finite differences only where they do not apply),
+// 1 = SummaryStdFiniteDifference (2 p perturbed Z-widths). Error: the largest
+// relative difference between the two (the differences' truncation error).
+void BM_SummaryStd(benchmark::State& state) {
+  const model::Plant p = PlantWithSections(static_cast<int>(state.range(0)));
+  const int n = stability::NumLogParameters(p);
+  std::vector<double> cov(n * n, 0.0);
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> g;
+  for (int i = 0; i < n; ++i) cov[i * n + i] = 1e-4 * (1.0 + 0.5 * std::abs(g(rng)));
+  const stability::PerturbedPlants pl = stability::SamplePerturbedPlants(p, 1e-3);
+  const stability::ZWidth z(pl.nominal, 2);
+  const stability::DelaySummary s = z.Summarize();
+  stability::SummaryStd sd;
+  for (auto _ : state) {
+    sd = state.range(1) == 0 ? stability::SummaryStdDelta(z, pl, cov, 2, s)
+                             : stability::SummaryStdFiniteDifference(pl, cov, 2, s);
+    benchmark::DoNotOptimize(sd);
+  }
+  const stability::SummaryStd im = stability::SummaryStdDelta(z, pl, cov, 2, s);
+  const stability::SummaryStd fd = stability::SummaryStdFiniteDifference(pl, cov, 2, s);
+  double err = 0;
+  for (auto [a, b] : {std::pair{im.K_cr_at_zero_B, fd.K_cr_at_zero_B}, {im.B_t, fd.B_t}, {im.K_cr_max, fd.K_cr_max},
+                      {im.B_max, fd.B_max}}) {
+    if (std::isfinite(b) && b > 0) err = std::max(err, std::abs(a / b - 1));
+  }
+  state.counters["params"] = n;
+  state.counters["max_rel_diff_implicit_vs_fd"] = err;
+}
+BENCHMARK(BM_SummaryStd)->ArgsProduct({{0, 1, 2, 3, 4}, {0, 1}})->Unit(benchmark::kMillisecond);
 
 // The relay experiment at d = 2: record length (s) against the error of the
 // estimate and of the paper's reading, at B = 0 and 0.9 B_t (where the plain

@@ -85,6 +85,9 @@ class ZohResidual : public ceres::CostFunction {
   struct CoefficientGradients {
     std::vector<double> dI, dea, dca;  // integrator, rigid pole, rigid coefficient [param]
     std::vector<cd> dE, dC;            // section pole, coefficient [mode * p_ + param]
+    // dE of mode i is non-zero only in [de_lo[i], de_hi[i]) (its pole's own
+    // omega and damping ratio): the pole's terms are added only there.
+    std::vector<int> de_lo, de_hi;
   };
   bool Gradients(const double* x, CoefficientGradients* d) const {
     d->dI.assign(p_, 0.0); d->dea.assign(p_, 0.0); d->dca.assign(p_, 0.0);
@@ -109,6 +112,15 @@ class ZohResidual : public ceres::CostFunction {
           d->dE[i * p_ + q] = cd(fj.pole[i].re.v[q - s], fj.pole[i].im.v[q - s]);
           d->dC[i * p_ + q] = cd(fj.coeff[i].re.v[q - s], fj.coeff[i].im.v[q - s]);
         }
+      }
+    }
+    d->de_lo.assign(n_, p_);
+    d->de_hi.assign(n_, 0);
+    for (int i = 0; i < n_; ++i) {
+      for (int q = 0; q < p_; ++q) {
+        if (d->dE[i * p_ + q] == cd(0.0)) continue;
+        d->de_lo[i] = std::min(d->de_lo[i], q);
+        d->de_hi[i] = q + 1;
       }
     }
     return true;
@@ -147,9 +159,14 @@ class ZohResidual : public ceres::CostFunction {
           const cd b1 = c * q1 * q1, b2 = std::conj(c) * q2 * q2;
           const cd* de = &dE[i * p_];
           const cd* dc = &dC[i * p_];
-          for (int q = 0; q < p_; ++q) {
+          // The pole's terms b1 de + b2 conj(de) where de can be non-zero;
+          // elsewhere they are exact zeros, left out (the same sums, bit for bit).
+          const int lo = d.de_lo[i], hi = std::max(lo, d.de_hi[i]);
+          for (int q = 0; q < lo; ++q) grad[q] += dc[q] * q1 + std::conj(dc[q]) * q2;
+          for (int q = lo; q < hi; ++q) {
             grad[q] += dc[q] * q1 + b1 * de[q] + std::conj(dc[q]) * q2 + b2 * std::conj(de[q]);
           }
+          for (int q = hi; q < p_; ++q) grad[q] += dc[q] * q1 + std::conj(dc[q]) * q2;
         }
       }
       const double w = bins_->weight[k];

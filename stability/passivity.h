@@ -26,7 +26,7 @@ namespace zwidth::stability {
 struct PassivityOptions {
   int min_grid_points = 4096;     // uniform theta grid on [0, pi], >= 64
   int grid_points_per_delay = 64; // extra points per sample of delay (+ filter order), >= 8
-  double theta_tolerance = 1e-12; // golden-section refinement of each local minimum [rad], in (0, 1e-3)
+  double theta_tolerance = 1e-12; // Brent refinement of each local minimum [rad], in (0, 1e-3)
   bool IsValid(std::string* why) const;
 };
 

@@ -8,6 +8,7 @@
 #include <complex>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <random>
 
 #include <Eigen/Dense>
@@ -125,56 +126,139 @@ std::vector<double> KcrStd(const model::Plant& plant, const std::vector<double>&
   return KcrStd(SamplePerturbedPlants(plant, T, loop.hand, o), cov, delay, points, loop);
 }
 
+namespace {
+
+// The crossing condition K + B V = W on z = e^{j theta} of one delay, on the
+// perturbed plants: W = -z^D / G_d (by the state-space solve, as the delta
+// method was validated with), V = F (1 - z^-1) / T, their theta derivatives
+// (central differences, step 1e-6; V_theta exact without a filter) and W_x by
+// central differences over the perturbed plants (step log_step).
+class CrossingCondition {
+ public:
+  CrossingCondition(const PerturbedPlants& pl, int delay, const LoopOptions& loop)
+      : pl_(pl), loop_(loop), T_(pl.nominal.period_s()), D_(delay + pl.nominal.plant().delay_samples) {}
+  static bool AtPi(double th) { return std::abs(th - std::numbers::pi) < 1e-12; }
+  std::complex<double> V(double th) const {
+    const std::complex<double> zi = std::polar(1.0, -th);
+    std::complex<double> F = 1.0;
+    if (loop_.HasFilter()) {
+      std::complex<double> nb = 0.0, na = 0.0;
+      for (size_t i = loop_.filter_b.size(); i-- > 0;) nb = nb * zi + loop_.filter_b[i];
+      for (size_t i = loop_.filter_a.size(); i-- > 0;) na = na * zi + loop_.filter_a[i];
+      F = nb / na;
+    }
+    return F * (1.0 - zi) / T_;
+  }
+  std::complex<double> W(const SampledPlant& g, double th) const {
+    return -std::polar(1.0, th * D_) / g.GdStateSpace(std::polar(1.0, th));
+  }
+  std::complex<double> Wth(double th) const {
+    return AtPi(th) ? 0.0 : (W(pl_.nominal, th + kH) - W(pl_.nominal, th - kH)) / (2.0 * kH);
+  }
+  std::complex<double> Vth(double th) const {
+    return !loop_.HasFilter() ? std::complex<double>(std::sin(th), std::cos(th)) / T_
+                              : (AtPi(th) ? 0.0 : (V(th + kH) - V(th - kH)) / (2.0 * kH));
+  }
+  std::complex<double> Wx(int i, double th) const {
+    return (W(pl_.plus[i], th) - W(pl_.minus[i], th)) / (2.0 * pl_.log_step);
+  }
+  double theta_of(double f_hz) const { return 2.0 * std::numbers::pi * f_hz * T_; }
+
+ private:
+  static constexpr double kH = 1e-6;
+  const PerturbedPlants& pl_;
+  const LoopOptions& loop_;
+  double T_;
+  int D_;
+};
+
+// How the crossing at (theta, B) moves: dK/dx at fixed B (the per-row delta
+// method of uncertainty.h) and dK/dB along its branch. Off theta = pi,
+// Im W(theta) = B Im V(theta) fixes theta: with den = B Im V_theta - Im W_theta,
+// dtheta/dx = Im W_x / den and dtheta/dB = -Im V / den; K = Re W - B Re V.
+// At theta = pi (W, V real): K = W - B V.
+struct BranchSlopes {
+  Eigen::VectorXd K_x;
+  double K_B = kNaN;
+};
+BranchSlopes Branch(const CrossingCondition& cc, int p, double th, double B, bool with_K_B = true) {
+  BranchSlopes s;
+  s.K_x.resize(p);
+  const bool at_pi = CrossingCondition::AtPi(th);
+  const std::complex<double> Wth = cc.Wth(th), Vth = cc.Vth(th);
+  const double den = B * Vth.imag() - Wth.imag();
+  for (int i = 0; i < p; ++i) {
+    const std::complex<double> Wx = cc.Wx(i, th);
+    if (at_pi) { s.K_x[i] = Wx.real(); continue; }
+    const double dth = Wx.imag() / den;
+    s.K_x[i] = Wx.real() + (Wth.real() - B * Vth.real()) * dth;
+  }
+  if (!with_K_B) return s;
+  const std::complex<double> V = cc.V(th);
+  s.K_B = at_pi ? -V.real() : (Wth.real() - B * Vth.real()) * (-V.imag() / den) - V.real();
+  return s;
+}
+
+// dB/dx of a point (theta0, B0) where the curve meets K = 0: W(theta, x) =
+// B V(theta) there, two real equations in (theta, B): with a = W_theta -
+// B V_theta, a dtheta - V dB = -W_x, so dB = Im(conj(a) W_x) / Im(conj(a) V).
+// At theta = pi: dB = W_x / V.
+Eigen::VectorXd ZeroKSlope(const CrossingCondition& cc, int p, double th, double B) {
+  Eigen::VectorXd g(p);
+  const std::complex<double> V = cc.V(th);
+  const bool at_pi = CrossingCondition::AtPi(th);
+  const std::complex<double> a = cc.Wth(th) - B * cc.Vth(th);
+  for (int i = 0; i < p; ++i) {
+    const std::complex<double> Wx = cc.Wx(i, th);
+    g[i] = at_pi ? Wx.real() / V.real() : std::imag(std::conj(a) * Wx) / std::imag(std::conj(a) * V);
+  }
+  return g;
+}
+
+// The crossing at B nearest theta (nullopt when there is none within 1e-3 rad).
+std::optional<Crossing> CrossingNear(const ZWidth& z, double B, double th) {
+  std::optional<Crossing> best;
+  for (const Crossing& c : z.Crossings(B)) {
+    if (std::abs(c.theta - th) < 1e-3 && (!best || std::abs(c.theta - th) < std::abs(best->theta - th))) best = c;
+  }
+  return best;
+}
+
+// Two crossings on two branches that tie (the same K) at B, near theta1 and
+// theta2: K_1(B, x) = K_2(B, x) moves B by dB/dx = -(K_1,x - K_2,x) /
+// (K_1,B - K_2,B); upper is the branch with the larger K (either: they are
+// equal there). nullopt when the crossings are not found, do not tie to
+// 1e-6, or cross at the same slope.
+struct Tie {
+  Eigen::VectorXd B_x;
+  BranchSlopes upper;
+};
+std::optional<Tie> TieAt(const ZWidth& z, const CrossingCondition& cc, int p, double B, double th1, double th2) {
+  const std::optional<Crossing> c1 = CrossingNear(z, B, th1), c2 = CrossingNear(z, B, th2);
+  if (!c1 || !c2 || c1->theta == c2->theta ||
+      std::abs(c1->K - c2->K) > 1e-6 * std::max(std::abs(c1->K), std::abs(c2->K))) {
+    return std::nullopt;
+  }
+  const BranchSlopes s1 = Branch(cc, p, c1->theta, B), s2 = Branch(cc, p, c2->theta, B);
+  const double dkb = s1.K_B - s2.K_B;
+  if (!std::isfinite(dkb) || !(std::abs(dkb) > 1e-12 * (std::abs(s1.K_B) + std::abs(s2.K_B)))) return std::nullopt;
+  return Tie{-(s1.K_x - s2.K_x) / dkb, c1->K >= c2->K ? s1 : s2};
+}
+
+}  // namespace
+
 std::vector<double> KcrStd(const PerturbedPlants& pl, const std::vector<double>& cov, int delay,
                            const std::vector<CriticalPoint>& points, const LoopOptions& loop) {
   const model::Plant& plant = pl.nominal.plant();
-  const double T = pl.nominal.period_s();
   const Eigen::MatrixXd S = CovMatrix(plant, cov);
   const int p = NumLogParameters(plant);
-  const int D = delay + plant.delay_samples;
-  // V(theta) = F(e^{j theta}) (1 - e^{-j theta}) / T.
-  auto V = [&](double th) {
-    const std::complex<double> zi = std::polar(1.0, -th);
-    std::complex<double> F = 1.0;
-    if (loop.HasFilter()) {
-      std::complex<double> nb = 0.0, na = 0.0;
-      for (size_t i = loop.filter_b.size(); i-- > 0;) nb = nb * zi + loop.filter_b[i];
-      for (size_t i = loop.filter_a.size(); i-- > 0;) na = na * zi + loop.filter_a[i];
-      F = nb / na;
-    }
-    return F * (1.0 - zi) / T;
-  };
-  // G_d by the state-space (Hessenberg) solve, as the delta method was validated with.
-  auto W = [&](const SampledPlant& g, double th) {
-    return -std::polar(1.0, th * D) / g.GdStateSpace(std::polar(1.0, th));
-  };
-  const SampledPlant& g0 = pl.nominal;
-  const std::vector<SampledPlant>& gp = pl.plus;
-  const std::vector<SampledPlant>& gm = pl.minus;
-  const UncertaintyOptions o{pl.log_step};
+  const CrossingCondition cc(pl, delay, loop);
   std::vector<double> out(points.size(), kNaN);
   for (size_t k = 0; k < points.size(); ++k) {
     const CriticalPoint& c = points[k];
     if (c.K_cr == 0.0) { out[k] = 0.0; continue; }
     if (!std::isfinite(c.K_cr) || !std::isfinite(c.f_cr_hz)) continue;
-    const double th = 2.0 * std::numbers::pi * c.f_cr_hz * T;
-    Eigen::VectorXd grad(p);
-    const bool at_pi = std::abs(th - std::numbers::pi) < 1e-12;
-    const double h = 1e-6;
-    const std::complex<double> Wth =
-        at_pi ? 0.0 : (W(g0, th + h) - W(g0, th - h)) / (2.0 * h);
-    // V_theta: exact for the raw difference (sin, cos), else central differences.
-    const std::complex<double> Vth = !loop.HasFilter()
-                                         ? std::complex<double>(std::sin(th), std::cos(th)) / T
-                                         : (at_pi ? 0.0 : (V(th + h) - V(th - h)) / (2.0 * h));
-    const double den = c.B * Vth.imag() - Wth.imag();
-    for (int i = 0; i < p; ++i) {
-      const std::complex<double> Wx = (W(gp[i], th) - W(gm[i], th)) / (2.0 * o.log_step);
-      if (at_pi) { grad[i] = Wx.real(); continue; }
-      const double dth = Wx.imag() / den;
-      grad[i] = Wx.real() + (Wth.real() - c.B * Vth.real()) * dth;
-    }
-    out[k] = Quad(grad, S);
+    out[k] = Quad(Branch(cc, p, cc.theta_of(c.f_cr_hz), c.B, /*with_K_B=*/false).K_x, S);
   }
   return out;
 }
@@ -187,27 +271,144 @@ SummaryStd SummaryStdDelta(const model::Plant& plant, const std::vector<double>&
   return SummaryStdDelta(SamplePerturbedPlants(plant, T, loop.hand, o), cov, delay, nominal, loop);
 }
 
-SummaryStd SummaryStdDelta(const PerturbedPlants& pl, const std::vector<double>& cov, int delay,
-                           const DelaySummary& nominal, const LoopOptions& loop) {
-  const model::Plant& plant = pl.nominal.plant();
-  const Eigen::MatrixXd S = CovMatrix(plant, cov);
-  const int p = NumLogParameters(plant);
-  const UncertaintyOptions o{pl.log_step};
+namespace {
+
+// The four rows d(K_CR(0), B_t, K_CR^max, B_max)/dx by central differences:
+// each quantity recomputed near its nominal value (ZWidth::SummarizeNear) on
+// the plants at x +- log_step e_i (2 p Z-widths).
+Eigen::MatrixXd FiniteDifferenceRows(const PerturbedPlants& pl, int delay, const DelaySummary& nominal,
+                                     const LoopOptions& loop) {
+  const int p = NumLogParameters(pl.nominal.plant());
+  const double h = pl.log_step;
   Eigen::MatrixXd J(4, p);
   for (int i = 0; i < p; ++i) {
     SummaryStd q[2];
     for (int s = 0; s < 2; ++s) q[s] = ZWidth(s == 0 ? pl.plus[i] : pl.minus[i], delay, loop).SummarizeNear(nominal);
-    J(0, i) = (q[0].K_cr_at_zero_B - q[1].K_cr_at_zero_B) / (2 * o.log_step);
-    J(1, i) = (q[0].B_t - q[1].B_t) / (2 * o.log_step);
-    J(2, i) = (q[0].K_cr_max - q[1].K_cr_max) / (2 * o.log_step);
-    J(3, i) = (q[0].B_max - q[1].B_max) / (2 * o.log_step);
+    J(0, i) = (q[0].K_cr_at_zero_B - q[1].K_cr_at_zero_B) / (2 * h);
+    J(1, i) = (q[0].B_t - q[1].B_t) / (2 * h);
+    J(2, i) = (q[0].K_cr_max - q[1].K_cr_max) / (2 * h);
+    J(3, i) = (q[0].B_max - q[1].B_max) / (2 * h);
   }
+  return J;
+}
+
+// var = J Sigma J^T for each quantity the nominal summary has.
+SummaryStd FromRows(const Eigen::MatrixXd& J, const Eigen::MatrixXd& S, const DelaySummary& nominal) {
   SummaryStd r;
   if (std::isfinite(nominal.K_cr_at_zero_B)) r.K_cr_at_zero_B = nominal.K_cr_at_zero_B == 0.0 ? 0.0 : Quad(J.row(0).transpose(), S);
   if (nominal.has_transition) r.B_t = Quad(J.row(1).transpose(), S);
   if (std::isfinite(nominal.K_cr_max)) r.K_cr_max = Quad(J.row(2).transpose(), S);
   if (std::isfinite(nominal.B_max) && nominal.B_max > 0.0) r.B_max = Quad(J.row(3).transpose(), S);
   return r;
+}
+
+// The rows of FiniteDifferenceRows by implicit differentiation on the nominal
+// Z-width's crossings (O(p) evaluations of G_d, no Z-width per parameter),
+// where the summary's structure is one of those below; a row left NaN is
+// not one of them (the caller differences it):
+// - K_CR(0): the critical crossing at B = 0 (dK/dx at fixed B).
+// - B_t where two branches tie (K_1 = K_2 at B_t, K_CR continuous):
+//   dB_t/dx = -(K_1,x - K_2,x) / (K_1,B - K_2,B).
+// - K_CR^max at that corner: K_1,x + K_1,B dB_t/dx; at the corner where the
+//   interval from 0+ closes (B_max_from_zero): K_x + K_B dB_0/dx; at a
+//   smooth interior maximum (K_B = 0 there): K_x; at B = 0: K_CR(0)'s row.
+// - B_max at B_max_from_zero, the curve's K = 0 point: ZeroKSlope; at a
+//   reopened band's end where its interval's two ends tie: as B_t.
+Eigen::MatrixXd ImplicitRows(const ZWidth& z, const PerturbedPlants& pl, int delay, const DelaySummary& nom,
+                             const LoopOptions& loop) {
+  const int p = NumLogParameters(pl.nominal.plant());
+  const CrossingCondition cc(pl, delay, loop);
+  Eigen::MatrixXd J = Eigen::MatrixXd::Constant(4, p, kNaN);
+  const bool has_k0 = std::isfinite(nom.K_cr_at_zero_B) && nom.K_cr_at_zero_B != 0.0 && std::isfinite(nom.f_at_zero_B_hz);
+  if (has_k0) J.row(0) = Branch(cc, p, cc.theta_of(nom.f_at_zero_B_hz), 0.0).K_x.transpose();
+  // The K = 0 point at B_max_from_zero.
+  std::optional<Eigen::VectorXd> b0_x;
+  const double B0 = nom.B_max_from_zero;
+  if (std::isfinite(B0) && B0 > 0.0) {
+    std::optional<Crossing> c0;
+    for (const Crossing& c : z.Crossings(B0)) if (!c0 || std::abs(c.K) < std::abs(c0->K)) c0 = c;
+    const double k_scale = std::isfinite(nom.K_cr_max) ? std::abs(nom.K_cr_max) : 1.0;
+    if (c0 && std::abs(c0->K) <= 1e-6 * k_scale) b0_x = ZeroKSlope(cc, p, c0->theta, B0);
+  }
+  // The two branches that tie at B_t.
+  std::optional<BranchSlopes> winner;
+  if (nom.has_transition && std::isfinite(nom.B_t)) {
+    if (const std::optional<Tie> t =
+            TieAt(z, cc, p, nom.B_t, cc.theta_of(nom.f_before_hz), cc.theta_of(nom.f_after_hz))) {
+      J.row(1) = t->B_x.transpose();
+      winner = t->upper;
+    }
+  }
+  // K_CR^max, as SummarizeNear finds it.
+  const bool at_corner = nom.has_transition && std::abs(nom.B_at_K_cr_max - nom.B_t) <= 1e-6 * nom.B_t;
+  if (at_corner) {
+    if (winner) J.row(2) = winner->K_x.transpose() + winner->K_B * J.row(1);
+  } else if (nom.B_at_K_cr_max > 0.0) {
+    const CriticalPoint cp = z.At(nom.B_at_K_cr_max);
+    if (std::isfinite(cp.K_cr) && cp.K_cr > 0.0 && std::isfinite(cp.f_cr_hz)) {
+      const BranchSlopes s = Branch(cc, p, cc.theta_of(cp.f_cr_hz), nom.B_at_K_cr_max);
+      const bool at_zero_corner = std::isfinite(B0) && std::abs(nom.B_at_K_cr_max - B0) <= 1e-6 * B0;
+      if (!at_zero_corner) J.row(2) = s.K_x.transpose();
+      else if (b0_x) J.row(2) = s.K_x.transpose() + s.K_B * b0_x->transpose();
+    }
+  } else if (has_k0) {
+    J.row(2) = J.row(0);
+  }
+  if (std::isfinite(nom.B_max) && nom.B_max > 0.0) {
+    if (b0_x && std::abs(nom.B_max - B0) <= 1e-9 * nom.B_max) {
+      J.row(3) = b0_x->transpose();
+    } else if (nom.B_max > B0 * (1 + 1e-9)) {
+      // A reopened band's end: its last interval closes where its two ends,
+      // crossings on two branches, tie (a fold of one branch, where they
+      // merge, is left to the differences).
+      const std::vector<KInterval> iv = z.StableIntervals(nom.B_max * (1 - 1e-7));
+      const KInterval* last = nullptr;
+      for (const KInterval& v : iv) {
+        if (std::isfinite(v.K_hi) && v.K_lo > 0.0 && (!last || v.K_hi - v.K_lo < last->K_hi - last->K_lo)) last = &v;
+      }
+      if (last && std::isfinite(last->f_lo_hz) && std::isfinite(last->f_hi_hz) &&
+          std::abs(cc.theta_of(last->f_lo_hz) - cc.theta_of(last->f_hi_hz)) > 1e-2) {
+        if (const std::optional<Tie> t =
+                TieAt(z, cc, p, nom.B_max, cc.theta_of(last->f_lo_hz), cc.theta_of(last->f_hi_hz))) {
+          J.row(3) = t->B_x.transpose();
+        }
+      }
+    }
+  }
+  return J;
+}
+
+}  // namespace
+
+SummaryStd SummaryStdDelta(const PerturbedPlants& pl, const std::vector<double>& cov, int delay,
+                           const DelaySummary& nominal, const LoopOptions& loop) {
+  return SummaryStdDelta(ZWidth(pl.nominal, delay, loop), pl, cov, delay, nominal);
+}
+
+SummaryStd SummaryStdImplicit(const ZWidth& z, const PerturbedPlants& pl, const std::vector<double>& cov, int delay,
+                              const DelaySummary& nominal) {
+  return FromRows(ImplicitRows(z, pl, delay, nominal, z.loop()), CovMatrix(pl.nominal.plant(), cov), nominal);
+}
+
+SummaryStd SummaryStdDelta(const ZWidth& z, const PerturbedPlants& pl, const std::vector<double>& cov, int delay,
+                           const DelaySummary& nominal) {
+  const Eigen::MatrixXd S = CovMatrix(pl.nominal.plant(), cov);
+  Eigen::MatrixXd J = ImplicitRows(z, pl, delay, nominal, z.loop());
+  // Which rows the summary needs and the implicit derivative did not give.
+  const bool need[4] = {std::isfinite(nominal.K_cr_at_zero_B) && nominal.K_cr_at_zero_B != 0.0, nominal.has_transition,
+                        std::isfinite(nominal.K_cr_max), std::isfinite(nominal.B_max) && nominal.B_max > 0.0};
+  bool difference = false;
+  for (int q = 0; q < 4; ++q) difference |= need[q] && !J.row(q).allFinite();
+  if (difference) {
+    const Eigen::MatrixXd F = FiniteDifferenceRows(pl, delay, nominal, z.loop());
+    for (int q = 0; q < 4; ++q) if (!J.row(q).allFinite()) J.row(q) = F.row(q);
+  }
+  return FromRows(J, S, nominal);
+}
+
+SummaryStd SummaryStdFiniteDifference(const PerturbedPlants& pl, const std::vector<double>& cov, int delay,
+                                      const DelaySummary& nominal, const LoopOptions& loop) {
+  return FromRows(FiniteDifferenceRows(pl, delay, nominal, loop), CovMatrix(pl.nominal.plant(), cov), nominal);
 }
 
 MonteCarloResult SummaryMonteCarlo(const model::Plant& plant, const std::vector<double>& cov, double T, int delay,

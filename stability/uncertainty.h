@@ -18,10 +18,18 @@
 //   unstable at K = 0+ for every nearby parameter) or +inf (nan).
 //   W_x by central differences of G_d in x (step log_step), W_theta by central
 //   differences in theta.
-// - K_CR(0), B_t, K_CR^max and B_max: the derivative of each quantity,
-//   recomputed near its nominal value (ZWidth::SummarizeNear) for x +- log_step
-//   e_i, then var = J Sigma J^T. Valid where the quantity is a smooth function
-//   of x (not where, e.g., B_max jumps between two bands).
+// - K_CR(0), B_t, K_CR^max and B_max: the derivative of each quantity, then
+//   var = J Sigma J^T. By implicit differentiation on the nominal crossings
+//   where the summary's structure is known (K_CR(0) and a smooth maximum as
+//   above; B_t where two branches tie: dB_t/dx = -(K_1,x - K_2,x) /
+//   (K_1,B - K_2,B); K_CR^max at a corner through dB_t/dx or dB_0/dx; B_max
+//   at the curve's K = 0 point B_0: W = B V there, so with a = W_theta -
+//   B V_theta, dB_0/dx = Im(conj(a) W_x) / Im(conj(a) V); at a reopened band's
+//   end where its interval's two ends tie, as B_t): O(p) evaluations of
+//   G_d. Elsewhere each quantity is recomputed near its nominal value
+//   (ZWidth::SummarizeNear) for x +- log_step e_i (2 p Z-widths). Valid where
+//   the quantity is a smooth function of x (not where, e.g., B_max jumps
+//   between two bands).
 // With a velocity filter and a hand (LoopOptions, stability/loop_options.h) the
 // same holds with V = F (1 - z^-1)/T in place of (1 - z^-1)/T: B Im V = Im W
 // fixes theta, dtheta/dx = Im W_x / (B Im V_theta - Im W_theta),
@@ -81,6 +89,19 @@ std::vector<double> KcrStd(const PerturbedPlants& plants, const std::vector<doub
                            const LoopOptions& loop = {});
 SummaryStd SummaryStdDelta(const PerturbedPlants& plants, const std::vector<double>& log_covariance,
                            int delay_samples, const DelaySummary& nominal, const LoopOptions& loop = {});
+// The same on the nominal Z-width z of that delay (z.loop() the loop), when
+// the caller has it (else one is built).
+SummaryStd SummaryStdDelta(const ZWidth& z, const PerturbedPlants& plants, const std::vector<double>& log_covariance,
+                           int delay_samples, const DelaySummary& nominal);
+// The implicit derivatives alone: nan where the summary's structure is not
+// one they cover (SummaryStdDelta then differences).
+SummaryStd SummaryStdImplicit(const ZWidth& z, const PerturbedPlants& plants, const std::vector<double>& log_covariance,
+                              int delay_samples, const DelaySummary& nominal);
+// Every row by central differences of the re-evaluated quantities
+// (ZWidth::SummarizeNear on 2 p perturbed Z-widths): the reference the
+// implicit derivatives are checked against, and their fallback.
+SummaryStd SummaryStdFiniteDifference(const PerturbedPlants& plants, const std::vector<double>& log_covariance,
+                                      int delay_samples, const DelaySummary& nominal, const LoopOptions& loop = {});
 
 // Std of K_CR at each point (points from ZWidth::At on the same plant, T, delay).
 std::vector<double> KcrStd(const model::Plant& plant, const std::vector<double>& log_covariance,

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <ostream>
 #include <random>
 #include <string>
 #include <vector>
@@ -87,6 +88,54 @@ TEST_P(UncertaintyDelays, DeltaMethodAgreesWithMonteCarlo) {
 }
 
 INSTANTIATE_TEST_SUITE_P(TableOne, UncertaintyDelays, ::testing::Values(2, 8), test::DelayName());
+
+// The summary std by implicit differentiation on the nominal crossings
+// against central differences of the quantities themselves (2 p perturbed
+// Z-widths, ZWidth::SummarizeNear): the same derivative two ways, so they
+// agree to the differences' truncation error (step 1e-4 in the logs: ~1e-8).
+// Table I at d = 1, 2, 4, 8 (K_CR^max at the corner B_t, B_max at the K = 0
+// point), and the lightly damped device whose K_CR^max sits where the
+// interval from 0+ closes (and whose B_max ends a reopened band past it, where
+// the band's last interval closes as its two ends tie).
+struct ImplicitCase { const char* name; model::Plant plant; int delay; bool b_max_at_zero_k = true; };
+void PrintTo(const ImplicitCase& c, std::ostream* os) { *os << c.name; }
+class UncertaintyImplicit : public ::testing::TestWithParam<ImplicitCase> {};
+
+TEST_P(UncertaintyImplicit, ImplicitDerivativesEqualFiniteDifferences) {
+  const ImplicitCase& c = GetParam();
+  const std::vector<double> cov = TestCovariance(c.plant, 0.01, 3);
+  const PerturbedPlants pl = SamplePerturbedPlants(c.plant, 1e-3);
+  const ZWidth z(pl.nominal, c.delay);
+  const DelaySummary s = z.Summarize();
+  const SummaryStd im = SummaryStdImplicit(z, pl, cov, c.delay, s);
+  const SummaryStd fd = SummaryStdFiniteDifference(pl, cov, c.delay, s);
+  const SummaryStd dm = SummaryStdDelta(z, pl, cov, c.delay, s);
+  const double q[4][3] = {{im.K_cr_at_zero_B, fd.K_cr_at_zero_B, dm.K_cr_at_zero_B}, {im.B_t, fd.B_t, dm.B_t},
+                          {im.K_cr_max, fd.K_cr_max, dm.K_cr_max}, {im.B_max, fd.B_max, dm.B_max}};
+  for (int k = 0; k < 4; ++k) {
+    if (k == 1 && !s.has_transition) continue;
+    ASSERT_TRUE(std::isfinite(q[k][1]) && q[k][1] > 0) << c.name << " quantity " << k;
+    if (k == 3) {  // B_max at the K = 0 point, or at a reopened band's end
+      if (c.b_max_at_zero_k) EXPECT_NEAR(s.B_max / s.B_max_from_zero, 1.0, 1e-9) << c.name;
+      else EXPECT_GT(s.B_max, (1 + 1e-6) * s.B_max_from_zero) << c.name;
+    }
+    ASSERT_TRUE(std::isfinite(q[k][0])) << c.name << " quantity " << k << ": not covered by the implicit derivatives";
+    EXPECT_NEAR(q[k][0] / q[k][1], 1.0, 1e-6) << c.name << " quantity " << k;
+    EXPECT_EQ(q[k][2], q[k][0]) << c.name << " quantity " << k;  // SummaryStdDelta takes the implicit row
+  }
+}
+
+model::Plant LightlyDamped() {
+  const double w = 2 * std::numbers::pi * 120, v = 2 * std::numbers::pi * 100;
+  return model::Plant{1e-3, 5e-3, {{w, 2 * 0.001 * w, v, 2 * 0.001 * v}}};
+}
+INSTANTIATE_TEST_SUITE_P(Devices, UncertaintyImplicit,
+                         ::testing::Values(ImplicitCase{"TableOneD1", model::PhantomTable1(), 1},
+                                           ImplicitCase{"TableOneD2", model::PhantomTable1(), 2},
+                                           ImplicitCase{"TableOneD4", model::PhantomTable1(), 4},
+                                           ImplicitCase{"TableOneD8", model::PhantomTable1(), 8},
+                                           ImplicitCase{"LightlyDampedD4", LightlyDamped(), 4, false}),
+                         [](const ::testing::TestParamInfo<ImplicitCase>& i) { return std::string(i.param.name); });
 
 // K_CR^max where the interval from K = 0+ closes (B_at_K_cr_max =
 // B_max_from_zero: K_CR(B) rises to a corner there), on a device with a very
