@@ -35,7 +35,7 @@ std::string Full(double v) {
 const std::vector<std::string>& FixedColumns() {
   static const std::vector<std::string> c = {"serial", "logs", "status", "error", "verdict", "verdict_reasons",
                                              "p_min", "outlier", "outlier_d2", "outlier_reasons", "input_hash", "sample_rate_hz",
-                                             "fit_quality", "fit_reasons", "warnings", "m", "m_std", "b", "b_std",
+                                             "units", "fit_quality", "fit_reasons", "warnings", "m", "m_std", "b", "b_std",
                                              "delay_samples", "modes", "friction_status", "friction_topology", "F_c",
                                              "F_c_std", "friction_offset", "friction_offset_std", "linear_only_b",
                                              "linear_only_b_std"};
@@ -248,6 +248,7 @@ Cells BatchRowOf(const io::BatchEntry& unit, const std::string& input_hash, cons
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const std::optional<model::Plant>& s = mf.std_errors;
   c["sample_rate_hz"] = Full(a.input.response.frf.sample_rate_hz);
+  c["units"] = model::Units(mf.linear).word;  // rotary | linear: what the values' units are
   c["fit_quality"] = fit::ToString(a.input.fit.quality);
   std::string reasons, warnings;
   for (const fit::QualityReason& q : a.input.fit.reasons) reasons += (reasons.empty() ? "" : ";") + q.code;

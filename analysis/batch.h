@@ -134,7 +134,7 @@ struct BatchResult {
 // reads back as the double `run` wrote):
 //   serial, logs, status (ok | input_error | computation_error), error,
 //   verdict, verdict_reasons, p_min (with specs),
-//   input_hash, sample_rate_hz, fit_quality, fit_reasons (codes, ';'), warnings (' | '),
+//   input_hash, sample_rate_hz, units (rotary | linear: the model's, model/units.h), fit_quality, fit_reasons (codes, ';'), warnings (' | '),
 //   m, m_std, b, b_std, delay_samples, modes,
 //   friction_status (fitted | not detected | not identified: fit.friction.status; empty when not looked at),
 //   friction_topology (rigid body | collocated, when fitted),

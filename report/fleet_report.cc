@@ -13,6 +13,7 @@
 #include "io/provenance.h"
 #include "model/plant.h"
 #include "model/sample_period.h"
+#include "model/units.h"
 #include "report/histogram.h"
 #include "report/report_internal.h"
 #include "stability/zwidth.h"
@@ -37,6 +38,16 @@ std::string Get(const Row& r, const std::string& c) {
 std::string Num(double v) {
   char b[40];
   std::snprintf(b, sizeof b, "%.4g", v);
+  return b;
+}
+// An axis tick on an axis of ticks `step` apart reaching `reach` (the larger
+// |end|): 3 significant digits, more where 3 would print two ticks alike (a
+// narrow range far from 0: 329.9, 330.0, 330.1, not 330 three times).
+std::string Tick(double v, double step, double reach) {
+  int digits = 3;
+  if (step > 0 && reach > 0) digits = std::clamp(static_cast<int>(std::ceil(std::log10(reach / step))) + 1, 3, 8);
+  char b[40];
+  std::snprintf(b, sizeof b, "%.*g", digits, v);
   return b;
 }
 
@@ -70,10 +81,39 @@ std::vector<double> Region(const model::Plant& p, double period_s, int delay, co
   return k;
 }
 
+// The units the table's values are in: the ok units' "units" cell when they
+// agree, else the design model's, else rotary (a table of an older zwidth,
+// which wrote no units column, was rotary unless --units linear).
+const model::UnitLabels& TableUnits(const io::BatchTable& t, const io::Design* design) {
+  std::string seen;
+  for (const Row& r : t.rows) {
+    if (Get(r, "status") != "ok" || Get(r, "units").empty()) continue;
+    if (seen.empty()) seen = Get(r, "units");
+    else if (seen != Get(r, "units")) seen = "mixed";
+  }
+  if (seen == "linear" || seen == "rotary") return model::Units(seen == "linear");
+  return model::Units(design && design->model.linear);
+}
+
+// A value column's unit: "m [kg]", "d2_K_cr_max [N/m]"; the column alone
+// where it has none (a count, a distance).
+std::string ColumnLabel(const std::string& c, const model::UnitLabels& u) {
+  auto ends = [&](const char* s) { const std::string e(s); return c.size() >= e.size() && c.compare(c.size() - e.size(), e.size(), e) == 0; };
+  const char* unit = nullptr;
+  if (c == "m") unit = u.m;
+  else if (c == "b" || c == "linear_only_b") unit = u.b;
+  else if (c == "F_c" || c == "friction_offset") unit = u.input;
+  else if (c.rfind("mode", 0) == 0) unit = "rad/s";
+  else if (ends("_K_cr_at_zero_B") || ends("_K_cr_max")) unit = u.K;
+  else if (ends("_B_t") || ends("_B_max") || ends("_B_max_from_zero")) unit = u.B;
+  return unit ? c + " [" + unit + "]" : c;
+}
+
 // A plot's frame: data [x0, x1] x [y0, y1] on a w x h canvas with margins for the labels.
 struct Frame {
   double x0, x1, y0, y1;
-  double w = 430, h = 260, left = 58, right = 12, top = 12, bottom = 40;
+  double w = 430, h = 260, left = 76, right = 22, top = 12, bottom = 40;
+  int x_ticks = 4;  // intervals between the x ticks (a narrow frame: 2)
   double X(double x) const { return left + (x - x0) / (x1 - x0) * (w - left - right); }
   double Y(double y) const { return h - bottom - (y - y0) / (y1 - y0) * (h - top - bottom); }
 };
@@ -81,11 +121,18 @@ struct Frame {
 void Axes(const Frame& f, const std::string& xlabel, const std::string& ylabel, std::ostringstream& s) {
   s << "<rect x='" << f.left << "' y='" << f.top << "' width='" << f.w - f.left - f.right << "' height='"
     << f.h - f.top - f.bottom << "' fill='none' stroke='#444'/>\n";
+  const double x_step = (f.x1 - f.x0) / f.x_ticks, y_step = (f.y1 - f.y0) / 4;
+  const double x_reach = std::max(std::abs(f.x0), std::abs(f.x1)), y_reach = std::max(std::abs(f.y0), std::abs(f.y1));
+  for (int i = 0; i <= f.x_ticks; ++i) {
+    // The last x tick ends at the frame's right edge (centred, it left the canvas).
+    const double x = f.x0 + x_step * i;
+    s << "<text x='" << f.X(x) << "' y='" << f.h - f.bottom + 14 << "' font-size='10' text-anchor='"
+      << (i == f.x_ticks ? "end" : "middle") << "'>" << Tick(x, x_step, x_reach) << "</text>\n";
+  }
   for (int i = 0; i <= 4; ++i) {
-    const double x = f.x0 + (f.x1 - f.x0) * i / 4, y = f.y0 + (f.y1 - f.y0) * i / 4;
-    s << "<text x='" << f.X(x) << "' y='" << f.h - f.bottom + 14 << "' font-size='10' text-anchor='middle'>" << Num(x)
-      << "</text>\n<text x='" << f.left - 4 << "' y='" << f.Y(y) + 3 << "' font-size='10' text-anchor='end'>"
-      << Num(y) << "</text>\n";
+    const double y = f.y0 + y_step * i;
+    s << "<text x='" << f.left - 4 << "' y='" << f.Y(y) + 3 << "' font-size='10' text-anchor='end'>"
+      << Tick(y, y_step, y_reach) << "</text>\n";
   }
   s << "<text x='" << (f.left + f.w - f.right) / 2 << "' y='" << f.h - 6 << "' font-size='11' text-anchor='middle'>"
     << HtmlEscaped(xlabel) << "</text>\n<text x='12' y='" << (f.top + f.h - f.bottom) / 2
@@ -107,7 +154,7 @@ std::string Polyline(const Frame& f, const std::vector<double>& xs, const std::v
 
 // Every ok unit's K_CR(B) at `delay` (grey; outliers orange, failures red) and the design's (black, thick).
 void RegionFigure(const io::BatchTable& t, const analysis::Population& pop, const io::Design* design, int delay,
-                  std::ostringstream& h) {
+                  const model::UnitLabels& u, std::ostringstream& h) {
   const std::string k = "d" + std::to_string(delay) + "_";
   std::vector<double> bmax, kmax;
   for (const Row& r : t.rows) {
@@ -137,7 +184,7 @@ void RegionFigure(const io::BatchTable& t, const analysis::Population& pop, cons
   s.imbue(std::locale::classic());
   s << "<svg xmlns='http://www.w3.org/2000/svg' width='" << f.w << "' height='" << f.h << "' viewBox='0 0 " << f.w
     << " " << f.h << "'>\n";
-  Axes(f, "B [N m s/rad]", "K_CR [N m/rad], delay " + std::to_string(delay), s);
+  Axes(f, std::string("B [") + u.B + "]", std::string("K_CR [") + u.K + "], delay " + std::to_string(delay), s);
   std::string bad;
   for (size_t i = 0; i < t.rows.size(); ++i) {
     const Row& r = t.rows[i];
@@ -167,7 +214,7 @@ void RegionFigure(const io::BatchTable& t, const analysis::Population& pop, cons
 // and the specs' bounds (red dashes), over a robust range (report/histogram.h): a wild unit is
 // a labelled count beyond the edge (orange), not the axis' end.
 void Histogram(const io::BatchTable& t, const analysis::PopulationColumn& c, const std::vector<analysis::BatchSpec>& specs,
-               std::ostringstream& h) {
+               const model::UnitLabels& u, std::ostringstream& h) {
   std::vector<double> v;
   for (const Row& r : t.rows) {
     if (Get(r, "status") != "ok") continue;
@@ -179,9 +226,10 @@ void Histogram(const io::BatchTable& t, const analysis::PopulationColumn& c, con
   const HistogramBins hb = RobustHistogram(v, c.median, c.mad_sigma, marks);
   const double lo = hb.lo, hi = hb.hi;
   const int bins = static_cast<int>(hb.counts.size());
-  Frame f{lo, hi, 0, static_cast<double>(*std::max_element(hb.counts.begin(), hb.counts.end())) * 1.1};
-  if (!(f.y1 > 0)) f.y1 = 1;
-  f.w = 300, f.h = 180;
+  // Counts: the 4 ticks on whole units (the top a multiple of 4 above the tallest bin).
+  const int tallest = *std::max_element(hb.counts.begin(), hb.counts.end());
+  Frame f{lo, hi, 0, 4.0 * std::ceil((tallest + 1) / 4.0)};
+  f.w = 300, f.h = 180, f.x_ticks = 2;
   std::ostringstream s;
   s.imbue(std::locale::classic());
   s << "<svg xmlns='http://www.w3.org/2000/svg' width='" << f.w << "' height='" << f.h << "'>\n";
@@ -209,7 +257,7 @@ void Histogram(const io::BatchTable& t, const analysis::PopulationColumn& c, con
     s << "<text x='" << f.w - f.right - 3 << "' y='" << f.top + 11 << "' font-size='10' fill='#e08a00' "
       << "text-anchor='end'>" << hb.above << " above &#9654;</text>\n";
   }
-  Axes(f, c.column, "units", s);
+  Axes(f, ColumnLabel(c.column, u), "units", s);
   s << "</svg>";
   std::string note;
   if (hb.below) note += std::to_string(hb.below) + " below the range (min " + Num(hb.min) + ")";
@@ -274,17 +322,18 @@ std::string FleetHtml(const io::BatchTable& t, const analysis::Population& pop, 
     << pop.distance_columns.size() << " columns; or another number of modes than the population's (docs/fleet.md).</p>\n";
   // Regions.
   h << "<h2>Regions</h2>\n";
-  for (int d : options.run.delays) RegionFigure(t, pop, design, d, h);
+  const model::UnitLabels& units = TableUnits(t, design);
+  for (int d : options.run.delays) RegionFigure(t, pop, design, d, units, h);
   // Distributions and the population table.
   h << "<h2>Distributions</h2>\n<p>Over the analysed units: blue line the median, shaded &plusmn;1 MAD sigma, red "
     << "dashes the specs' bounds; the axis spans the median &plusmn; "
     << Num(HistogramOptions{}.mad_multiple) << " MAD sigma (clipped to the values), the "
     << "units beyond it are counted at its edges (orange).</p>\n";
-  for (const analysis::PopulationColumn& c : pop.columns) Histogram(t, c, options.specs, h);
+  for (const analysis::PopulationColumn& c : pop.columns) Histogram(t, c, options.specs, units, h);
   h << "<h2>Population</h2>\n<table class='zw'><tr><th>column</th><th>units</th><th>median</th><th>MAD sigma</th>"
     << "<th>min</th><th>max</th><th>in D&sup2;</th></tr>\n";
   for (const analysis::PopulationColumn& c : pop.columns) {
-    h << "<tr><td class='l'>" << HtmlEscaped(c.column) << "</td><td>" << c.units << "</td><td>" << Num(c.median)
+    h << "<tr><td class='l'>" << HtmlEscaped(ColumnLabel(c.column, units)) << "</td><td>" << c.units << "</td><td>" << Num(c.median)
       << "</td><td>" << Num(c.mad_sigma) << "</td><td>" << Num(c.min) << "</td><td>" << Num(c.max) << "</td><td>"
       << (c.in_distance ? "yes" : "no") << "</td></tr>\n";
   }

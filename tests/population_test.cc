@@ -13,15 +13,12 @@
 
 #include "analysis/population.h"
 #include "model/error.h"
+#include "tests/test_util.h"
 
 namespace zwidth::analysis {
 namespace {
 
-std::string Full(double v) {
-  char b[40];
-  std::snprintf(b, sizeof b, "%.17g", v);
-  return b;
-}
+std::string Full(double v) { return test::TableCell(v); }
 
 io::BatchTable Table(const std::vector<Eigen::Vector2d>& x, const std::vector<double>& std_m = {}) {
   io::BatchTable t;

@@ -4,12 +4,20 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <iterator>
 #include <numbers>
 #include <stdexcept>
 
 namespace zwidth::test {
+
+std::string TableCell(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
+}
+
 
 model::Plant RandomPlant(std::mt19937_64& rng, const RandomPlantRanges& r, int modes, double T) {
   std::uniform_real_distribution<double> U(0, 1);

@@ -12,6 +12,9 @@
 
 namespace zwidth::test {
 
+// A number as a batch table's cell holds it: 17 significant digits, so it reads back as the same double.
+std::string TableCell(double v);
+
 // A uniform range lo + span * u, u ~ U(0, 1). Given as (lo, span), not
 // (lo, hi), so that each test's numbers stay the ones it wrote, to the bit.
 struct Range {
