@@ -7,6 +7,7 @@
 
 #include "io/stability_files.h"
 #include "model/error.h"
+#include "model/simulate.h"
 #include "model/friction.h"
 #include "model/parallel.h"
 #include "stability/relay.h"
@@ -75,6 +76,7 @@ bool Table2Options::IsValid(std::string* why) const {
     if (!(std::isfinite(f) && f >= 0.0 && f <= 1e6)) return bad("coulomb_levels: each level must be finite, >= 0 and <= 1e6 N m");
   }
   if (!(std::isfinite(encoder_step) && encoder_step >= 0.0)) return bad("encoder_step must be finite and >= 0");
+  if (std::string p = model::EncoderStepProblem(encoder_step, "encoder_step"); !p.empty()) return bad(p);
   if (!(std::isfinite(relay_amplitude) && relay_amplitude > 0.0)) return bad("relay_amplitude must be finite and > 0");
   if (!(seconds >= 1.0 && seconds <= 600.0)) return bad("seconds must be in [1, 600]");
   return true;

@@ -7,7 +7,9 @@
 #include <random>
 
 #include "ident/fft.h"
+#include "model/c_locale.h"
 #include "model/error.h"
+#include "model/simulate.h"
 
 namespace zwidth::ident {
 namespace {
@@ -49,6 +51,9 @@ bool ExcitationOptions::IsValid(std::string* why) const {
   if (seconds * sample_rate_hz > 1e8) return bad("ExcitationOptions::seconds x ExcitationOptions::sample_rate_hz is over 1e8 samples");
   if (seconds * sample_rate_hz < 16) return bad("ExcitationOptions::seconds x ExcitationOptions::sample_rate_hz gives fewer than 16 samples");
   if (!(rms > 0.0 && std::isfinite(rms))) return bad("ExcitationOptions::rms must be finite and > 0");
+  if (rms > model::kMaxSignalRms) {  // 1e308 was scaled to inf and written as "rms=inf"
+    return bad("ExcitationOptions::rms = " + FormatG(rms) + " is above 1e12 (input units)");
+  }
   if (!(fmin_hz >= 0.0 && std::isfinite(fmin_hz))) return bad("ExcitationOptions::fmin_hz must be finite and >= 0");
   if (kind == ExcitationKind::kChirp && !(fmin_hz > 0.0)) return bad("ExcitationOptions::fmin_hz must be > 0 for a logarithmic chirp");
   if (!(fmax_hz > fmin_hz)) return bad("ExcitationOptions::fmax_hz must be > ExcitationOptions::fmin_hz");

@@ -76,11 +76,20 @@ std::string CanonicalColumn(std::string name) {
   return it == aliases.end() ? name : it->second;
 }
 
+// The header line of a response CSV, without the UTF-8 BOM a spreadsheet
+// saves first (the log reader drops it too): with it, "f_hz" was not found and
+// the file was read as a log ("no column 'torque'").
+bool ReadHeader(std::istream& in, std::string* line) {
+  if (!std::getline(in, *line)) return false;
+  if (line->rfind("\xEF\xBB\xBF", 0) == 0) line->erase(0, 3);
+  return true;
+}
+
 ident::FrequencyResponse ReadCsv(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path + ": cannot open frequency-response file");
   std::string line;
-  if (!std::getline(in, line)) throw InputError(path + ": empty file");
+  if (!ReadHeader(in, &line)) throw InputError(path + ": empty file");
   std::map<std::string, int> col;
   size_t num_columns = 0;
   std::vector<std::string_view> fields;
@@ -422,7 +431,7 @@ bool IsFrequencyResponseFile(const std::string& path) {
   }
   std::ifstream in(path);
   std::string line;
-  if (!std::getline(in, line)) return false;
+  if (!ReadHeader(in, &line)) return false;
   // zwidth estimate's header, or one from elsewhere that starts f,...H_re.
   std::vector<std::string_view> fields;
   internal::SplitFields(line, ',', &fields);
