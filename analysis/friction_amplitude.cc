@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "model/c_locale.h"
 #include "model/error.h"
 #include "model/simulate.h"
 #include "model/parallel.h"
@@ -24,7 +25,7 @@ double EncoderStepOf(const io::ModelFile& model, std::optional<double> given, co
 bool FrictionAmplitudeOptions::IsValid(std::string* why) const {
   auto bad = [&](const std::string& m) { if (why) *why = "FrictionAmplitudeOptions::" + m; return false; };
   if (!(k_factor > 1.0 && k_factor <= 100.0)) {
-    return bad("k_factor = " + std::to_string(k_factor) + " must be in (1, 100] (a multiple of K_cr(B))");
+    return bad("k_factor = " + FormatG(k_factor) + " must be in (1, 100] (a multiple of K_cr(B))");
   }
   if (!(std::isfinite(encoder_step) && encoder_step >= 0.0)) return bad("encoder_step must be finite and >= 0");
   if (std::string p = model::EncoderStepProblem(encoder_step, "encoder_step"); !p.empty()) return bad(p);

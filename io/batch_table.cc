@@ -1,7 +1,6 @@
 #include "io/batch_table.h"
 
 #include <glob.h>
-#include <sys/stat.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -106,15 +105,6 @@ std::string Quoted(const std::string& cell) {
 
 bool IsGlob(const std::string& s) { return s.find_first_of("*?[") != std::string::npos; }
 
-// Which file a unit's log is: its device and inode (a hard link, a symlink or
-// "./x.csv" are the file "x.csv" is), else the path as written. One log for
-// two units would count its device twice in every fleet figure.
-std::string LogIdentity(const std::string& path) {
-  struct stat st;
-  if (::stat(path.c_str(), &st) == 0) return "inode " + std::to_string(st.st_dev) + ":" + std::to_string(st.st_ino);
-  return "path " + path;
-}
-
 }  // namespace
 
 std::vector<BatchEntry> ReadManifest(const std::string& path) {
@@ -141,7 +131,6 @@ std::vector<BatchEntry> ReadManifest(const std::string& path) {
   const std::filesystem::path folder = std::filesystem::path(path).parent_path();
   std::vector<BatchEntry> out;
   std::map<std::string, int> serial_line;
-  std::map<std::string, std::pair<std::string, int>> log_of;  // LogIdentity -> (serial, line)
   for (size_t k = 1; k < records.size(); ++k) {
     const Record& r = records[k];
     const std::string at = where + " line " + std::to_string(r.line);
@@ -160,11 +149,6 @@ std::vector<BatchEntry> ReadManifest(const std::string& path) {
                        "; a serial names one unit (give the logs of one unit different serials, or one row)");
     }
     if (std::filesystem::path(e.path).is_relative()) e.path = (folder / e.path).string();
-    if (auto [it, fresh] = log_of.emplace(LogIdentity(e.path), std::pair{e.serial, r.line}); !fresh) {
-      throw InputError(at + ", column 'path': '" + Printable(r.fields[path_col]) + "' is the log of serial '" +
-                       Printable(it->second.first) + "' on line " + std::to_string(it->second.second) +
-                       " already (the same file); give each unit's log once");
-    }
     for (size_t c = 0; c < header.size(); ++c) {
       if (static_cast<int>(c) == serial_col || static_cast<int>(c) == path_col || r.fields[c].empty()) continue;
       e.flags.emplace_back(header[c], r.fields[c]);
@@ -177,7 +161,7 @@ std::vector<BatchEntry> ReadManifest(const std::string& path) {
 
 std::vector<BatchEntry> EntriesFromArguments(const std::vector<std::string>& arguments) {
   std::vector<BatchEntry> out;
-  std::map<std::string, std::string> seen;  // LogIdentity -> origin
+  std::map<std::string, std::string> seen;  // path -> origin
   for (size_t a = 0; a < arguments.size(); ++a) {
     const std::string origin = "argument " + std::to_string(a + 1);
     std::vector<std::string> paths;
@@ -194,7 +178,7 @@ std::vector<BatchEntry> EntriesFromArguments(const std::vector<std::string>& arg
       paths.push_back(arguments[a]);
     }
     for (const std::string& p : paths) {
-      if (auto [it, fresh] = seen.emplace(LogIdentity(p), origin); !fresh) {
+      if (auto [it, fresh] = seen.emplace(p, origin); !fresh) {
         throw InputError("'" + Printable(p) + "' is named by " + it->second + " and " + origin +
                          "; give each unit's log once");
       }

@@ -273,7 +273,11 @@ void Finish(ident::FrequencyResponse& r, const std::string& path, double rate, s
   }
   CheckBinValues(r, path);
   if (rate > 0.0) r.sample_rate_hz = rate;
-  if (!(r.sample_rate_hz > 0.0) || !std::isfinite(r.sample_rate_hz)) {
+  if (std::isnan(r.sample_rate_hz) || std::isinf(r.sample_rate_hz)) {  // given, but no rate ("no attribute" before)
+    throw InputError(path + ": the file's sample_rate_hz = " + Num(r.sample_rate_hz) + " is not a finite number: "
+                     "write the log's sample rate there (10..1e6 Hz), or pass ReadFrequencyResponse::sample_rate_hz");
+  }
+  if (!(r.sample_rate_hz > 0.0)) {
     throw InputError(path + ": no sample_rate_hz column or attribute; pass ReadFrequencyResponse::sample_rate_hz (the log's sample rate)");
   }
   CheckRate(r.sample_rate_hz, path, rate > 0.0 ? "ReadFrequencyResponse::sample_rate_hz" : "the file's sample_rate_hz");

@@ -49,12 +49,13 @@ bool SimulateOptions::IsValid(std::string* why) const {
                "band there; give a band up to Nyquist (SimulateOptions::bandwidth_hz " + nyquist +
                " is white noise) or raise SimulateOptions::sample_rate_hz");
   }
-  // At most kMaxSimulateSamples (1e8, 28 h at 1 kHz: 1.6 GB of samples in memory).
-  constexpr double kMaxSimulateSamples = 1e8;
+  // At most kMaxSimulateSamples (4e7, 11 h at 1 kHz): `simulate` peaks at ~24 bytes a sample
+  // (2e7 samples: 487 MB, 4.4 s here), so under 1 GiB; 1e8 took 2.4 GB from one flag.
+  constexpr double kMaxSimulateSamples = 4e7;
   if (seconds * sample_rate_hz < 2) return bad("SimulateOptions::seconds * SimulateOptions::sample_rate_hz must give at least 2 samples");
   if (!(seconds * sample_rate_hz <= kMaxSimulateSamples)) {
     return bad("SimulateOptions::seconds x SimulateOptions::sample_rate_hz = " + FormatG(seconds * sample_rate_hz) +
-               " samples, more than simulate writes (1e8); shorten SimulateOptions::seconds or lower "
+               " samples, more than simulate writes (4e7); shorten SimulateOptions::seconds or lower "
                "SimulateOptions::sample_rate_hz");
   }
   return true;

@@ -27,7 +27,7 @@ std::string EncoderStepProblem(double q, const std::string& name);
 inline constexpr double kMaxSignalRms = 1e12;
 
 struct SimulateOptions {
-  double seconds = 30.0;             // log length [s], > 0; seconds x sample_rate_hz in [2, 1e8] samples
+  double seconds = 30.0;             // log length [s], > 0; seconds x sample_rate_hz in [2, 4e7] samples
   double sample_rate_hz = 1000.0;    // [Hz], in (10, 1e6]: the log readers' range (IsDeviceLogRate)
   double period_s() const { return SamplePeriod(sample_rate_hz); }  // the sample period T [s]
   double torque_rms = 0.03;          // RMS of the torque [N m], > 0

@@ -58,9 +58,17 @@ printf '{"objects":[{"name":"w","K":1,"B":0.01}]}' > "$T/scene.json"
 expect check-encoder "--encoder-step = 3" "" -- "$ZW" check "$T/scene.json" --model "$M" --delay 2 --encoder-step 3
 "$ZW" relay "$M" --delay 2 --damping 0 --seconds 2 --encoder-step 0 >/dev/null 2>&1 && ok "--encoder-step 0 (exact) still accepted" || bad "--encoder-step 0 refused"
 
+# ---- (a) a fixed fit delay beyond what a model file holds (100000 was fitted and written, then refused)
+expect fit-delay-huge "--delay-samples must be in \[0, 1000\]" "$T/o12.json" -- "$ZW" fit "$T/frf.csv" --modes 2 --delay-samples 100000 -o "$T/o12.json"
+expect boundary-k-factor "--amplitude-k-factor = 1e\+300 must be in \(1, 100\]" "$T/o13.csv" -- "$ZW" boundary "$M" --amplitude-k-factor 1e300 -o "$T/o13.csv"
+
 # ---- (a) a signal's RMS: 1e300 was written (then refused by every reader), 1e308 as "rms=inf"
 expect simulate-rms-huge "--torque-rms = 1e\+300 is above 1e12" "$T/o9.csv" -- "$ZW" simulate --model "$M" --seconds 1 --torque-rms 1e300 -o "$T/o9.csv"
 expect excite-rms-huge "--rms = 1e\+308 is above 1e12" "$T/o10.csv" -- "$ZW" excite --rms 1e308 -o "$T/o10.csv"
+
+# ---- (c) the sample counts of simulate and excite, bounded in memory (1e8: 2.4 GB and ~5.8 GB)
+expect simulate-samples "more than simulate writes \(4e7\)" "$T/o15.h5" -- "$ZW" simulate --model "$M" --seconds 50000 -o "$T/o15.h5"
+expect excite-samples "over 1e7 samples" "$T/o16.csv" -- "$ZW" excite --seconds 20000 -o "$T/o16.csv"
 
 # ---- (a) a loop's B and a scene's K and B, bounded as the wall's --stiffness/--damping and a hand
 expect relay-damping-huge "--damping must lie in \[0, 1e12\]" "" -- "$ZW" relay "$M" --delay 2 --damping 1e300 --seconds 1
@@ -77,18 +85,19 @@ if "$ZW" fit "$T/frf_bom.csv" --modes 2 --delay-samples 0 -o "$T/bom.json" >/dev
   ok "a response CSV with a BOM fits as the same file without it"
 else bad "a response CSV with a BOM: $(tail -1 "$T/stderr")"; fi
 
-# ---- (d) a manifest: a UTF-8 BOM ("it reads 'serial,path'"), one log for two units (the arguments
-# refused a path twice, a manifest did not: one device counted twice in every fleet figure)
-mkdir -p "$T/line"; cp "$LOG" "$T/line/u1.csv"; ln "$T/line/u1.csv" "$T/line/u1_link.csv"
+# ---- (d) a response .h5 whose sample_rate_hz attribute is NaN: named, not "no sample_rate_hz attribute"
+if $PY -c "import h5py" 2>/dev/null; then
+  "$ZW" estimate "$LOG" -o "$T/frf.h5" >/dev/null 2>&1
+  $PY -c "import h5py, sys; f = h5py.File(sys.argv[1], 'r+'); f.attrs['sample_rate_hz'] = float('nan')" "$T/frf.h5"
+  expect frf-h5-rate-nan "sample_rate_hz = nan is not a finite number" "$T/o14.json" -- "$ZW" fit "$T/frf.h5" --modes 2 -o "$T/o14.json"
+fi
+
+# ---- (d) a manifest with a UTF-8 BOM (refused: "it reads 'serial,path'")
+mkdir -p "$T/line"; cp "$LOG" "$T/line/u1.csv"
 printf '\xef\xbb\xbfserial,path\nA,u1.csv\n' > "$T/line/bom.csv"
 if "$ZW" batch --manifest "$T/line/bom.csv" -o "$T/fleet_bom.csv" --jobs 1 >/dev/null 2>"$T/stderr" && grep -q '^A,' "$T/fleet_bom.csv"; then
   ok "a manifest with a BOM is read"
 else bad "a manifest with a BOM: $(tail -1 "$T/stderr")"; fi
-printf 'serial,path\nA,u1.csv\nB,./u1.csv\n' > "$T/line/same.csv"
-expect manifest-same-log "line 3, column 'path': './u1.csv' is the log of serial 'A' on line 2" "$T/fleet_same.csv" -- "$ZW" batch --manifest "$T/line/same.csv" -o "$T/fleet_same.csv"
-printf 'serial,path\nA,u1.csv\nB,u1_link.csv\n' > "$T/line/link.csv"
-expect manifest-hard-link "the same file" "$T/fleet_link.csv" -- "$ZW" batch --manifest "$T/line/link.csv" -o "$T/fleet_link.csv"
-expect arguments-hard-link "give each unit's log once" "$T/fleet_args.csv" -- "$ZW" batch "$T/line/u1.csv" "$T/line/u1_link.csv" -o "$T/fleet_args.csv"
 
 # ---- (d) a MATLAB logical array as a signal (read as 0/1 samples; an HDF5 boolean is refused)
 if $PY -c "import scipy" 2>/dev/null; then
