@@ -70,6 +70,11 @@ expect excite-rms-huge "--rms = 1e\+308 is above 1e12" "$T/o10.csv" -- "$ZW" exc
 expect simulate-samples "more than simulate writes \(4e7\)" "$T/o15.h5" -- "$ZW" simulate --model "$M" --seconds 50000 -o "$T/o15.h5"
 expect excite-samples "over 1e7 samples" "$T/o16.csv" -- "$ZW" excite --seconds 20000 -o "$T/o16.csv"
 
+# ---- (b) B ranges past a loop's bound and a Coulomb level twice (simulated twice, its column twice)
+expect boundary-b-max-huge "--b-max = 1e\+300 is above 1e12" "$T/o17.csv" -- "$ZW" boundary "$M" --b-max 1e300 -o "$T/o17.csv"
+expect sweep-area-b-max-huge "--area-b-max must be at most 1e12" "$T/o18.csv" -- "$ZW" filter-sweep "$M" --delay 2 --measure area --area-b-max 1e300 -o "$T/o18.csv"
+expect compare-levels-twice "the level 0.01 is given twice" "" -- "$ZW" compare "$M" --reference table1 --table2 --seconds 1 --coulomb-levels 0.01,0.01
+
 # ---- (a) a loop's B and a scene's K and B, bounded as the wall's --stiffness/--damping and a hand
 expect relay-damping-huge "--damping must lie in \[0, 1e12\]" "" -- "$ZW" relay "$M" --delay 2 --damping 1e300 --seconds 1
 printf '{"objects":[{"name":"w","K":1e300,"B":0.01}]}' > "$T/scene_k.json"
