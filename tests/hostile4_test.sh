@@ -24,6 +24,10 @@ for case in "b-points|boundary $M -o $T/o1 --b-points @" "extra|boundary $M -o $
   else bad "CLI11 message raw ($label), exit $rc: $(cat -A "$T/stderr" | head -2)"; fi
 done
 
+# ---- (b) the overlap given is the one a message names (--overlap 0 was "at 50 % overlap")
+"$ZW" simulate --model "$M" --seconds 10 -o "$T/ten.csv" >/dev/null 2>&1
+expect overlap-0-message "at 0 % overlap, so at least 12288 samples" "$T/o19.csv" -- "$ZW" estimate "$T/ten.csv" --overlap 0 -o "$T/o19.csv"
+
 # ---- (b) a delay given twice: computed twice, its rows and summary repeated
 expect boundary-delays-twice "the delay 2 is given twice" "$T/o2" -- "$ZW" boundary "$M" --delays 2,4,2 -o "$T/o2"
 expect compare-delays-twice "given twice" "" -- "$ZW" compare "$M" --reference table1 --delays 8,8
@@ -119,6 +123,7 @@ if mount -t tmpfs -o size=64k tmpfs "$T/full" 2>/dev/null; then
   expect full-boundary "failed writing '$T/full/b.csv': No space left on device" "$T/full/b.csv" -- "$ZW" boundary "$M" --b-points 20000 -o "$T/full/b.csv"
   expect full-estimate "failed writing '$T/full/f.csv': No space left" "$T/full/f.csv" -- "$ZW" estimate "$LOG" -o "$T/full/f.csv"
   expect full-simulate "failed writing '$T/full/s.csv': No space left" "$T/full/s.csv" -- "$ZW" simulate --model "$M" --seconds 30 -o "$T/full/s.csv"
+  expect full-simulate-h5 "failed writing '$T/full/s.h5': No space left" "$T/full/s.h5" -- "$ZW" simulate --model "$M" --seconds 30 -o "$T/full/s.h5"
   expect full-run "failed writing '$T/full/run/[a-z]+\.[a-z]+': No space left" "$T/full/run" -- "$ZW" run "$LOG" --no-figures --delays 2 -o "$T/full/run"
   [ -z "$(ls -A "$T/full")" ] && ok "the full disk holds nothing afterwards" || bad "the full disk holds $(ls -A "$T/full")"
   umount "$T/full"
