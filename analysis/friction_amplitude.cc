@@ -4,7 +4,9 @@
 #include <cmath>
 #include <cstdio>
 
+#include "model/c_locale.h"
 #include "model/error.h"
+#include "model/simulate.h"
 #include "model/parallel.h"
 
 namespace zwidth::analysis {
@@ -16,15 +18,17 @@ double EncoderStepOf(const io::ModelFile& model, std::optional<double> given, co
     std::snprintf(b, sizeof b, "%g", *given);
     throw InputError(name + " " + b + ": must be finite and >= 0 (rad or m per count; 0: an exact encoder)");
   }
+  if (std::string p = model::EncoderStepProblem(*given, name); !p.empty()) throw InputError(p);
   return *given;
 }
 
 bool FrictionAmplitudeOptions::IsValid(std::string* why) const {
   auto bad = [&](const std::string& m) { if (why) *why = "FrictionAmplitudeOptions::" + m; return false; };
   if (!(k_factor > 1.0 && k_factor <= 100.0)) {
-    return bad("k_factor = " + std::to_string(k_factor) + " must be in (1, 100] (a multiple of K_cr(B))");
+    return bad("k_factor = " + FormatG(k_factor) + " must be in (1, 100] (a multiple of K_cr(B))");
   }
   if (!(std::isfinite(encoder_step) && encoder_step >= 0.0)) return bad("encoder_step must be finite and >= 0");
+  if (std::string p = model::EncoderStepProblem(encoder_step, "encoder_step"); !p.empty()) return bad(p);
   if (rows_per_delay < 1) return bad("rows_per_delay must be >= 1");
   std::string w;
   if (!prediction.IsValid(&w)) return bad("prediction: " + w);

@@ -349,15 +349,17 @@ void CheckLogLength(size_t num_samples, double rate_hz, const ident::WelchOption
   const double T = model::SamplePeriod(rate_hz);
   char s[700];
   if (default_window) {
+    // The overlap given (--overlap 0 was reported "at 50 % overlap" beside a count made with 0).
+    ident::WelchOptions d = o;
+    d.window_length = ident::DefaultWindowLength(rate_hz, size_t{1} << 40);
+    const size_t nd = static_cast<size_t>(d.window_length), need_d = nd + 2 * (nd - d.overlap_samples());
     std::snprintf(s, sizeof s,
                   "the log is too short: %zu samples (%.3g s at %g Hz); an estimate needs 3 Welch segments of at "
-                  "least %zu samples (%.3g s, the shortest default window at this rate: bins of %.3g Hz) at 50 %% "
+                  "least %zu samples (%.3g s, the shortest default window at this rate: bins of %.3g Hz) at %.3g %% "
                   "overlap, so at least %zu samples (%.3g s). Record a longer log: at least %.3g s, and %.3g s or "
-                  "more for the default %d-sample window (bins of %.3g Hz)",
-                  num_samples, num_samples * T, rate_hz, n, n * T, rate_hz / n, need, need * T, need * T,
-                  2 * ident::DefaultWindowLength(rate_hz, size_t{1} << 40) * T,
-                  ident::DefaultWindowLength(rate_hz, size_t{1} << 40),
-                  rate_hz / ident::DefaultWindowLength(rate_hz, size_t{1} << 40));
+                  "more for the default %zu-sample window (bins of %.3g Hz)",
+                  num_samples, num_samples * T, rate_hz, n, n * T, rate_hz / n, 100.0 * o.overlap, need, need * T,
+                  need * T, need_d * T, nd, rate_hz / nd);
   } else {
     // The longest power-of-two windows that fit: one segment, and three.
     size_t one = 16, three = 16;

@@ -1,6 +1,7 @@
 #include "analysis/plant_stability.h"
 
 #include "analysis/laps.h"
+#include "model/c_locale.h"
 #include "model/error.h"
 #include "model/parallel.h"
 
@@ -34,6 +35,10 @@ bool PlantStabilityOptions::IsValid(std::string* why) const {
     if (!loops[h].IsValid(&w)) p = "PlantStabilityOptions::loops[" + std::to_string(h) + "]." + w;
   }
   if (p.empty() && !grid.IsValid(&w)) p = w;
+  // A hand's, a wall's and a scene's B bound (stability::kMaxLoopValue): --b-max 1e300 gave rows up to 1e300.
+  if (p.empty() && grid.b_max > stability::kMaxLoopValue) {
+    p = "BGridOptions::b_max = " + FormatG(grid.b_max) + " is above 1e12 (N m s/rad; N s/m on a linear axis)";
+  }
   if (p.empty() && monte_carlo < 0) p = "PlantStabilityOptions::monte_carlo must be >= 0";
   if (p.empty() && monte_carlo > 0 && loops.size() > 1) {
     p = "PlantStabilityOptions::monte_carlo takes at most one PlantStabilityOptions::loops";

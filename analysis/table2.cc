@@ -6,7 +6,9 @@
 #include <utility>
 
 #include "io/stability_files.h"
+#include "model/c_locale.h"
 #include "model/error.h"
+#include "model/simulate.h"
 #include "model/friction.h"
 #include "model/parallel.h"
 #include "stability/relay.h"
@@ -74,7 +76,15 @@ bool Table2Options::IsValid(std::string* why) const {
   for (double f : coulomb_levels) {
     if (!(std::isfinite(f) && f >= 0.0 && f <= 1e6)) return bad("coulomb_levels: each level must be finite, >= 0 and <= 1e6 N m");
   }
+  for (size_t i = 0; i < coulomb_levels.size(); ++i) {  // a level twice was simulated twice, its column twice
+    for (size_t k = 0; k < i; ++k) {
+      if (coulomb_levels[k] == coulomb_levels[i]) {
+        return bad("coulomb_levels: the level " + FormatG(coulomb_levels[i]) + " is given twice; give each once");
+      }
+    }
+  }
   if (!(std::isfinite(encoder_step) && encoder_step >= 0.0)) return bad("encoder_step must be finite and >= 0");
+  if (std::string p = model::EncoderStepProblem(encoder_step, "encoder_step"); !p.empty()) return bad(p);
   if (!(std::isfinite(relay_amplitude) && relay_amplitude > 0.0)) return bad("relay_amplitude must be finite and > 0");
   if (!(seconds >= 1.0 && seconds <= 600.0)) return bad("seconds must be in [1, 600]");
   return true;

@@ -33,17 +33,19 @@ namespace zwidth::app {
 
 
 
+// The relay's options mean nothing without --table2: given alone they were
+// silently ignored (even --amplitude -1), so each needs it (CLI11 names both).
 void AddTable2Flags(CLI::App* cmd, bool* on, analysis::Table2Options* t2) {
-  cmd->add_flag("--table2", *on,
+  CLI::Option* table2 = cmd->add_flag("--table2", *on,
                 "the paper's measured relay points (Table II) beside the model's linear Z-width and its relay "
                 "simulated with Coulomb friction (--coulomb-levels) and an encoder, and the level that explains them "
                 "best");
   cmd->add_option("--coulomb-levels", t2->coulomb_levels, "with --table2: the Coulomb levels tried [N m]")
-      ->delimiter(',')->capture_default_str();
+      ->delimiter(',')->capture_default_str()->needs(table2);
   cmd->add_option("--encoder-step", t2->encoder_step, "with --table2: the relay's encoder step [rad per count]")
-      ->capture_default_str();
-  cmd->add_option("--amplitude", t2->relay_amplitude, "with --table2: the relay amplitude [N m]")->capture_default_str();
-  cmd->add_option("--seconds", t2->seconds, "with --table2: each relay run's length [s]")->capture_default_str();
+      ->capture_default_str()->needs(table2);
+  cmd->add_option("--amplitude", t2->relay_amplitude, "with --table2: the relay amplitude [N m]")->capture_default_str()->needs(table2);
+  cmd->add_option("--seconds", t2->seconds, "with --table2: each relay run's length [s]")->capture_default_str()->needs(table2);
 }
 
 std::string FrictionLine(const fit::FrictionFitResult& ff) {

@@ -64,6 +64,12 @@ int main(int argc, char** argv) {
   zwidth::app::AddWallCommand(app);
   zwidth::app::GuardNumericFlags(&app);
   zwidth::app::OrganizeHelp(app);  // after every command: topics, examples, --help-all, completion
+  // CLI11's own messages quote what was typed ("Could not convert: --b-points = ...",
+  // "The following argument was not expected: ..."): escaped like every other message,
+  // so an ESC or a newline typed in an argument is shown, not obeyed.
+  app.failure_message([](const CLI::App* a, const CLI::Error& e) {
+    return zwidth::io::PrintableLines(CLI::FailureMessage::simple(a, e));
+  });
   try {
     zwidth::app::CheckListFlags(app, argc, argv);
     app.parse(argc, argv);

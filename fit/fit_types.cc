@@ -15,7 +15,10 @@ namespace zwidth::fit {
 bool FitOptions::IsValid(std::string* why) const {
   auto bad = [&](const std::string& m) { if (why) *why = m; return false; };
   if (num_modes < 0 || num_modes > 20) return bad("FitOptions::num_modes must be in [0, 20]");
-  if (delay_samples < 0) return bad("FitOptions::delay_samples must be >= 0");
+  // A model file holds a delay up to model::kMaxDelaySamples: 100000 was fitted and written, then refused.
+  if (delay_samples < 0 || delay_samples > model::kMaxDelaySamples) {
+    return bad("FitOptions::delay_samples must be in [0, " + std::to_string(model::kMaxDelaySamples) + "]");
+  }
   if (max_auto_delay < 0 || max_auto_delay > 1000) return bad("FitOptions::max_auto_delay must be in [0, 1000]");
   if (!(min_damping_ratio > 0 && min_damping_ratio < max_pole_damping_ratio)) return bad("FitOptions::min_damping_ratio must be in (0, FitOptions::max_pole_damping_ratio)");
   if (!(max_pole_damping_ratio < 1.0)) return bad("FitOptions::max_pole_damping_ratio must be < 1");

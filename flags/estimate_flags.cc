@@ -1,5 +1,7 @@
 #include "flags/estimate_flags.h"
 
+#include "flags/flag_guard.h"
+
 #include "io/model_json.h"
 #include "io/option_names.h"
 #include "model/error.h"
@@ -35,13 +37,16 @@ void AddLogFlags(CLI::App* cmd, io::LogSelect* s) {
   cmd->add_option("--time-unit", s->time_unit, "unit of the text time column: s | ms | us (default s)");
   cmd->add_option("--input-unit", s->input_unit, "unit of the text input column (mN m, N mm, N, ...; si: as is; default: from the header, else N m)");
   cmd->add_option("--output-unit", s->output_unit, "unit of the text output column (deg, rad, mm, um, m, counts, ...; si: as is; default: from the header, else rad)");
-  cmd->add_option("--counts-per-rev", s->counts_per_rev, "encoder counts per turn, for an output in counts (to rad)");
-  cmd->add_option("--counts-per-m", s->counts_per_m, "encoder counts per metre, for an output in counts (to m)");
+  cmd->add_option("--counts-per-rev", s->counts_per_rev, "encoder counts per turn, for an output in counts (to rad)")
+      ->check(NonZeroWhenGiven());
+  cmd->add_option("--counts-per-m", s->counts_per_m, "encoder counts per metre, for an output in counts (to m)")
+      ->check(NonZeroWhenGiven());
   cmd->add_flag("--decimal-comma", s->decimal_comma, "text numbers use ',' as the decimal mark (detected when the first data line reads only so)");
   cmd->add_option("--input-dataset", s->input_dataset, "HDF5 dataset of the input")->capture_default_str();
   cmd->add_option("--output-dataset", s->output_dataset, "HDF5 dataset of the output")->capture_default_str();
   cmd->add_option("--time-dataset", s->time_dataset, "HDF5 dataset of the time stamps")->capture_default_str();
-  cmd->add_option("--rate", s->sample_rate_hz, "sample rate [Hz], overrides the log's (time column then only checked to increase)");
+  cmd->add_option("--rate", s->sample_rate_hz, "sample rate [Hz], overrides the log's (time column then only checked to increase)")
+      ->check(NonZeroWhenGiven());
 }
 
 void AddEstimateFlags(CLI::App* cmd, EstimateFlags* f) {
@@ -49,7 +54,8 @@ void AddEstimateFlags(CLI::App* cmd, EstimateFlags* f) {
   cmd->add_option("--window", f->window, "hann | hamming | rect (periodic)")->capture_default_str();
   cmd->add_option("--window-length", f->welch.window_length,
                   "samples per Welch segment (default: the power of two nearest 4.096 s at the log's rate, halved until "
-                  "the log holds 3 segments: 4096 at 1 kHz, 16384 at 5 kHz)");
+                  "the log holds 3 segments: 4096 at 1 kHz, 16384 at 5 kHz)")
+      ->check(NonZeroWhenGiven());
   cmd->add_option("--overlap", f->welch.overlap, "segment overlap fraction in [0, 1)")->capture_default_str();
   cmd->add_option("--detrend", f->detrend,
                   "none | mean | linear, per segment (default linear; mean with --whole-record, where linear biases "

@@ -29,12 +29,18 @@ std::string CheckNumber(const std::string& value, bool floating) {
 
 // The long names ("--delays") of the options of `app` and its subcommands
 // that split their value at a delimiter.
-void ListFlagNames(const CLI::App& app, std::set<std::string>* names) {
+// And in `valued` the names ("--detrend", "-o") of every option that takes a value.
+void ListFlagNames(const CLI::App& app, std::set<std::string>* names, std::set<std::string>* valued) {
   for (const CLI::Option* opt : app.get_options()) {
+    if (opt->get_type_size() == 0 || opt->get_positional()) continue;  // a switch, a positional argument
+    for (const std::string& n : opt->get_lnames()) valued->insert("--" + n);
+    for (const std::string& n : opt->get_snames()) valued->insert("-" + n);
     if (opt->get_delimiter() == '\0') continue;
     for (const std::string& n : opt->get_lnames()) names->insert("--" + n);
   }
-  for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) ListFlagNames(*sub, names);
+  for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) {
+    ListFlagNames(*sub, names, valued);
+  }
 }
 
 // The 1-based index of the first empty (or blank) item of `value` split at
@@ -53,23 +59,41 @@ size_t EmptyItem(const std::string& value) {
 }  // namespace
 
 void CheckListFlags(const CLI::App& app, int argc, char** argv) {
-  std::set<std::string> names;
-  ListFlagNames(app, &names);
+  std::set<std::string> names, valued;
+  ListFlagNames(app, &names, &valued);
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--") return;  // positional arguments follow
-    const size_t eq = arg.find('=');
+    const size_t eq = arg.rfind("--", 0) == 0 ? arg.find('=') : std::string::npos;
     const std::string name = arg.substr(0, eq);
-    if (!names.count(name)) continue;
+    if (!valued.count(name)) continue;
     if (eq == std::string::npos && i + 1 >= argc) return;  // CLI11 reports the missing value
     const std::string value = eq == std::string::npos ? argv[++i] : arg.substr(eq + 1);
-    if (value.empty()) continue;  // one empty value: the numeric check names it
+    // An empty value is never a choice: `--detrend ""`, `--time-unit ""`, `--delimiter ""` silently
+    // meant the default, `--delays ""` the delay 0.
+    if (value.find_first_not_of(" \t") == std::string::npos) {
+      throw InputError(name + " '" + io::Printable(value) + "': an empty value; give one (or leave " + name +
+                       " out for its default)");
+    }
+    if (!names.count(name)) continue;
     if (const size_t item = EmptyItem(value)) {
       throw InputError(name + " '" + io::Printable(value) + "': item " + std::to_string(item) +
                        " of the comma-separated list is empty; give a number between each pair of commas "
                        "(e.g. " + name + " 2,4)");
     }
   }
+}
+
+CLI::Validator NonZeroWhenGiven() {
+  return CLI::Validator(
+      [](std::string& v) -> std::string {
+        char* end = nullptr;
+        const double x = std::strtod(v.c_str(), &end);
+        if (end == v.c_str() || x != 0.0) return "";  // non-numbers: CheckNumber and CLI11 name them
+        return "'" + v + "' is the value that means \"not given\" (the default); give a positive value or "
+               "leave the flag out";
+      },
+      "", "non-zero");
 }
 
 void GuardNumericFlags(CLI::App* app) {

@@ -14,5 +14,9 @@ void GuardNumericFlags(CLI::App* app);
 // an empty item in the value of any option of `app` (or its subcommands) that
 // has a delimiter is an InputError naming the flag and the item.
 void CheckListFlags(const CLI::App& app, int argc, char** argv);
+// For an option whose 0 means "not given" (--rate: the log's; --window-length:
+// the default segment): an explicit 0 is refused instead of silently meaning
+// the default (`--counts-per-rev 0` read the output as radians).
+CLI::Validator NonZeroWhenGiven();
 
 }  // namespace zwidth::flags

@@ -7,7 +7,9 @@
 #include <random>
 
 #include "ident/fft.h"
+#include "model/c_locale.h"
 #include "model/error.h"
+#include "model/simulate.h"
 
 namespace zwidth::ident {
 namespace {
@@ -46,9 +48,14 @@ bool ExcitationOptions::IsValid(std::string* why) const {
   auto bad = [&](const std::string& m) { if (why) *why = m; return false; };
   if (!(sample_rate_hz > 0.0 && std::isfinite(sample_rate_hz))) return bad("ExcitationOptions::sample_rate_hz must be finite and > 0");
   if (!(seconds > 0.0 && std::isfinite(seconds))) return bad("ExcitationOptions::seconds must be finite and > 0");
-  if (seconds * sample_rate_hz > 1e8) return bad("ExcitationOptions::seconds x ExcitationOptions::sample_rate_hz is over 1e8 samples");
+  // `excite` peaks at ~58 bytes a sample (the whole record's spectrum; 2e7 samples: 1.15 GB, 16 s
+  // here): 1e7 keeps it near 600 MB (2.8 h at 1 kHz); 1e8 took ~5.8 GB from one flag.
+  if (seconds * sample_rate_hz > 1e7) return bad("ExcitationOptions::seconds x ExcitationOptions::sample_rate_hz is over 1e7 samples");
   if (seconds * sample_rate_hz < 16) return bad("ExcitationOptions::seconds x ExcitationOptions::sample_rate_hz gives fewer than 16 samples");
   if (!(rms > 0.0 && std::isfinite(rms))) return bad("ExcitationOptions::rms must be finite and > 0");
+  if (rms > model::kMaxSignalRms) {  // 1e308 was scaled to inf and written as "rms=inf"
+    return bad("ExcitationOptions::rms = " + FormatG(rms) + " is above 1e12 (input units)");
+  }
   if (!(fmin_hz >= 0.0 && std::isfinite(fmin_hz))) return bad("ExcitationOptions::fmin_hz must be finite and >= 0");
   if (kind == ExcitationKind::kChirp && !(fmin_hz > 0.0)) return bad("ExcitationOptions::fmin_hz must be > 0 for a logarithmic chirp");
   if (!(fmax_hz > fmin_hz)) return bad("ExcitationOptions::fmax_hz must be > ExcitationOptions::fmin_hz");

@@ -108,7 +108,8 @@ bool IsGlob(const std::string& s) { return s.find_first_of("*?[") != std::string
 }  // namespace
 
 std::vector<BatchEntry> ReadManifest(const std::string& path) {
-  const std::string text = ReadSmallFile(path, "manifest", kMaxTableBytes);
+  std::string text = ReadSmallFile(path, "manifest", kMaxTableBytes);
+  if (text.rfind("\xEF\xBB\xBF", 0) == 0) text.erase(0, 3);  // a spreadsheet's UTF-8 BOM ("it reads 'serial,path'")
   const std::string where = Printable(path);
   std::vector<Record> records = ParseCsv(text, where);
   if (records.empty()) throw InputError(where + ": an empty manifest; its first line names the columns (serial,path,...)");

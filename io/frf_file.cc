@@ -76,11 +76,20 @@ std::string CanonicalColumn(std::string name) {
   return it == aliases.end() ? name : it->second;
 }
 
+// The header line of a response CSV, without the UTF-8 BOM a spreadsheet
+// saves first (the log reader drops it too): with it, "f_hz" was not found and
+// the file was read as a log ("no column 'torque'").
+bool ReadHeader(std::istream& in, std::string* line) {
+  if (!std::getline(in, *line)) return false;
+  if (line->rfind("\xEF\xBB\xBF", 0) == 0) line->erase(0, 3);
+  return true;
+}
+
 ident::FrequencyResponse ReadCsv(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path + ": cannot open frequency-response file");
   std::string line;
-  if (!std::getline(in, line)) throw InputError(path + ": empty file");
+  if (!ReadHeader(in, &line)) throw InputError(path + ": empty file");
   std::map<std::string, int> col;
   size_t num_columns = 0;
   std::vector<std::string_view> fields;
@@ -264,7 +273,11 @@ void Finish(ident::FrequencyResponse& r, const std::string& path, double rate, s
   }
   CheckBinValues(r, path);
   if (rate > 0.0) r.sample_rate_hz = rate;
-  if (!(r.sample_rate_hz > 0.0) || !std::isfinite(r.sample_rate_hz)) {
+  if (std::isnan(r.sample_rate_hz) || std::isinf(r.sample_rate_hz)) {  // given, but no rate ("no attribute" before)
+    throw InputError(path + ": the file's sample_rate_hz = " + Num(r.sample_rate_hz) + " is not a finite number: "
+                     "write the log's sample rate there (10..1e6 Hz), or pass ReadFrequencyResponse::sample_rate_hz");
+  }
+  if (!(r.sample_rate_hz > 0.0)) {
     throw InputError(path + ": no sample_rate_hz column or attribute; pass ReadFrequencyResponse::sample_rate_hz (the log's sample rate)");
   }
   CheckRate(r.sample_rate_hz, path, rate > 0.0 ? "ReadFrequencyResponse::sample_rate_hz" : "the file's sample_rate_hz");
@@ -422,7 +435,7 @@ bool IsFrequencyResponseFile(const std::string& path) {
   }
   std::ifstream in(path);
   std::string line;
-  if (!std::getline(in, line)) return false;
+  if (!ReadHeader(in, &line)) return false;
   // zwidth estimate's header, or one from elsewhere that starts f,...H_re.
   std::vector<std::string_view> fields;
   internal::SplitFields(line, ',', &fields);

@@ -2,14 +2,18 @@
 // open-object check of every HDF5 or MATLAB write. Nothing here links libhdf5:
 // a program that reads a model JSON links neither libhdf5 nor libmatio.
 #include <atomic>
+#include <cerrno>
+#include <filesystem>
 #include <cstdio>
 #include <cstdlib>
 #include <mutex>
 
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 #include "io/atomic_file.h"
 #include "io/hdf5_api.h"
+#include "io/io_internal.h"
 #include "io/isolated.h"
 #include "model/error.h"
 
@@ -49,7 +53,19 @@ void WriteHdf5Atomically(const std::string& path,
   WriteAtomically(path, [&](const std::string& tmp) {
     std::lock_guard<std::recursive_mutex> hold(LibraryForkMutex());
     const long open_before = h5.open_objects();
-    write(h5, tmp);
+    try {
+      write(h5, tmp);
+    } catch (const InputError&) {
+      // HDF5 says "H5Dwrite failed" about the temporary; a full disk is said as a text file's is
+      // (the user's name, the system's reason), found by errno or by no free block left.
+      const int err = errno;
+      struct statvfs fs;
+      const std::string folder = std::filesystem::path(tmp).parent_path().string();
+      const bool full = err == ENOSPC || err == EDQUOT ||
+                        (::statvfs(folder.empty() ? "." : folder.c_str(), &fs) == 0 && fs.f_bavail == 0);
+      if (full) throw InputError(WriteFailure(tmp, ENOSPC));
+      throw;
+    }
     if (h5.open_objects() > open_before) {
       static std::once_flag once;
       std::call_once(once, [] { std::atexit(ExitBeforeHdf5Cleanup); });

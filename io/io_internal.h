@@ -35,6 +35,11 @@ void AppendInt(std::string* out, long long v);
 // '\n', kept in a buffer written out every MiB (a response of 2^20 bins would
 // otherwise sit whole in memory). InputError "cannot create '<path>'" when it
 // cannot be opened, "failed writing '<shown>'" from Close when a write failed.
+// The message of a write that failed on `written` (a temporary: "DIR/.OUT.tmp-XXXXXX/f.csv.tmp-XXXXXX"
+// is shown as the file the user named, "DIR/OUT/f.csv"), with the system's reason (errno, e.g. "No
+// space left on device") and what to do. Nothing was written.
+std::string WriteFailure(const std::string& written, int error);
+
 class CsvFile {
  public:
   explicit CsvFile(const std::string& path);
@@ -53,6 +58,7 @@ class CsvFile {
   std::FILE* f_;
   std::string buf_;
   bool first_ = true, ok_ = true;
+  int errno_ = 0;  // of the first write that failed
 };
 
 // The fields of model/friction.h as (name, value), in model.json's key order

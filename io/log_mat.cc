@@ -205,6 +205,12 @@ bool ReadMatVector(mat_t* mat, const std::string& path, const std::string& spec,
       v->class_type == MAT_C_CHAR) {
     throw InputError(path + ": '" + spec.substr(0, 40) + "' is " + MatKind(v));
   }
+  // A logical array (u > 0) is read by libmatio as uint8 0/1: no torque or
+  // position, and an HDF5 log's boolean dataset is refused likewise.
+  if (v->isLogical) {
+    throw InputError(path + ": '" + spec.substr(0, 40) + "' is a logical array (true/false), not samples: save the "
+                     "signal itself as numbers (double)");
+  }
   if (v->isComplex || long_dims > 1 || !v->data) {
     std::string shape;
     for (int i = 0; i < v->rank; ++i) {

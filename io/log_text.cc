@@ -1,6 +1,7 @@
 #include "io/log.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -686,6 +687,7 @@ void WriteCsvLog(const std::string& tmp, double rate, const std::vector<double>&
   if (!f) throw InputError("cannot create '" + tmp + "'");
   std::fputs(linear ? "t,force [N],position [m]\n" : "t,torque,position\n", f);
   std::string line;  // to_chars: no decimal comma under the host's locale (Python's locale.setlocale)
+  int error = 0;     // errno of the first write that failed
   for (size_t k = 0; k < u.size(); ++k) {
     line.clear();
     AppendG(&line, static_cast<double>(k) / rate, 17);
@@ -694,10 +696,12 @@ void WriteCsvLog(const std::string& tmp, double rate, const std::vector<double>&
     line += ',';
     AppendG(&line, y[k], 17);
     line += '\n';
-    std::fputs(line.c_str(), f);
+    if (std::fputs(line.c_str(), f) < 0 && error == 0) error = errno;
   }
   const bool ok = std::ferror(f) == 0;
-  if (std::fclose(f) != 0 || !ok) throw InputError("failed writing '" + tmp + "' (disk full?)");
+  errno = 0;
+  if (std::fclose(f) != 0 && error == 0) error = errno;
+  if (error != 0 || !ok) throw InputError(internal::WriteFailure(tmp, error));
 }
 
 }  // namespace zwidth::io::internal

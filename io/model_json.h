@@ -29,6 +29,7 @@
 
 #include "model/friction.h"
 #include "model/plant.h"
+#include "model/simulate.h"
 
 namespace zwidth::io {
 
@@ -75,7 +76,7 @@ inline constexpr size_t kMaxJsonBytes = 64u << 20; // size of a model or scene f
 inline constexpr double kMinPeriodS = 1e-6, kMaxPeriodS = 0.1;
 // A model's "encoder_step" lies in [kPlausibleMin, kMaxEncoderStep] (rad or m
 // per count); a fit stores a step read from its log only there.
-inline constexpr double kMaxEncoderStep = 1.0;
+inline constexpr double kMaxEncoderStep = model::kMaxEncoderStep;
 
 // "" when T lies in that range, else the message naming `name` ("--period",
 // "key 'sample_period_s'") with the likely slip (a rate or milliseconds typed

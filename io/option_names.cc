@@ -76,6 +76,7 @@ const std::vector<OptionName>& OptionNames() {
       {"FitOptions::runner_up_cost_ratio", "", ""},
       {"BGridOptions::b_min", "--b-min", ""},
       {"BGridOptions::b_max", "--b-max", ""},
+      {"CutoffSweepOptions::area_B_max", "--area-b-max", ""},
       {"BGridOptions::b_step", "--b-step", "b_step"},
       {"BGridOptions::b_points", "--b-points", "b_points"},
       {"SummaryMonteCarlo::samples", "--monte-carlo", "monte_carlo"},

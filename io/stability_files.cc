@@ -11,6 +11,8 @@
 #include <unordered_set>
 
 #include "io/atomic_file.h"
+#include "model/c_locale.h"
+#include "stability/loop_options.h"
 #include "io/model_json.h"
 #include "model/error.h"
 
@@ -120,10 +122,19 @@ std::string LoopDelaysProblem(const std::vector<int>& delays, const std::string&
     return name + ": " + std::to_string(delays.size()) + " delays, more than the " + std::to_string(kMaxLoopDelays) +
            " one command takes: run it again for the others";
   }
-  for (int d : delays) {
+  for (size_t i = 0; i < delays.size(); ++i) {
+    const int d = delays[i];
     if (d < 0 || d > kMaxLoopDelaySamples) {
       return name + " = " + std::to_string(d) + ": a loop delay must lie in [0, " +
              std::to_string(kMaxLoopDelaySamples) + "] samples (a delay counts samples of the period, not ms or us)";
+    }
+    // A delay twice would be computed twice and give its rows and summary twice
+    // (a boundary CSV with repeated rows, a comparison printed twice).
+    for (size_t k = 0; k < i; ++k) {
+      if (delays[k] == d) {
+        return name + ": the delay " + std::to_string(d) + " is given twice (items " + std::to_string(k + 1) +
+               " and " + std::to_string(i + 1) + "): give each delay once";
+      }
     }
   }
   return "";
@@ -183,8 +194,10 @@ std::vector<SceneObject> ParseScene(const std::string& text, const std::string& 
         throw InputError(where + ": '" + key + "' must be a number");
       }
       const double v = o[key].get<double>();
-      if (!std::isfinite(v) || v < 0.0) {
-        throw InputError(where + ": '" + key + "' = " + o[key].dump() + " must be finite and >= 0");
+      // The bound of --stiffness and --damping (wall) and of a hand's K and B.
+      if (!std::isfinite(v) || v < 0.0 || v > stability::kMaxLoopValue) {
+        throw InputError(where + ": '" + key + "' = " + FormatG(v) + " must be finite and in [0, 1e12] (" +
+                         (key[0] == 'K' ? "N m/rad; N/m" : "N m s/rad; N s/m") + " on a linear axis)");
       }
       (key[0] == 'K' ? so.K : so.B) = v;
     }

@@ -13,13 +13,23 @@
 
 namespace zwidth::model {
 
+std::string EncoderStepProblem(double q, const std::string& name) {
+  if (q == 0.0 || (q >= kMinEncoderStep && q <= kMaxEncoderStep)) return "";
+  return name + " = " + FormatG(q) + ": an encoder step is 0 (an exact encoder) or lies in [1e-12, 1] rad (m on a "
+         "linear axis) per count, e.g. 2 pi / 40960 = 0.000153398 for 40960 counts per turn";
+}
+
 bool SimulateOptions::IsValid(std::string* why) const {
   auto bad = [&](const std::string& m) { if (why) *why = m; return false; };
   if (!(std::isfinite(seconds) && seconds > 0)) return bad("SimulateOptions::seconds must be > 0");
   if (!(std::isfinite(sample_rate_hz) && sample_rate_hz > 0)) return bad("SimulateOptions::sample_rate_hz must be > 0");
   if (!(std::isfinite(torque_rms) && torque_rms > 0)) return bad("SimulateOptions::torque_rms must be > 0");
+  if (torque_rms > kMaxSignalRms) {
+    return bad("SimulateOptions::torque_rms = " + FormatG(torque_rms) + " is above 1e12 (N m, or N on a linear axis)");
+  }
   if (!(std::isfinite(bandwidth_hz) && bandwidth_hz > 0)) return bad("SimulateOptions::bandwidth_hz must be > 0");
   if (!(std::isfinite(encoder_step_rad) && encoder_step_rad >= 0)) return bad("SimulateOptions::encoder_step_rad must be >= 0");
+  if (std::string p = EncoderStepProblem(encoder_step_rad, "SimulateOptions::encoder_step_rad"); !p.empty()) return bad(p);
   if (!(std::isfinite(noise_std_rad) && noise_std_rad >= 0)) return bad("SimulateOptions::noise_std_rad must be >= 0");
   if (delay_samples < 0) return bad("SimulateOptions::delay_samples must be >= 0");
   if (delay_samples > kMaxDelaySamples) {  // the model's own plus this one may not wrap
@@ -39,12 +49,13 @@ bool SimulateOptions::IsValid(std::string* why) const {
                "band there; give a band up to Nyquist (SimulateOptions::bandwidth_hz " + nyquist +
                " is white noise) or raise SimulateOptions::sample_rate_hz");
   }
-  // At most kMaxSimulateSamples (1e8, 28 h at 1 kHz: 1.6 GB of samples in memory).
-  constexpr double kMaxSimulateSamples = 1e8;
+  // At most kMaxSimulateSamples (4e7, 11 h at 1 kHz): `simulate` peaks at ~24 bytes a sample
+  // (2e7 samples: 487 MB, 4.4 s here), so under 1 GiB; 1e8 took 2.4 GB from one flag.
+  constexpr double kMaxSimulateSamples = 4e7;
   if (seconds * sample_rate_hz < 2) return bad("SimulateOptions::seconds * SimulateOptions::sample_rate_hz must give at least 2 samples");
   if (!(seconds * sample_rate_hz <= kMaxSimulateSamples)) {
     return bad("SimulateOptions::seconds x SimulateOptions::sample_rate_hz = " + FormatG(seconds * sample_rate_hz) +
-               " samples, more than simulate writes (1e8); shorten SimulateOptions::seconds or lower "
+               " samples, more than simulate writes (4e7); shorten SimulateOptions::seconds or lower "
                "SimulateOptions::sample_rate_hz");
   }
   return true;

@@ -12,8 +12,22 @@
 
 namespace zwidth::model {
 
+// An encoder step q [rad, or m on a linear axis, per count] is 0 (an exact
+// encoder) or lies in [kMinEncoderStep, kMaxEncoderStep]: a step above 1 rad
+// rounds every motion of a haptic device to one count (a wall simulated with
+// --encoder-step 1e300 "decayed", a relay "did not oscillate"). The one rule
+// for a flag, a keyword, an option and a model file's "encoder_step".
+inline constexpr double kMinEncoderStep = 1e-12, kMaxEncoderStep = 1.0;
+// "" when q is allowed, else a message naming `name`.
+std::string EncoderStepProblem(double q, const std::string& name);
+
+// A signal's RMS (a simulated torque, an excitation) is at most kMaxSignalRms
+// [input units]: past it the log's spectra overflow (1e300 was written, then
+// refused by every reader) long before any actuator could give it.
+inline constexpr double kMaxSignalRms = 1e12;
+
 struct SimulateOptions {
-  double seconds = 30.0;             // log length [s], > 0; seconds x sample_rate_hz in [2, 1e8] samples
+  double seconds = 30.0;             // log length [s], > 0; seconds x sample_rate_hz in [2, 4e7] samples
   double sample_rate_hz = 1000.0;    // [Hz], in (10, 1e6]: the log readers' range (IsDeviceLogRate)
   double period_s() const { return SamplePeriod(sample_rate_hz); }  // the sample period T [s]
   double torque_rms = 0.03;          // RMS of the torque [N m], > 0

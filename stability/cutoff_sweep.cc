@@ -25,6 +25,9 @@ bool CutoffSweepOptions::IsValid(double T, std::string* why) const {
   if (measure == SweepMeasure::kArea && !(area_B_max > 0.0 && std::isfinite(area_B_max))) {
     return bad("area_B_max must be finite and > 0 for the area measure");
   }
+  if (area_B_max > kMaxLoopValue) {  // a hand's and a wall's B bound: 1e300 was swept
+    return bad("CutoffSweepOptions::area_B_max must be at most 1e12 (N m s/rad), the bound of a loop's B");
+  }
   if (!(area_K_clip > 0.0)) return bad("area_K_clip must be > 0");
   if (area_B_points < 2) return bad("area_B_points must be >= 2");
   return true;

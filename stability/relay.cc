@@ -10,6 +10,7 @@
 
 #include "model/cancel.h"
 #include "model/error.h"
+#include "model/simulate.h"
 #include "model/nonlinear_simulate.h"
 #include "model/state_space.h"
 #include "stability/hand.h"
@@ -25,6 +26,8 @@ bool RelayOptions::IsValid(std::string* why) const {
   if (!(std::isfinite(period_s) && period_s > 0)) return bad("period_s must be finite and > 0");
   if (delay_samples < 0) return bad("delay_samples must be >= 0");
   if (!(std::isfinite(damping) && damping >= 0)) return bad("damping must be finite and >= 0");
+  // The wall's and the hand's bound (kMaxLoopValue): B = 1e300 was simulated and reported.
+  if (damping > kMaxLoopValue) return bad("damping must lie in [0, 1e12]");
   if (!(std::isfinite(amplitude) && amplitude > 0)) return bad("amplitude must be finite and > 0");
   if (!(std::isfinite(seconds) && seconds > 0)) return bad("seconds must be finite and > 0");
   if (seconds / period_s > 5e7) return bad("seconds / period_s is over 5e7 samples: simulate less");
@@ -37,6 +40,7 @@ bool RelayOptions::IsValid(std::string* why) const {
   if (!friction.IsValid(&loop_why)) return bad("friction." + loop_why);
   if (!actuator.IsValid(&loop_why)) return bad("actuator." + loop_why);
   if (!(std::isfinite(encoder_step) && encoder_step >= 0)) return bad("encoder_step must be finite and >= 0");
+  if (std::string p = model::EncoderStepProblem(encoder_step, "encoder_step"); !p.empty()) return bad(p);
   return true;
 }
 

@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "model/error.h"
+#include "model/simulate.h"
 #include "model/nonlinear_simulate.h"
 #include "model/state_space.h"
 #include "stability/hand.h"
@@ -28,6 +29,7 @@ bool WallOptions::IsValid(std::string* why) const {
     return bad("initial_position must be != 0 (the wall is at 0) and within +-1e6");
   }
   if (!(std::isfinite(encoder_step) && encoder_step >= 0)) return bad("encoder_step must be finite and >= 0");
+  if (std::string p = model::EncoderStepProblem(encoder_step, "encoder_step"); !p.empty()) return bad(p);
   std::string w;
   if (!friction.IsValid(&w)) return bad("friction." + w);
   if (!actuator.IsValid(&w)) return bad("actuator." + w);

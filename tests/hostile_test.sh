@@ -236,7 +236,7 @@ $PY -c "
 import json,sys; m=json.load(open('$M')); m['modes']=m['modes']*33; json.dump(m, open('$T/many_modes.json','w'))"
 expect modes-cap "has 66 entries, more than 64" -- "$ZW" boundary "$T/many_modes.json" -o "$T/x21.csv"
 expect simulate-delay-cap "--delay-samples 2147483647 is more than 1000" -- "$ZW" simulate --model "$M" --delay-samples 2147483647 -o "$T/x26.csv"
-expect simulate-sample-cap "more than simulate writes \(1e8\)" -- "$ZW" simulate --model "$M" --seconds 1e6 -o "$T/x22.csv"
+expect simulate-sample-cap "more than simulate writes \(4e7\)" -- "$ZW" simulate --model "$M" --seconds 1e6 -o "$T/x22.csv"
 
 # ---- 5. non-finite results are errors, with the stage named
 awk -F, 'NR>1{$3=$3*1e306}1' OFS=, "$T/good.csv" > "$T/huge_output.csv"
