@@ -64,7 +64,9 @@ struct CriticalPoint {
   double K_cr = std::numeric_limits<double>::quiet_NaN();
   double f_cr_hz = std::numeric_limits<double>::quiet_NaN();  // ultimate frequency
   bool unstable_at_zero_k = false;
-  // Schur-Cohn agrees: stable at 0.999999 K_cr, unstable at 1.000001 K_cr.
+  // Schur-Cohn agrees: stable at 0.999999 K_cr, unstable at 1.000001 K_cr
+  // (with ill-conditioned poles, ZWidth::UnstableRoots: the eigenvalues at
+  // the smallest of K_cr (1 -+ 1e-6 .. 1e-3) they can resolve).
   bool verified = false;
   // The paper's reading, eq. (4): the gain margin of
   // G_d / (z^d + B (1 - z^-1)/T G_d) as MATLAB's margin() reports it (the phase
@@ -86,7 +88,8 @@ struct KInterval {
   double f_lo_hz = std::numeric_limits<double>::quiet_NaN();  // pole frequency at K_lo (nan at 0)
   double f_hi_hz = std::numeric_limits<double>::quiet_NaN();  // pole frequency at K_hi (nan at inf)
   // Schur-Cohn agrees at each finite, positive end: stable at (1 -+ 1e-6) of
-  // it inside the interval, unstable just outside.
+  // it inside the interval, unstable just outside (ill-conditioned poles: as
+  // CriticalPoint::verified).
   bool verified = false;
 };
 
@@ -227,6 +230,11 @@ class ZWidth {
   bool IsStable(double K, double B) const;
   // The number of closed-loop roots with |z| >= 1 at (K, B) (K = 0 as 0+):
   // exact with the eigenvalue test, 0 or 1 (at least one) with Schur-Cohn.
+  // Where the sampled plant's poles are ill-conditioned (its
+  // eigenvalue_shift over kEigenvalueShiftWarning: the summary's
+  // conditioning warning) the eigenvalues at K = 0+ and the crossings'
+  // directions count it (exact to the crossings' theta tolerance; the
+  // eigenvalues only where a direction is unknown).
   // IsStable is UnstableRoots == 0: every caller's one test.
   int UnstableRoots(double K, double B) const;
   DelaySummary Summarize() const;
