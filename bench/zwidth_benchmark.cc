@@ -448,6 +448,55 @@ void BM_CrowdedModeBoundary(benchmark::State& state) {
 }
 BENCHMARK(BM_CrowdedModeBoundary)->Arg(8)->Arg(16)->Arg(32)->Unit(benchmark::kMillisecond);
 
+// Issue 31's hardest corner: 64 sections 1 % apart at damping ratio 1e-4
+// (omega_i = 300 x 1.01^i rad/s, v_i = 0.93 omega_i, Table I's m and b,
+// T = 1 ms) at delay 0, 2, 20 (the arg): construction, Summarize and K_CR at
+// 8 B values from 0 to 0.9 B_max_from_zero (the poles' eigenvalue_shift is
+// 3.4e-4: UnstableRoots counts the crossings). Error: the largest relative
+// difference of K_CR at B = 0, 0.26 and 0.64 B_max_from_zero from a 20-step
+// 30-digit bisection over K_CR (1 -+ 1e-5) (tests/brute_force_wide.h; its
+// resolution, 1.9e-11, is the smallest error it can show; double and long double cannot resolve the integrator's root 6e-14
+// inside the circle at K ~ 1e-13); 1 where the bisection does not straddle a
+// boundary. Without Boost no error (wide_referee = 0).
+void BM_CornerBoundary(benchmark::State& state) {
+  model::Plant p = model::PhantomTable1();
+  p.modes.clear();
+  for (int i = 0; i < 64; ++i) {
+    const double w = 300.0 * std::pow(1.01, i), v = 0.93 * w;
+    p.modes.push_back({w, 2e-4 * w, v, 2e-4 * v});
+  }
+  const int d = static_cast<int>(state.range(0));
+  std::vector<double> K(8), Bs(8);
+  int verified = 0;
+  for (auto _ : state) {
+    const stability::ZWidth z(p, 1e-3, d);
+    const stability::DelaySummary s = z.Summarize();
+    verified = 0;
+    for (int i = 0; i < 8; ++i) {
+      Bs[i] = 0.9 * s.B_max_from_zero * i / 7.0;
+      const stability::CriticalPoint c = z.At(Bs[i]);
+      K[i] = c.K_cr;
+      verified += c.verified;
+    }
+    benchmark::DoNotOptimize(K.data());
+  }
+  state.counters["verified_of_8"] = verified;
+  state.counters["K_cr_at_zero_B"] = K[0];
+#if ZWIDTH_HAVE_WIDE_BRUTE_FORCE
+  const stability::WideBruteForce wide(p, d, 1e-3);
+  double err = 0.0;
+  for (int i : {0, 2, 5}) {  // B = 0, 0.26, 0.64 B_max_from_zero
+    const double k = stability::WideBisect(wide, K[i], Bs[i], 1e-5, 20);
+    err = std::max(err, std::isfinite(k) ? std::abs(K[i] / k - 1) : 1.0);
+  }
+  state.counters["max_rel_err_K_cr_vs_30_digit_brute_force"] = err;
+  state.counters["wide_referee"] = 1;
+#else
+  state.counters["wide_referee"] = 0;
+#endif
+}
+BENCHMARK(BM_CornerBoundary)->Arg(0)->Arg(2)->Arg(20)->Unit(benchmark::kMillisecond)->Iterations(1);
+
 // Long loop delays (Table I, T = 1 ms, d = 100, 170, 240 samples; past ~163
 // the characteristic polynomial's boundary error exceeds 1e-9 and the
 // closed loop's eigenvalues decide): the summary and the boundary rows of a

@@ -127,6 +127,7 @@ ZWidth::ZWidth(const SampledPlant& sampled, int delay_samples, const LoopOptions
   zero_k_b_ = ZeroKCandidates(&zero_k_change_);
   zero_k_counts_ = std::make_shared<std::vector<std::atomic<int>>>(zero_k_b_.size() + 1);
   for (std::atomic<int>& c : *zero_k_counts_) c.store(-1);
+  count_by_crossings_ = !use_polynomial_ && sp_.conditioning().eigenvalue_shift > kEigenvalueShiftWarning;
 }
 
 void ZWidth::BuildGrid() {
@@ -337,9 +338,33 @@ int ZWidth::UnstableRoots(double K, double B) const {
     // the integrator's eigenvalue at 1 deflated (it moves inside for K > 0).
     if (K < 0.0 && has_integrator_) return 1;
     if (K == 0.0) return RootsOutsideAtZeroK(B);
+    if (count_by_crossings_) {
+      const int c = CrossingCount(K, B);
+      if (c >= 0) return c;
+    }
     return closed_loop_->RootsOutside(K, B, false);
   }
   return PolynomialStable(K, B) ? 0 : 1;
+}
+
+int ZWidth::CrossingCount(double K, double B) const {
+  // The roots cross the circle only at the crossings, each in its known
+  // direction (Crossings): from K = 0+ (the eigenvalues at K = 0, where the
+  // roots are the loop's at B alone and lie as far from the circle as the
+  // plant's poles) to K the count changes by weight x direction at each.
+  std::vector<Crossing> xs = Crossings(B);
+  std::sort(xs.begin(), xs.end(), [](const Crossing& a, const Crossing& b) { return a.K < b.K; });
+  const int order = closed_loop_->order();
+  int count = RootsOutsideAtZeroK(B);
+  for (const Crossing& x : xs) {
+    if (!(x.K > 0.0) || !std::isfinite(x.K)) continue;
+    if (std::abs(x.K - K) <= 1e-12 * K) return -1;  // on the boundary: the eigenvalues decide
+    if (x.K > K) break;
+    const int w = x.theta < std::numbers::pi ? 2 : 1;
+    count = internal::PropagateCount(count, w * x.direction, x.direction != 0, order);
+    if (count < 0) return -1;
+  }
+  return count;
 }
 
 std::vector<double> ZWidth::ZeroKCandidates(std::vector<int>* changes) const {
@@ -440,9 +465,17 @@ int ZWidth::RootsOutsideAtZeroK(double B) const {
 }
 
 template <typename Stable>
-bool ZWidth::ConfirmsEnd(double K_in, double K_out, double B, const Stable& stable) const {
+bool ZWidth::ConfirmsEnd(double K_in, double K_out, double B, const Stable& stable, double gap) const {
   if (!use_polynomial_ && polynomial_verifies_ && PolynomialStable(K_in, B) && !PolynomialStable(K_out, B)) return true;
-  return stable(K_in) == 0 && stable(K_out) != 0;
+  if (!count_by_crossings_) return stable(K_in) == 0 && stable(K_out) != 0;
+  // stable(K) counts the crossings themselves here: the eigenvalues verify.
+  const double K = 0.5 * (K_in + K_out), side = K_out > K ? 1.0 : -1.0;
+  for (double delta : {1e-6, 1e-5, 1e-4, 1e-3}) {
+    if (delta > 1e-6 && delta >= 0.5 * gap) break;
+    if (closed_loop_->RootsOutside(K * (1.0 - side * delta), B, false) == 0 &&
+        closed_loop_->RootsOutside(K * (1.0 + side * delta), B, false) != 0) return true;
+  }
+  return false;
 }
 
 bool ZWidth::PolynomialStable(double K, double B) const {
@@ -497,6 +530,22 @@ std::vector<double> MakeBGrid(const BGridOptions& o, double largest, double fall
   return g;
 }
 
+namespace {
+
+// The relative distance from K to its nearest other crossing with K > 0
+// (ConfirmsEnd's bound on how far it may probe); inf when there is none.
+double RelativeGap(double K, const std::vector<Crossing>& xs) {
+  double gap = std::numeric_limits<double>::infinity();
+  for (const Crossing& x : xs) {
+    if (!(x.K > 0.0) || !std::isfinite(x.K)) continue;
+    const double g = std::abs(x.K - K) / K;
+    if (g > 1e-13) gap = std::min(gap, g);
+  }
+  return gap;
+}
+
+}  // namespace
+
 double ZWidth::NoCrossingProbe(const std::vector<Crossing>& xs) const {
   // Far above every crossing's |K| (whatever its sign), so that a crossing
   // near K = 0 lost to rounding lies between 0+ and the probe.
@@ -540,7 +589,7 @@ CriticalPoint ZWidth::PointFrom(double B, const std::vector<Crossing>& xs, const
     return cp;
   }
   cp.verified = !verify || !options_.verify ||
-                ConfirmsEnd(cp.K_cr * (1.0 - 1e-6), cp.K_cr * (1.0 + 1e-6), B, stable);
+                ConfirmsEnd(cp.K_cr * (1.0 - 1e-6), cp.K_cr * (1.0 + 1e-6), B, stable, RelativeGap(cp.K_cr, xs));
   return cp;
 }
 
@@ -622,15 +671,20 @@ std::vector<KInterval> ZWidth::IntervalsFrom(double B, const std::vector<Crossin
   for (KInterval& iv : out) {
     bool ok = true;
     if (check == Check::kVerify && options_.verify) {
-      if (iv.K_lo > 0.0) ok = ok && ConfirmsEnd(iv.K_lo * (1.0 + 1e-6), iv.K_lo * (1.0 - 1e-6), B, stable);
-      if (std::isfinite(iv.K_hi)) ok = ok && ConfirmsEnd(iv.K_hi * (1.0 - 1e-6), iv.K_hi * (1.0 + 1e-6), B, stable);
+      if (iv.K_lo > 0.0) {
+        ok = ok && ConfirmsEnd(iv.K_lo * (1.0 + 1e-6), iv.K_lo * (1.0 - 1e-6), B, stable, RelativeGap(iv.K_lo, xs));
+      }
+      if (std::isfinite(iv.K_hi)) {
+        ok = ok && ConfirmsEnd(iv.K_hi * (1.0 - 1e-6), iv.K_hi * (1.0 + 1e-6), B, stable, RelativeGap(iv.K_hi, xs));
+      }
     }
     iv.verified = ok;
     all_ok = all_ok && ok;
   }
   // An interval from the counts that the test does not confirm: the test at
-  // every region decides instead.
-  if (count && !all_ok) return IntervalsFrom(B, xs, stable, check, false);
+  // every region decides instead (not where the crossings are what the
+  // test counts, count_by_crossings_: the ends stay unverified).
+  if (count && !all_ok && !count_by_crossings_) return IntervalsFrom(B, xs, stable, check, false);
   return out;
 }
 

@@ -64,7 +64,9 @@ struct CriticalPoint {
   double K_cr = std::numeric_limits<double>::quiet_NaN();
   double f_cr_hz = std::numeric_limits<double>::quiet_NaN();  // ultimate frequency
   bool unstable_at_zero_k = false;
-  // Schur-Cohn agrees: stable at 0.999999 K_cr, unstable at 1.000001 K_cr.
+  // Schur-Cohn agrees: stable at 0.999999 K_cr, unstable at 1.000001 K_cr
+  // (with ill-conditioned poles, ZWidth::UnstableRoots: the eigenvalues at
+  // the smallest of K_cr (1 -+ 1e-6 .. 1e-3) they can resolve).
   bool verified = false;
   // The paper's reading, eq. (4): the gain margin of
   // G_d / (z^d + B (1 - z^-1)/T G_d) as MATLAB's margin() reports it (the phase
@@ -86,7 +88,8 @@ struct KInterval {
   double f_lo_hz = std::numeric_limits<double>::quiet_NaN();  // pole frequency at K_lo (nan at 0)
   double f_hi_hz = std::numeric_limits<double>::quiet_NaN();  // pole frequency at K_hi (nan at inf)
   // Schur-Cohn agrees at each finite, positive end: stable at (1 -+ 1e-6) of
-  // it inside the interval, unstable just outside.
+  // it inside the interval, unstable just outside (ill-conditioned poles: as
+  // CriticalPoint::verified).
   bool verified = false;
 };
 
@@ -227,6 +230,11 @@ class ZWidth {
   bool IsStable(double K, double B) const;
   // The number of closed-loop roots with |z| >= 1 at (K, B) (K = 0 as 0+):
   // exact with the eigenvalue test, 0 or 1 (at least one) with Schur-Cohn.
+  // Where the sampled plant's poles are ill-conditioned (its
+  // eigenvalue_shift over kEigenvalueShiftWarning: the summary's
+  // conditioning warning) the eigenvalues at K = 0+ and the crossings'
+  // directions count it (exact to the crossings' theta tolerance; the
+  // eigenvalues only where a direction is unknown).
   // IsStable is UnstableRoots == 0: every caller's one test.
   int UnstableRoots(double K, double B) const;
   DelaySummary Summarize() const;
@@ -331,13 +339,32 @@ class ZWidth {
   // Whether K_in is stable and K_out (1e-6 across a boundary from it) is
   // not: by Schur-Cohn where polynomial_error() <= kPolynomialVerifyTolerance
   // (O(n^2)), else, or where it does not confirm, by stable(K).
+  // With ill-conditioned poles (count_by_crossings_) the eigenvalues decide
+  // instead, at the smallest offset delta of 1e-6, 1e-5, 1e-4, 1e-3 (below
+  // half of gap, the end's relative distance to its nearest other crossing)
+  // at which they read stable inside and unstable outside: they cannot place
+  // a root closer to the circle than the poles' conditioning allows.
   template <typename Stable>
-  bool ConfirmsEnd(double K_in, double K_out, double B, const Stable& stable) const;
+  bool ConfirmsEnd(double K_in, double K_out, double B, const Stable& stable, double gap = 0.0) const;
+  // The number of roots outside at (K > 0, B) from the crossings: the count
+  // at K = 0+ (RootsOutsideAtZeroK) plus the change at every crossing below
+  // K (the Nyquist count of IntervalsFrom). -1 where it is not known (a
+  // crossing of unknown direction below K, K within 1e-12 of a crossing, a
+  // count outside [0, order]).
+  int CrossingCount(double K, double B) const;
 
   SampledPlant sp_;
   std::shared_ptr<const ClosedLoopMatrix> closed_loop_;
   bool use_polynomial_ = false;
   bool polynomial_verifies_ = false;  // Verify uses Schur-Cohn
+  // Eigenvalue test with ill-conditioned poles (ConditioningWarning): the
+  // stability of a point counts the crossings (CrossingCount), and the
+  // eigenvalues only verify the ends (ConfirmsEnd). Why: with 64 sections 1 %
+  // apart at damping ratio 1e-4 (eigenvalue_shift 3.4e-4) the closed loop's
+  // double eigenvalues misjudge points 1e-5 (relative, in K) from K_CR(0)
+  // while the crossings from the binary128 G_d place K_CR(0) within 2.4e-7
+  // of the 30-digit brute force's (tests/zwidth_corner_test.cc).
+  bool count_by_crossings_ = false;
   double polynomial_error_ = 0.0;
   double period_s_;
   int total_delay_;

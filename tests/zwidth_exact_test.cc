@@ -334,15 +334,15 @@ INSTANTIATE_TEST_SUITE_P(
 #else
 // 32 and 64 sections: the eigenvalue test is O(n^3), so in the stress label
 // (zwidth_exact_stress_test). Measured under load 15 on 2 cores: 6.6 s and
-// 39 s (was 10.5 s with one false point, and 361 s). Open (issue 31): 64
-// sections 1 % apart at damping 1e-4 (d = 0) does not finish in 10.8 CPU
-// minutes. Its ZWidth constructor took 65 s in the Hessenberg solves: the
-// double state space's response is off by 1e-3 there (median over the grid)
-// and its rounding made B(theta) jagged (23844 extrema on a 90559-point grid);
-// with G_d in binary128 (stability/sampled_plant.cc) it takes 4.6 s and the
-// grid has 128 extrema. Still not in the suite: Summarize's scans of the
-// O(n^3) eigenvalue test, and a double brute force that errs as much as the
-// state space does (its poles moved by 3.4e-4 of their distance to the circle).
+// 39 s (was 10.5 s with one false point, and 361 s). 64 sections 1 % apart
+// at damping 1e-4 is tests/zwidth_corner_test.cc (delays 0, 2, 20): its
+// ZWidth constructor took 65 s in the Hessenberg solves (the double state
+// space's response off by 1e-3, B(theta) jagged: 23844 extrema on a
+// 90559-point grid); with G_d in binary128 (stability/sampled_plant.cc) 0.7 s
+// and 128 extrema. Its K_CR are ~1e-13, where the integrator's root lies
+// 6e-14 inside the circle: neither the double brute force here nor its long
+// double referee can classify the grid (its poles move by 3.4e-4 of their
+// distance to the circle), so that test decides every point in 30 digits.
 INSTANTIATE_TEST_SUITE_P(
     ManyModes, ZWidthFamilies,
     ::testing::Values(FamilyCase{"thirtytwo_sections_1pct_zeta1e3_d3", 32, 500, 1.01, 1e-3, 3, false},
