@@ -140,7 +140,8 @@ void Verdict(ValidationResult* r) {
   if (r->chi2_per_dof > r->chi2_limit) {
     r->reason_codes.push_back("response_misfit");
     r->reasons.push_back(Fmt("the log's frequency response differs from the model's by chi2/dof = %.3g in units of "
-                             "its per-bin std, above the limit %.3g (a right model gives about 1)",
+                             "its per-bin std, above the limit %.3g (a right model gives about 1 at 8 or more averages, "
+                             "n / (n - 2) at fewer: the limit is scaled so)",
                              r->chi2_per_dof, r->chi2_limit));
   }
   if (r->fit_percent < 0) {

@@ -10,9 +10,11 @@
 //   - frequency domain: the fresh log's Welch response against the model in
 //     the bins the fit's band rule keeps (ident::SelectExcitedBand), in units
 //     of the per-bin std: chi2/dof with dof = 2 x bins (nothing is fitted),
-//     judged by the fit's own limit 1.5 + 4 sqrt(2 kappa / dof) (fit/quality.cc).
+//     judged by the fit's own limit fit::Chi2PerDofLimit, 1.5 + 4 sqrt(2 kappa /
+//     dof), scaled below 8 Welch averages (fit::Chi2SmallSampleFactor).
 // The verdict is poor when the response misfit exceeds that limit (the
-// calibrated test: a right model gives chi2/dof ~ 1) or when the simulation
+// calibrated test: a right model gives chi2/dof ~ 1 at many averages, about
+// n / (n - 2) at n, fit::Chi2SmallSampleLaw) or when the simulation
 // explains less than the output's mean (fit % < 0). The residual tests are
 // reported beside, with a warning when more lags than 5 % fall outside the
 // 99 % bounds: with tens of thousands of samples they flag model errors far

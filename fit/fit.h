@@ -144,8 +144,9 @@ struct FitResult {
   // The bins used (ident::SelectExcitedBand); band.used has one entry per bin.
   ident::ExcitedBand band;
   // Verdict: poor when any of these fails (thresholds in fit.cc, QualityTests):
-  //   chi2/dof above 1.5 + 4 sqrt(2 kappa / dof) (1.0-1.4 on correct models
-  //   with >= 8 averages, see the tests), residual runs test z < -4 on every 3rd bin
+  //   chi2/dof above Chi2PerDofLimit: 1.5 + 4 sqrt(2 kappa / dof) (1.0-1.4 on
+  //   correct models with >= 8 averages, see the tests; scaled below 8 by
+  //   Chi2SmallSampleFactor), residual runs test z < -4 on every 3rd bin
   //   (bins 3 apart are uncorrelated for Hann), one octave band with
   //   chi2/dof > 4 and > 3x the rest, fewer than min_averages segments,
   //   damping at a bound, a spurious section, a search ended at its limit.
@@ -165,23 +166,42 @@ struct FitResult {
   std::string BriefReport() const;
 };
 
-// The chi2/dof a right model is expected to reach on `frf` relative to one
-// with 8 averages, >= 1: Welch's H1 std is estimated from the same n averages
-// as H (ident::CoherenceStd, n = effective_averages), so a bin's
-// |H - G|^2 / std^2 is n/(n - 1) F(2, 2n - 2) distributed (the residual
-// power's n - 1 complex dof, independent of the estimate's error), of mean
-// n / (n - 2): 3.0 at 3 averages, 1.33 at 8, 1.18 at 13. Measured on 16
-// seeded 10 s / 30 s logs of a 1-section linear stage (zwidth simulate,
-// 2 kHz, the default window: 3 / 13 segments): chi2/dof 2.83 / 1.16 on
-// average. Below 8 averages the limit is scaled by E_n / E_8 (capped at n =
-// 2.5, where F's mean nears infinity); 1 at 8 or more, where Chi2PerDofLimit's
-// 1.5 was set, and for the other estimators (their std has its own dof).
-inline double Chi2SmallSampleFactor(const ident::FrequencyResponse& frf) {
-  if (frf.estimator != "welch-h1") return 1.0;
+// The mean chi2/dof of a right model on `frf`, whose per-bin std is
+// estimated from n averages of the same data (n = its count, 0 where the law
+// is not known): Welch's H1 std (ident::CoherenceStd, n = effective_averages)
+// makes a bin's |H - G|^2 / std^2 n/(n - 1) F(2, 2n - 2) distributed (the
+// residual power's n - 1 complex dof, independent of the estimate's error),
+// of mean n / (n - 2): 3.0 at 3 averages, 1.33 at 8, 1.18 at 13; the scatter
+// of m runs about their mean (ident/joint.cc's run-scatter std, estimator
+// "...-runs") F(2, 2m - 2), of mean (m - 1) / (m - 2). A response read from a
+// file or a pickle (estimator unknown) with its averages takes the Welch law,
+// the rule its std was derived by (io/frf_file.cc). The local methods and
+// the robust one have their own dof, H2 and the closed-loop estimator a law
+// not derived here: none. n is capped at 2.5 (F's mean nears infinity; at n
+// <= 3 F(2, 2n - 2) has no variance, so the limit's 4 sigma term is nominal).
+// Measured on 16 seeded 10 s / 30 s logs of a 1-section linear stage (zwidth
+// simulate, 2 kHz, the default window: 3 / 13 overlapped segments, n = 2.89 /
+// 12.4): chi2/dof 2.83 / 1.16 on average, against the law's 3.24 / 1.19.
+struct Chi2SmallSample {
+  double n = 0.0;         // the averages the std rests on (0: no law)
+  double expected = 1.0;  // a right model's mean chi2/dof, n capped at 2.5
+};
+inline Chi2SmallSample Chi2SmallSampleLaw(const ident::FrequencyResponse& frf) {
+  const std::string& e = frf.estimator;
+  const bool runs = e.size() > 5 && e.compare(e.size() - 5, 5, "-runs") == 0;
+  const bool welch_h1 = e == "welch-h1" || (e.empty() && (frf.effective_averages > 0.0 || frf.num_averages > 0));
+  if (!runs && !welch_h1) return {};
   const double n = frf.effective_averages > 0.0 ? frf.effective_averages : frf.num_averages;
-  if (!(n > 0.0) || n >= 8.0) return 1.0;
+  if (!(n > 0.0)) return {};
   const double m = std::max(n, 2.5);
-  return (m / (m - 2.0)) / (8.0 / 6.0);
+  return {n, runs ? (m - 1.0) / (m - 2.0) : m / (m - 2.0)};
+}
+// The chi2/dof limit's scale relative to a Welch response of 8 averages,
+// >= 1: E_n / E_8 below 8 averages (1 at 8 or more, where Chi2PerDofLimit's
+// 1.5 was set, and where no law is known).
+inline double Chi2SmallSampleFactor(const ident::FrequencyResponse& frf) {
+  const Chi2SmallSample law = Chi2SmallSampleLaw(frf);
+  return law.n > 0.0 ? std::max(1.0, law.expected / (8.0 / 6.0)) : 1.0;
 }
 
 // chi2/dof above which a model does not explain a response `frf` within its

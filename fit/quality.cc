@@ -148,13 +148,13 @@ void JudgeQuality(const Fixed& fx, const ident::FrequencyResponse& sub, const Fi
                                "a band where the device is linear (BandOptions::fmin_hz/BandOptions::fmax_hz)",
                                "check for a mode above Nyquist or aliasing (eq. 1 cannot fit one)"}));
   }
-  if (const double factor = Chi2SmallSampleFactor(sub); factor > 1.0) {
-    const double n = sub.effective_averages > 0.0 ? sub.effective_averages : sub.num_averages;
+  if (Chi2SmallSampleFactor(sub) > 1.0) {
+    const Chi2SmallSample law = Chi2SmallSampleLaw(sub);
     res->warnings.push_back(
-        Fmt("the response averages %.2g segments (Welch's effective count): its per-bin std is estimated from as "
-            "few, so a right model's chi2/dof is about %.2g and the verdict's limit is scaled to %.3g; more averages "
-            "(a longer log, or a shorter WelchOptions::window_length) make the verdict and the std firmer",
-            n, n > 2.0 ? n / (n - 2.0) : INFINITY, chi_limit));
+        Fmt("the response's per-bin std rests on %.2g averages (segments, or runs): estimated from as few, it makes "
+            "a right model's chi2/dof about %.2g, and the verdict's limit is scaled to %.3g; more averages (a longer "
+            "log, or a shorter WelchOptions::window_length) make the verdict and the std firmer",
+            law.n, law.expected, chi_limit));
   }
   // Runs test on every 3rd bin (Hann bins 3 apart are uncorrelated), or past
   // the correlation the estimator reports (a local method's window).

@@ -70,8 +70,9 @@ void CheckListFlags(const CLI::App& app, int argc, char** argv) {
     if (eq == std::string::npos && i + 1 >= argc) return;  // CLI11 reports the missing value
     const std::string value = eq == std::string::npos ? argv[++i] : arg.substr(eq + 1);
     // An empty value is never a choice: `--detrend ""`, `--time-unit ""`, `--delimiter ""` silently
-    // meant the default, `--delays ""` the delay 0.
-    if (value.find_first_not_of(" \t") == std::string::npos) {
+    // meant the default, `--delays ""` the delay 0. A space or a tab is a value (`--delimiter ' '`,
+    // `--delimiter $'\t'`: io/log_text.cc takes both); a blank item of a list is caught below.
+    if (value.empty()) {
       throw InputError(name + " '" + io::Printable(value) + "': an empty value; give one (or leave " + name +
                        " out for its default)");
     }

@@ -176,8 +176,10 @@ void StdFromRunScatter(const std::vector<RunSpectra>& runs, bool joint, Combined
     }
     r.H_std[k] = std::sqrt(ss / (2.0 * m * (m - 1.0)));
   }
-  // One segment per run: the estimate's averages are the runs.
+  // One segment per run: the estimate's averages are the runs; the std is
+  // their scatter (fit::Chi2SmallSampleLaw reads "-runs" for its law).
   r.effective_averages = m;
+  r.estimator += "-runs";
 }
 
 }  // namespace

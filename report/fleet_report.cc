@@ -82,9 +82,9 @@ std::vector<double> Region(const model::Plant& p, double period_s, int delay, co
 }
 
 // The units the table's values are in: the ok units' "units" cell when they
-// agree, else the design model's, else rotary (a table of an older zwidth,
-// which wrote no units column, was rotary unless --units linear).
-const model::UnitLabels& TableUnits(const io::BatchTable& t, const io::Design* design) {
+// agree, else linear with the batch's --units linear or a linear design,
+// else rotary (a table of an older zwidth wrote no units column).
+const model::UnitLabels& TableUnits(const io::BatchTable& t, const io::Design* design, bool linear_flag) {
   std::string seen;
   for (const Row& r : t.rows) {
     if (Get(r, "status") != "ok" || Get(r, "units").empty()) continue;
@@ -92,7 +92,7 @@ const model::UnitLabels& TableUnits(const io::BatchTable& t, const io::Design* d
     else if (seen != Get(r, "units")) seen = "mixed";
   }
   if (seen == "linear" || seen == "rotary") return model::Units(seen == "linear");
-  return model::Units(design && design->model.linear);
+  return model::Units(linear_flag || (design && design->model.linear));
 }
 
 // A value column's unit: "m [kg]", "d2_K_cr_max [N/m]"; the column alone
@@ -322,7 +322,7 @@ std::string FleetHtml(const io::BatchTable& t, const analysis::Population& pop, 
     << pop.distance_columns.size() << " columns; or another number of modes than the population's (docs/fleet.md).</p>\n";
   // Regions.
   h << "<h2>Regions</h2>\n";
-  const model::UnitLabels& units = TableUnits(t, design);
+  const model::UnitLabels& units = TableUnits(t, design, options.run.linear);
   for (int d : options.run.delays) RegionFigure(t, pop, design, d, units, h);
   // Distributions and the population table.
   h << "<h2>Distributions</h2>\n<p>Over the analysed units: blue line the median, shaded &plusmn;1 MAD sigma, red "

@@ -46,7 +46,7 @@ def interrupt_on_the_cluster(zb, client, log, t):
     import signal
     import threading
     from zwidth import _zwidth
-    n = 600  # the same log under n serials, ~10 ms a unit
+    n = 1500  # the same log under n serials, ~10 ms a unit: the batch outlasts the interrupt
     manifest, out, folders = os.path.join(t, "units.csv"), os.path.join(t, "interrupted.csv"), os.path.join(t, "u")
     os.mkdir(folders)
     with open(manifest, "w", newline="") as f:
@@ -56,11 +56,15 @@ def interrupt_on_the_cluster(zb, client, log, t):
     flags = dict(delays=[2], b_points=10, window_length=512, modes=0)
     saved_before = []
 
-    def ctrl_c():
+    def ctrl_c():  # once the first periodic save (2 s) has written the table, or at 60 s
+        t_end = time.monotonic() + 60
+        while not os.path.exists(out) and time.monotonic() < t_end:
+            time.sleep(0.05)
         saved_before.append(os.path.exists(out))
+        time.sleep(0.3)
         os.kill(os.getpid(), signal.SIGINT)
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)  # also where ctest ignores SIGINT
-    timer = threading.Timer(2.6, ctrl_c)
+    timer = threading.Thread(target=ctrl_c, daemon=True)
     interrupted, t0 = False, time.monotonic()
     try:
         timer.start()
@@ -68,7 +72,7 @@ def interrupt_on_the_cluster(zb, client, log, t):
     except KeyboardInterrupt:
         interrupted = True
     finally:
-        timer.cancel()
+        timer.join()
         signal.signal(signal.SIGINT, previous)
     stopped = time.monotonic() - t0
     check(interrupted, f"Ctrl-C on a cluster batch raises KeyboardInterrupt ({stopped:.2f} s in)")
@@ -82,11 +86,13 @@ def interrupt_on_the_cluster(zb, client, log, t):
     resumed = sum(row is not None for _, row in _zwidth._batch_units(args, "cluster-resume-check"))
     check(resumed == len(rows), f"a re-run resumes exactly the saved units ({resumed} of {len(rows)})")
     before = {r["serial"]: r for r in rows}
-    time.sleep(0.5)  # the cancelled tasks still running on the workers end
+    t_end = time.monotonic() + 30  # the cancelled tasks still running on the workers end
+    while any(client.processing().values()) and time.monotonic() < t_end:
+        time.sleep(0.05)
     zb.batch(manifest=manifest, output=out, client=client, unit_folders=folders, **flags)
     after = {r["serial"]: r for r in csv.DictReader(open(out, newline=""))}
     check(len(after) == n and all(r["status"] == "ok" for r in after.values()), "the re-run finishes every unit")
-    # The population's columns are the whole batch's (a unit's outlier status among 600, not among the
+    # The population's columns are the whole batch's (a unit's outlier status among all, not among the
     # 130 saved); every other cell of a saved row is the unit's own and stays.
     population = {"outlier", "outlier_d2", "outlier_reasons"}
     changed = sorted({k for s, r in before.items() for k in r if after[s][k] != r[k]} - population)

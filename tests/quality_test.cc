@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <numbers>
 #include <random>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -257,12 +259,12 @@ TEST(FitQuality, DistortionAboveTheNoiseWhereTheRigidBodyIsSetIsAReason) {
 namespace zwidth::fit {
 namespace {
 
-// Chi2SmallSampleFactor's law, by a Monte Carlo of the estimator itself
-// written here: per bin, n segments U_i (complex normal), Y_i = H U_i + N_i,
-// H1 = sum conj(U) Y / sum |U|^2, its std from the coherence by
-// ident::CoherenceStd (per component), and the chi2 of the true H,
-// |H1 - H|^2 / (2 std^2). Its mean is n / (n - 2) (n/(n-1) F(2, 2n - 2)),
-// and the factor is that over its value at 8 averages.
+// Chi2SmallSampleLaw against a Monte Carlo of the estimators written here:
+// per bin, n segments U_i (complex normal), Y_i = H U_i + N_i, H1 = sum
+// conj(U) Y / sum |U|^2, its std from the coherence by ident::CoherenceStd
+// (per component), and the chi2 of the true H, |H1 - H|^2 / (2 std^2); and m
+// runs' estimates H + e_i, their mean and its textbook standard error from
+// their scatter. The law's mean must be the measured one.
 TEST(FitQuality, ChiSquareOfTheTrueResponseWithAnEstimatedStdHasTheMeanOfTheFLaw) {
   std::mt19937_64 rng(20261204);
   std::normal_distribution<double> g(0.0, std::sqrt(0.5));
@@ -285,16 +287,36 @@ TEST(FitQuality, ChiSquareOfTheTrueResponseWithAnEstimatedStdHasTheMeanOfTheFLaw
     }
     return sum / bins;
   };
+  auto mean_chi2_of_runs = [&](int m) {
+    const int bins = 400000 / m;
+    double sum = 0.0;
+    for (int b = 0; b < bins; ++b) {
+      std::vector<std::complex<double>> h(m);
+      std::complex<double> mean = 0.0;
+      for (auto& x : h) mean += (x = H + 0.3 * std::complex<double>(g(rng), g(rng)));
+      mean /= m;
+      double ss = 0.0;
+      for (const auto& x : h) ss += std::norm(x - mean);
+      const double se2 = ss / (m - 1.0) / m;  // the complex variance of the mean, from the scatter
+      sum += std::norm(mean - H) / se2;       // over 2 dof, each of half that variance
+    }
+    return sum / bins;
+  };
   for (int n : {3, 4, 6, 8, 13}) {
-    const double measured = mean_chi2(n), law = n / (n - 2.0);
-    std::printf("n = %2d: mean chi2 of the true H %.4f, n/(n-2) %.4f\n", n, measured, law);
-    // n = 3: F(2, 4) has no finite variance; its sample mean converges slowly.
-    EXPECT_NEAR(measured / law, 1.0, n == 3 ? 0.08 : 0.02) << n;
     ident::FrequencyResponse frf;
     frf.estimator = "welch-h1";
     frf.effective_averages = n;
-    EXPECT_NEAR(Chi2SmallSampleFactor(frf), n >= 8 ? 1.0 : law / (8.0 / 6.0), 1e-12) << n;
-    frf.estimator = "lpm";
+    const double measured = mean_chi2(n), law = Chi2SmallSampleLaw(frf).expected;
+    std::printf("n = %2d: mean chi2 of the true H %.4f, the law %.4f\n", n, measured, law);
+    // n = 3: F(2, 4) has no finite variance; its sample mean converges slowly.
+    EXPECT_NEAR(measured / law, 1.0, n == 3 ? 0.08 : 0.02) << n;
+    frf.estimator = "";  // read from a file: the averages known, the Welch law
+    EXPECT_EQ(Chi2SmallSampleLaw(frf).expected, law);
+    frf.estimator = "welch-h1-runs";
+    const double runs = mean_chi2_of_runs(n), runs_law = Chi2SmallSampleLaw(frf).expected;
+    std::printf("m = %2d runs: mean chi2 of the true H %.4f, the law %.4f\n", n, runs, runs_law);
+    EXPECT_NEAR(runs / runs_law, 1.0, n == 3 ? 0.08 : 0.02) << n;
+    frf.estimator = "lpm";  // its own dof: no law, no scaling
     EXPECT_EQ(Chi2SmallSampleFactor(frf), 1.0);
   }
 }
@@ -302,7 +324,8 @@ TEST(FitQuality, ChiSquareOfTheTrueResponseWithAnEstimatedStdHasTheMeanOfTheFLaw
 // A right model on a 10 s log (the default window leaves 3 segments): chi2/dof
 // near 3, as the law says; before the factor (2026-12-04) every such fit was
 // poor ("chi2/dof 2.93 is above 1.66") with advice to look for aliasing.
-// A model one section short is still poor there.
+// A model one section short, and one a sample of delay off (a near miss the
+// sections bend to absorb), are still poor there.
 TEST(FitQuality, TenSecondLogOfARightModelIsGoodAndAMissingSectionStillPoor) {
   for (uint64_t seed : {31, 32, 33}) {
     const model::Plant p = Device(kPoles[1]);
@@ -322,11 +345,18 @@ TEST(FitQuality, TenSecondLogOfARightModelIsGoodAndAMissingSectionStillPoor) {
     EXPECT_GT(r.chi2_per_dof, 2.0);  // the small-sample inflation is real
     EXPECT_EQ(r.quality, FitQuality::kGood) << r.BriefReport();
     bool warned = false;
-    for (const std::string& w : r.warnings) warned |= w.find("effective count") != std::string::npos;
+    for (const std::string& w : r.warnings) warned |= w.find("averages (segments, or runs)") != std::string::npos;
     EXPECT_TRUE(warned);
     o.num_modes = 0;
     const FitResult under = FitModel(frf, o);
     EXPECT_EQ(under.quality, FitQuality::kPoor);
+    o.num_modes = 1;
+    o.auto_delay = false;
+    o.delay_samples = 1;  // the device has none
+    const FitResult late = FitModel(frf, o);
+    std::printf("seed %d, delay 1 off: chi2/dof %.3f, %s\n", static_cast<int>(seed), late.chi2_per_dof,
+                ToString(late.quality).c_str());
+    EXPECT_EQ(late.quality, FitQuality::kPoor);
   }
 }
 

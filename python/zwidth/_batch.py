@@ -83,10 +83,10 @@ def _run_on_threads(args, batch_id, call, rows, todo, serials, threads):
             for f in finished:
                 rows[futures[f]] = f.result()
             _zwidth._batch_progress(batch_id, rows)
-    except KeyboardInterrupt:
+    except BaseException:  # Ctrl-C, or an error of the saver or a unit's thread: the finished rows saved
         for f in pending:
             f.cancel()
-        pool.shutdown(wait=True)
+        pool.shutdown(wait=True, cancel_futures=True)
         for f, i in futures.items():
             if f.done() and not f.cancelled() and f.exception() is None:
                 rows[i] = f.result()
@@ -114,11 +114,15 @@ def _run_on_client(client, args, batch_id, call, rows, todo, serials):
             rows[index[f.key]] = f.result()
             _zwidth._batch_progress(batch_id, rows)
     except BaseException:
-        client.cancel([f for f in futures if not f.done()])
-        for f in futures:
-            if f.status == "finished" and rows[index[f.key]] is None:
-                rows[index[f.key]] = f.result()
-        _zwidth._batch_progress(batch_id, rows, now=True)
+        try:
+            client.cancel([f for f in futures if not f.done()])
+            for f in futures:
+                if f.status == "finished" and rows[index[f.key]] is None:
+                    rows[index[f.key]] = f.result(timeout=10)
+        except Exception:  # the scheduler gone: the rows taken so far are saved, the first error raised
+            pass
+        finally:
+            _zwidth._batch_progress(batch_id, rows, now=True)
         raise
 
 
