@@ -27,7 +27,7 @@ import tempfile
 zwidth, src = sys.argv[1], sys.argv[2]
 LIBRARY = ["model", "ident", "fit", "stability", "io", "analysis", "report"]
 STRING = re.compile(r'"(?:[^"\\\n]|\\.)*"')
-FIELD = re.compile(r"\b[A-Z][A-Za-z0-9]*::[a-z_][a-z_0-9]*")
+FIELD = re.compile(r"\b[A-Z][A-Za-z0-9]*::[a-z_][A-Za-z_0-9]*")  # a field may hold capitals: area_B_max
 failures = []
 
 
@@ -88,7 +88,7 @@ with open(os.path.join(src, "io", "option_names.cc"), encoding="utf-8") as f:
     common = f.read()
 body = common[common.index("OptionNames() {"):]
 body = body[: body.index("return table;")]
-rows = re.findall(r'\{"([A-Za-z0-9_]+::[a-z_0-9]+)",\s*"([^"]*)"(?:,\s*"([^"]*)")?\}', body)
+rows = re.findall(r'\{"([A-Za-z0-9_]+::[A-Za-z_0-9]+)",\s*"([^"]*)"(?:,\s*"([^"]*)")?\}', body)
 table = {field: flag for field, flag, _ in rows}
 for field, flag, keyword in rows:
     if not re.search(r'\{"' + re.escape(field) + r'",\s*"[^"]*",\s*"[^"]*"\}', body):
