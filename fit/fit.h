@@ -174,8 +174,11 @@ struct FitResult {
 // of mean n / (n - 2): 3.0 at 3 averages, 1.33 at 8, 1.18 at 13; the scatter
 // of m runs about their mean (ident/joint.cc's run-scatter std, estimator
 // "...-runs") F(2, 2m - 2), of mean (m - 1) / (m - 2). A response read from a
-// file or a pickle (estimator unknown) with its averages takes the Welch law,
-// the rule its std was derived by (io/frf_file.cc). The local methods and
+// file or a pickle (estimator unknown) takes the Welch law when it is one of
+// overlapped segments (effective_averages < num_averages: what only Welch's
+// overlap makes; the local and robust methods write the two equal, their
+// dof), else none (a whole-record or unoverlapped file is judged as
+// before). The local methods and
 // the robust one have their own dof, H2 and the closed-loop estimator a law
 // not derived here: none. n is capped at 2.5 (F's mean nears infinity; at n
 // <= 3 F(2, 2n - 2) has no variance, so the limit's 4 sigma term is nominal).
@@ -189,7 +192,8 @@ struct Chi2SmallSample {
 inline Chi2SmallSample Chi2SmallSampleLaw(const ident::FrequencyResponse& frf) {
   const std::string& e = frf.estimator;
   const bool runs = e.size() > 5 && e.compare(e.size() - 5, 5, "-runs") == 0;
-  const bool welch_h1 = e == "welch-h1" || (e.empty() && (frf.effective_averages > 0.0 || frf.num_averages > 0));
+  const bool welch_h1 =
+      e == "welch-h1" || (e.empty() && frf.effective_averages > 0.0 && frf.effective_averages < frf.num_averages);
   if (!runs && !welch_h1) return {};
   const double n = frf.effective_averages > 0.0 ? frf.effective_averages : frf.num_averages;
   if (!(n > 0.0)) return {};
