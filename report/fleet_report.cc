@@ -84,13 +84,15 @@ std::vector<double> Region(const model::Plant& p, double period_s, int delay, co
 // The units the table's values are in: the ok units' "units" cell when they
 // agree, else linear with the batch's --units linear or a linear design,
 // else rotary (a table of an older zwidth wrote no units column).
-const model::UnitLabels& TableUnits(const io::BatchTable& t, const io::Design* design, bool linear_flag) {
+const model::UnitLabels& TableUnits(const io::BatchTable& t, const io::Design* design, bool linear_flag,
+                                    bool* mixed) {
   std::string seen;
   for (const Row& r : t.rows) {
     if (Get(r, "status") != "ok" || Get(r, "units").empty()) continue;
     if (seen.empty()) seen = Get(r, "units");
     else if (seen != Get(r, "units")) seen = "mixed";
   }
+  *mixed = seen == "mixed";
   if (seen == "linear" || seen == "rotary") return model::Units(seen == "linear");
   return model::Units(linear_flag || (design && design->model.linear));
 }
@@ -227,6 +229,7 @@ void Histogram(const io::BatchTable& t, const analysis::PopulationColumn& c, con
   const double lo = hb.lo, hi = hb.hi;
   const int bins = static_cast<int>(hb.counts.size());
   // Counts: the 4 ticks on whole units (the top a multiple of 4 above the tallest bin).
+  if (hb.counts.empty()) return;
   const int tallest = *std::max_element(hb.counts.begin(), hb.counts.end());
   Frame f{lo, hi, 0, 4.0 * std::ceil((tallest + 1) / 4.0)};
   f.w = 300, f.h = 180, f.x_ticks = 2;
@@ -322,7 +325,13 @@ std::string FleetHtml(const io::BatchTable& t, const analysis::Population& pop, 
     << pop.distance_columns.size() << " columns; or another number of modes than the population's (docs/fleet.md).</p>\n";
   // Regions.
   h << "<h2>Regions</h2>\n";
-  const model::UnitLabels& units = TableUnits(t, design, options.run.linear);
+  bool mixed = false;
+  const model::UnitLabels& units = TableUnits(t, design, options.run.linear, &mixed);
+  if (mixed) {
+    h << "<p><b>The units mix rotary and linear axes</b> (the table's <code>units</code> column): their values "
+      << "share these axes and the population's statistics, which then mean nothing; batch each kind apart. "
+      << "The axes below are labelled " << units.word << ".</p>\n";
+  }
   for (int d : options.run.delays) RegionFigure(t, pop, design, d, units, h);
   // Distributions and the population table.
   h << "<h2>Distributions</h2>\n<p>Over the analysed units: blue line the median, shaded &plusmn;1 MAD sigma, red "

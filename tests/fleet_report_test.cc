@@ -69,6 +69,10 @@ TEST(FleetReport, AxesFollowTheTablesUnits) {
   for (const char* label : {"B [N m s/rad]", "K_CR [N m/rad], delay 2", "m [kg m^2]", "b [N m s/rad]"}) {
     EXPECT_NE(rotary.find(label), std::string::npos) << label;
   }
+  EXPECT_EQ(rotary.find("mix rotary and linear"), std::string::npos);
+  io::BatchTable both = Units("rotary", 12);
+  both.rows[3]["units"] = "linear";  // one unit of the other kind
+  EXPECT_NE(Html(both).find("The units mix rotary and linear axes"), std::string::npos);
 }
 
 TEST(FleetReport, TicksOfANarrowRangeAreAllDifferentAndCountsAreWhole) {
