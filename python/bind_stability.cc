@@ -103,20 +103,6 @@ std::unique_ptr<PyZWidth> NewZWidth(const io::ModelFile& model, std::optional<do
   p->options = options;
   std::string why;
   if (!p->options.IsValid(&why)) throw InputError(why);
-  // The theta grid holds max(min_grid_points, grid_points_per_delay x (delay + order)) points, each
-  // a few complex values: min_grid_points=10**9 took every GiB and the OOM killer ended Python.
-  // Bounded here, the only caller that sets them (BoundaryOptions::IsValid, stability/zwidth.cc,
-  // checks only the lower ends): 2^20 points took 0.32 s and 32 MB more than the default here.
-  constexpr int kMaxGridPoints = 1 << 20, kMaxGridPointsPerDelay = 1024;
-  if (p->options.min_grid_points > kMaxGridPoints) {
-    throw InputError("min_grid_points = " + std::to_string(p->options.min_grid_points) + ": at most 2**20 (" +
-                     std::to_string(kMaxGridPoints) + ") points; the default 2048 resolves every crossing (they are "
-                     "refined by Brent's method)");
-  }
-  if (p->options.grid_points_per_delay > kMaxGridPointsPerDelay) {
-    throw InputError("grid_points_per_delay = " + std::to_string(p->options.grid_points_per_delay) + ": at most " +
-                     std::to_string(kMaxGridPointsPerDelay) + " (the default is 64)");
-  }
   model.plant.Validate();
   p->model = model;
   p->period_arg = period_s;

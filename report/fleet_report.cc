@@ -100,14 +100,13 @@ const model::UnitLabels& TableUnits(const io::BatchTable& t, const io::Design* d
 // A value column's unit: "m [kg]", "d2_K_cr_max [N/m]"; the column alone
 // where it has none (a count, a distance).
 std::string ColumnLabel(const std::string& c, const model::UnitLabels& u) {
-  auto ends = [&](const char* s) { const std::string e(s); return c.size() >= e.size() && c.compare(c.size() - e.size(), e.size(), e) == 0; };
+  // The columns are analysis::IsValueColumn's: m, b, mode<i>_*, d<d>_<figure>.
   const char* unit = nullptr;
   if (c == "m") unit = u.m;
-  else if (c == "b" || c == "linear_only_b") unit = u.b;
-  else if (c == "F_c" || c == "friction_offset") unit = u.input;
-  else if (c.rfind("mode", 0) == 0) unit = "rad/s";
-  else if (ends("_K_cr_at_zero_B") || ends("_K_cr_max")) unit = u.K;
-  else if (ends("_B_t") || ends("_B_max") || ends("_B_max_from_zero")) unit = u.B;
+  else if (c == "b") unit = u.b;
+  else if (c.starts_with("mode")) unit = "rad/s";
+  else if (c.ends_with("_K_cr_at_zero_B") || c.ends_with("_K_cr_max")) unit = u.K;
+  else if (c.ends_with("_B_t") || c.ends_with("_B_max") || c.ends_with("_B_max_from_zero")) unit = u.B;
   return unit ? c + " [" + unit + "]" : c;
 }
 
